@@ -1,0 +1,63 @@
+//! The dodecahedron marker: its geometry ([`dodecahedron`]), the tags laid on its faces and the
+//! two jaw bodies that carry them ([`model`]), and the versioned JSON marker file ([`file`]).
+//!
+//! All lengths are millimetres, all points in a body's frame (see [`dodecahedron`]).
+
+pub mod dodecahedron;
+pub mod file;
+pub mod model;
+
+pub use dodecahedron::{Dodecahedron, Face};
+pub use file::MARKER_FILE_VERSION;
+pub use model::{
+    Body, BodyKind, DEFAULT_EDGE_MM, Marker, PrintError, TAG_CORNERS, TAGS_PER_BODY, Tag, default_tag_size,
+};
+
+/// Errors from building, reading or checking a marker.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum MarkerError {
+    /// The text is not JSON (NaN and Infinity are not JSON either).
+    #[error("marker file is not valid JSON: {0}")]
+    Json(String),
+    /// The file's `version` is not one this build reads.
+    #[error("unsupported marker file version {found} (this build reads version 1)")]
+    Version {
+        /// The version found.
+        found: String,
+    },
+    /// A field is missing or holds a value that cannot be right.
+    #[error("{location}: `{field}` {reason}")]
+    Field {
+        /// Which body and tag.
+        location: String,
+        /// Which field.
+        field: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// Parameters that cannot make a marker (negative edge, tag larger than its face, …).
+    #[error("impossible marker parameters: {0}")]
+    Params(String),
+    /// The file could not be read or written.
+    #[error("{path}: {reason}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The system's reason.
+        reason: String,
+    },
+    /// An error inside a named file.
+    #[error("{path}: {source}")]
+    InFile {
+        /// The file.
+        path: String,
+        /// The error.
+        source: Box<MarkerError>,
+    },
+}
+
+impl MarkerError {
+    fn in_file(self, path: &std::path::Path) -> Self {
+        MarkerError::InFile { path: path.display().to_string(), source: Box::new(self) }
+    }
+}
