@@ -1,0 +1,196 @@
+//! `jawtrack`: the command line of JawTrack. Each subcommand is a thin layer over a library
+//! crate; this file only parses arguments, reports progress and prints results.
+
+mod demo;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand};
+use jawtrack_marker::{DEFAULT_EDGE_MM, Marker};
+use jawtrack_pose::CameraIntrinsics;
+use jawtrack_synth::{Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use std::path::{Path, PathBuf};
+
+/// JawTrack: 6-DoF jaw motion from two AprilTag dodecahedra filmed by a phone.
+#[derive(Parser)]
+#[command(name = "jawtrack", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a short session on built-in defaults and summarise it (no phone needed).
+    Demo(demo::DemoArgs),
+    /// Write the marker file of the ideal dodecahedron pair.
+    Marker(MarkerArgs),
+    /// Check a marker file and print what it describes.
+    CheckMarker {
+        /// The marker file.
+        file: PathBuf,
+    },
+    /// Render a synthetic scene: PNG frames and ground_truth.json.
+    Synth(SynthArgs),
+}
+
+#[derive(Args)]
+struct MarkerArgs {
+    /// Where to write the marker file (JSON).
+    #[arg(long)]
+    out: PathBuf,
+    /// Edge length of the dodecahedron (mm).
+    #[arg(long, default_value_t = DEFAULT_EDGE_MM)]
+    edge: f64,
+    /// Side of each tag's black-border square (mm); default: the largest that leaves a
+    /// one-cell white margin on the face.
+    #[arg(long)]
+    tag_size: Option<f64>,
+}
+
+#[derive(Args)]
+pub(crate) struct SynthArgs {
+    /// Which scene: static, hinge, excursion or chew.
+    #[arg(long)]
+    scene: Option<SceneKind>,
+    /// Output folder.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Frame size: 1080p or 4k.
+    #[arg(long, default_value = "1080p")]
+    resolution: Resolution,
+    /// Seed of everything random (print errors, noise, tremor, clutter).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Camera intrinsics fx,fy,cx,cy[,k1,k2] (px); default: an iPhone wide camera.
+    #[arg(long)]
+    intrinsics: Option<CameraIntrinsics>,
+    /// Marker file (default: the nominal 12.7 mm pair).
+    #[arg(long)]
+    marker: Option<PathBuf>,
+    /// Realism settings as JSON; fields left out keep their defaults.
+    #[arg(long, conflicts_with = "clean")]
+    realism: Option<PathBuf>,
+    /// Exact geometry: no blur, noise, gamma, print error, occluders or glare.
+    #[arg(long)]
+    clean: bool,
+    /// Frames per camera view (static scene).
+    #[arg(long, default_value_t = 2)]
+    frames_per_view: usize,
+    /// Cycles per opening / glide (hinge, excursion, chew).
+    #[arg(long, default_value_t = 2)]
+    cycles: usize,
+    /// Frame rate of the dynamic scenes (frames/s).
+    #[arg(long, default_value_t = 30.0)]
+    fps: f64,
+    /// Keep only every n-th frame.
+    #[arg(long, default_value_t = 1)]
+    stride: usize,
+    /// Stop after this many frames.
+    #[arg(long)]
+    max_frames: Option<usize>,
+    /// Instead of a scene, render a large tag and measure where its edges land (px).
+    #[arg(long, conflicts_with_all = ["scene", "out"])]
+    self_check: bool,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(a) => demo::run(&a),
+        Command::Marker(a) => marker(&a),
+        Command::CheckMarker { file } => check_marker(&file),
+        Command::Synth(a) => synth(&a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn marker(a: &MarkerArgs) -> Result<()> {
+    let m = Marker::nominal(a.edge, a.tag_size)?;
+    m.save(&a.out)?;
+    let size = m.bodies[0].tags[0].size;
+    println!("wrote {} (edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
+    Ok(())
+}
+
+fn check_marker(file: &Path) -> Result<()> {
+    let m = Marker::load(file)?;
+    println!("{}: valid marker file, edge {} mm", file.display(), m.edge);
+    for b in &m.bodies {
+        let ids: Vec<String> = b.tags.iter().map(|t| t.id.to_string()).collect();
+        println!("  {}: {} tags, ids {}", b.kind, b.tags.len(), ids.join(" "));
+    }
+    Ok(())
+}
+
+pub(crate) fn load_realism(a: &SynthArgs) -> Result<Realism> {
+    if a.clean {
+        return Ok(Realism::clean());
+    }
+    match &a.realism {
+        None => Ok(Realism::default()),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            serde_json::from_str(&text).with_context(|| format!("{}: not a realism settings file", p.display()))
+        }
+    }
+}
+
+pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfig> {
+    let marker = match &a.marker {
+        Some(p) => Marker::load(p)?,
+        None => Marker::default(),
+    };
+    Ok(SynthConfig {
+        scene,
+        resolution: a.resolution,
+        intrinsics: a.intrinsics,
+        seed: a.seed,
+        realism: load_realism(a)?,
+        options: SceneOptions { frames_per_view: a.frames_per_view, cycles: a.cycles, fps: a.fps },
+        marker,
+        stride: a.stride,
+        max_frames: a.max_frames,
+    })
+}
+
+fn synth(a: &SynthArgs) -> Result<()> {
+    if a.self_check {
+        println!("side_px roll_deg rows  max_err_px rms_err_px");
+        let mut worst: f64 = 0.0;
+        for roll in [0.0, 7.0, 30.0, 45.0] {
+            let c = jawtrack_synth::selfcheck::edge_self_check(400.0, roll);
+            println!("{:7.0} {:8.1} {:5} {:10.4} {:10.4}", c.tag_side_px, roll, c.samples, c.max_error_px, c.rms_error_px);
+            worst = worst.max(c.max_error_px);
+        }
+        if worst >= 0.05 {
+            bail!("edge error {worst:.4} px exceeds 0.05 px");
+        }
+        println!("ok: every edge within {worst:.4} px of its projection");
+        return Ok(());
+    }
+    let Some(scene) = a.scene else { bail!("--scene is required (static, hinge, excursion or chew)") };
+    let Some(out) = &a.out else { bail!("--out DIR is required") };
+    let config = synth_config(a, scene)?;
+    let summary = render_with_progress(config, out)?;
+    demo::print_scene_summary(scene, out, &summary);
+    Ok(())
+}
+
+pub(crate) fn render_with_progress(config: SynthConfig, out: &Path) -> Result<jawtrack_synth::SceneSummary> {
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed} elapsed, ~{eta} left")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("rendering {}", config.scene.name()));
+    let summary = jawtrack_synth::write_scene(config, out, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    Ok(summary)
+}

@@ -1,0 +1,42 @@
+//! Synthetic rig renderer: frames of the two dodecahedron markers as an iPhone would film
+//! them, with exact ground truth, for tests, fixtures and benchmarks. It is never linked into
+//! the iOS library.
+//!
+//! The pipeline is [`render`] (exact anti-aliased geometry in linear light) then [`post`]
+//! (defocus, glare, illumination, sensor noise, transfer curve), driven by a [`scenes`] scene
+//! and the [`Realism`] settings; [`Synthesizer`] ties them together and [`truth`] is the
+//! ground-truth file. [`selfcheck`] measures the renderer's own edge placement.
+
+pub mod post;
+pub mod realism;
+pub mod render;
+pub mod scenes;
+pub mod selfcheck;
+pub mod truth;
+
+mod synthesizer;
+
+pub use realism::Realism;
+pub use render::{Camera, LinearImage, PAPER_ALBEDO, INK_ALBEDO, RenderScene};
+pub use scenes::{SceneKind, SceneOptions};
+pub use synthesizer::{Frame, Resolution, SynthConfig, Synthesizer, to_bgra, write_scene, SceneSummary};
+pub use truth::{FrameTruth, GroundTruth, TagTruth};
+
+/// Errors of the renderer.
+#[derive(Debug, thiserror::Error)]
+pub enum SynthError {
+    /// A setting that cannot be rendered.
+    #[error("invalid setting: {0}")]
+    Config(String),
+    /// The marker is not usable.
+    #[error(transparent)]
+    Marker(#[from] jawtrack_marker::MarkerError),
+    /// Writing output failed.
+    #[error("{path}: {reason}")]
+    Io {
+        /// The file or folder.
+        path: String,
+        /// Why.
+        reason: String,
+    },
+}

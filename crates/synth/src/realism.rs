@@ -1,0 +1,128 @@
+//! Realism settings: everything that makes a rendered frame look like a phone's, each with a
+//! default and drawn from the scene's seed so that a frame can be made again exactly.
+
+use serde::{Deserialize, Serialize};
+
+/// How a frame departs from the ideal pinhole image. `Realism::default()` is a plausible iPhone
+/// frame of the rig at 80–120 mm; `Realism::clean()` switches every effect off.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Realism {
+    /// Lens f-number for defocus (0 = a pinhole, no defocus).
+    pub f_number: f64,
+    /// Physical focal length (mm); with the f-number it sets the aperture.
+    pub focal_length_mm: f64,
+    /// Distance the lens is focused at (mm along the optical axis); `None` focuses on the
+    /// markers' midpoint, as autofocus would.
+    pub focus_distance_mm: Option<f64>,
+    /// Exposure time (s) for motion blur; 0 renders an instant.
+    pub exposure_s: f64,
+    /// Most sub-frames averaged for motion blur (enough for ≤ 0.5 px motion between them).
+    pub max_subframes: u32,
+    /// Electrons collected at white paper in full light (shot noise); 0 = no noise at all.
+    pub full_well_e: f64,
+    /// Read noise (electrons, standard deviation).
+    pub read_noise_e: f64,
+    /// Encode with the sRGB transfer curve (as phone frames are); false writes linear light.
+    pub gamma: bool,
+    /// Fraction of light lost at the image corners (cos⁴-like fall-off).
+    pub vignetting: f64,
+    /// Largest fractional change of illumination across the image (a lighting gradient in a
+    /// random direction).
+    pub lighting_gradient: f64,
+    /// RMS in-plane displacement of each printed tag on its face (mm); the marker file does
+    /// not know it, the ground truth records it.
+    pub print_error_mm: f64,
+    /// Standard deviation of each printed tag's in-plane rotation (degrees).
+    pub print_error_deg: f64,
+    /// Chance that a frame has an occluder (a finger or lip) in front of part of a marker.
+    pub occluder_probability: f64,
+    /// Chance that a frame has a specular glare patch on a marker face.
+    pub glare_probability: f64,
+    /// Number of clutter shapes on the background, a third of them dark squares that are not
+    /// tags.
+    pub clutter: u32,
+}
+
+impl Default for Realism {
+    fn default() -> Self {
+        Realism {
+            f_number: 1.8,
+            focal_length_mm: 5.7,
+            focus_distance_mm: None,
+            exposure_s: 1.0 / 120.0,
+            max_subframes: 24,
+            full_well_e: 3000.0,
+            read_noise_e: 3.0,
+            gamma: true,
+            vignetting: 0.25,
+            lighting_gradient: 0.2,
+            print_error_mm: 0.2,
+            print_error_deg: 0.5,
+            occluder_probability: 0.1,
+            glare_probability: 0.15,
+            clutter: 40,
+        }
+    }
+}
+
+impl Realism {
+    /// Every effect off: exact geometry, linear light, no noise, the nominal marker.
+    pub fn clean() -> Self {
+        Realism {
+            f_number: 0.0,
+            focus_distance_mm: None,
+            exposure_s: 0.0,
+            full_well_e: 0.0,
+            read_noise_e: 0.0,
+            gamma: false,
+            vignetting: 0.0,
+            lighting_gradient: 0.0,
+            print_error_mm: 0.0,
+            print_error_deg: 0.0,
+            occluder_probability: 0.0,
+            glare_probability: 0.0,
+            clutter: 0,
+            ..Realism::default()
+        }
+    }
+
+    /// Checks the numbers, naming the first bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        let fields = [
+            ("f_number", self.f_number),
+            ("focal_length_mm", self.focal_length_mm),
+            ("exposure_s", self.exposure_s),
+            ("full_well_e", self.full_well_e),
+            ("read_noise_e", self.read_noise_e),
+            ("vignetting", self.vignetting),
+            ("lighting_gradient", self.lighting_gradient),
+            ("print_error_mm", self.print_error_mm),
+            ("print_error_deg", self.print_error_deg),
+            ("occluder_probability", self.occluder_probability),
+            ("glare_probability", self.glare_probability),
+        ];
+        for (name, v) in fields {
+            if !v.is_finite() || v < 0.0 {
+                return Err(format!("realism.{name} must be a non-negative number, got {v}"));
+            }
+        }
+        for (name, v) in [("vignetting", self.vignetting), ("occluder_probability", self.occluder_probability), ("glare_probability", self.glare_probability)] {
+            if v > 1.0 {
+                return Err(format!("realism.{name} must be at most 1, got {v}"));
+            }
+        }
+        if self.focal_length_mm == 0.0 && self.f_number > 0.0 {
+            return Err("realism.focal_length_mm must be positive when f_number is set".into());
+        }
+        if let Some(d) = self.focus_distance_mm
+            && (!d.is_finite() || d <= self.focal_length_mm)
+        {
+            return Err(format!("realism.focus_distance_mm must exceed the focal length, got {d}"));
+        }
+        if self.max_subframes == 0 {
+            return Err("realism.max_subframes must be at least 1".into());
+        }
+        Ok(())
+    }
+}
