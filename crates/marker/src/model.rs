@@ -230,6 +230,10 @@ impl Marker {
                 .flat_map(|b| b.tags.iter_mut())
                 .find(|t| t.id == id)
                 .ok_or_else(|| MarkerError::Params(format!("no tag with id {id} to displace")))?;
+            // No error leaves the tag bit-for-bit where it was (not re-rounded through a rotation).
+            if e == PrintError::default() {
+                continue;
+            }
             let n = tag.face_normal();
             let (x, y) = tag.axes();
             let rot = Rotation3::from_axis_angle(&Unit::new_normalize(n), e.rotation);

@@ -453,6 +453,20 @@ fn make_occluder(tag_center: &Vector3<f64>, rng: &mut ChaCha8Rng) -> Plane {
     }
 }
 
+/// Writes an 8-bit gray PNG, compressed as far as the encoder goes (fixtures live in git).
+fn write_png(path: &Path, frame: &Frame) -> Result<(), Box<dyn std::error::Error>> {
+    use image::ImageEncoder;
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    PngEncoder::new_with_quality(file, CompressionType::Best, FilterType::Adaptive).write_image(
+        &frame.luma,
+        frame.width,
+        frame.height,
+        image::ExtendedColorType::L8,
+    )?;
+    Ok(())
+}
+
 /// What `write_scene` reports.
 #[derive(Debug, Clone)]
 pub struct SceneSummary {
@@ -483,7 +497,7 @@ pub fn write_scene(config: SynthConfig, dir: &Path, mut progress: impl FnMut(usi
     for i in 0..synth.len() {
         let frame = synth.render(i)?;
         let path = dir.join(&frame.truth.file);
-        image::save_buffer(&path, &frame.luma, frame.width, frame.height, image::ExtendedColorType::L8).map_err(|e| io(&path, &e))?;
+        write_png(&path, &frame).map_err(|e| io(&path, &e))?;
         let detectable: Vec<&TagTruth> = frame.truth.tags.iter().filter(|t| t.should_be_detected()).collect();
         counts.push(detectable.len());
         sides.extend(detectable.iter().map(|t| t.min_side_px));
