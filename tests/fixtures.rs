@@ -51,7 +51,8 @@ fn ground_truth_is_self_consistent() {
             assert!(gt.print_errors.iter().all(|e| e.shift_x == 0.0 && e.shift_y == 0.0 && e.rotation_deg == 0.0));
             assert_eq!(marker, Marker::default(), "a clean set uses the nominal marker");
         } else {
-            let rms = (gt.print_errors.iter().map(|e| e.shift_x.powi(2) + e.shift_y.powi(2)).sum::<f64>() / 24.0).sqrt();
+            let rms =
+                (gt.print_errors.iter().map(|e| e.shift_x.powi(2) + e.shift_y.powi(2)).sum::<f64>() / 24.0).sqrt();
             assert!(rms > 0.05 && rms < 0.5, "print error RMS {rms} mm");
         }
         for f in &gt.frames {
@@ -89,7 +90,14 @@ fn images_show_the_tags_where_the_truth_puts_them() {
                     .filter(|&&(x, y)| bm.is_white(x.into(), y.into()) != reading.is_white(x.into(), y.into()))
                     .count();
                 tags += 1;
-                assert!(reading.white - reading.black > 30.0, "{} {} tag {}: contrast {:?}", set.display(), f.file, t.id, reading);
+                assert!(
+                    reading.white - reading.black > 30.0,
+                    "{} {} tag {}: contrast {:?}",
+                    set.display(),
+                    f.file,
+                    t.id,
+                    reading
+                );
                 if errors <= if is_clean(&set) { 0 } else { 2 } {
                     decoded += 1;
                 }
@@ -105,10 +113,7 @@ fn images_show_the_tags_where_the_truth_puts_them() {
 /// is byte for byte the committed frame.
 #[test]
 fn fixtures_regenerate_bit_for_bit() {
-    let cases = [
-        ("clean-static-1080p", Realism::clean(), 1),
-        ("static-1080p", Realism::default(), 3),
-    ];
+    let cases = [("clean-static-1080p", Realism::clean(), 1), ("static-1080p", Realism::default(), 3)];
     for (name, realism, stride) in cases {
         let set = jawtrack_tests::fixtures_dir().join(name);
         let config = SynthConfig {

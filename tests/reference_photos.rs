@@ -17,7 +17,8 @@ fn rendered_tags_match_the_reference_decoding_of_real_photos() {
         return;
     };
     let dir = data.join("photos");
-    let text = std::fs::read_to_string(dir.join("reference_detections.jsonl")).expect("reference detections in ../shared");
+    let text =
+        std::fs::read_to_string(dir.join("reference_detections.jsonl")).expect("reference detections in ../shared");
     let (mut checked, mut exact, mut best_is_upright) = (0usize, 0usize, 0usize);
     for line in text.lines() {
         let rec: serde_json::Value = serde_json::from_str(line).expect("jsonl");
@@ -38,7 +39,9 @@ fn rendered_tags_match_the_reference_decoding_of_real_photos() {
             for m in mismatches.iter_mut() {
                 for &(x, y) in Tag36h11::bit_cells() {
                     let (x, y) = (usize::from(x), usize::from(y));
-                    let (_, _, albedo) = tag_texture(&pattern, -1.0 + (x as f64 + 0.5) / 4.0, -1.0 + (y as f64 + 0.5) / 4.0).expect("inside");
+                    let (_, _, albedo) =
+                        tag_texture(&pattern, -1.0 + (x as f64 + 0.5) / 4.0, -1.0 + (y as f64 + 0.5) / 4.0)
+                            .expect("inside");
                     let printed_white = albedo > INK_ALBEDO;
                     if printed_white != reading.is_white(x, y) {
                         *m += 1;
@@ -55,7 +58,9 @@ fn rendered_tags_match_the_reference_decoding_of_real_photos() {
             }
         }
     }
-    eprintln!("checked {checked} reference detections: {exact} read back within their reported hamming, {best_is_upright} fit only upright");
+    eprintln!(
+        "checked {checked} reference detections: {exact} read back within their reported hamming, {best_is_upright} fit only upright"
+    );
     assert!(checked >= 100, "too few reference detections read: {checked}");
     assert!(exact as f64 >= 0.97 * checked as f64, "{exact}/{checked} match");
     assert_eq!(best_is_upright, checked, "the corner order must match the reference's");

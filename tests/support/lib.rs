@@ -18,7 +18,9 @@ pub fn shared_data() -> Option<PathBuf> {
 /// Fixture sets: every folder of `fixtures/` holding a `ground_truth.json`, sorted.
 pub fn fixture_sets() -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(fixtures_dir())
-        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.join("ground_truth.json").is_file()).collect())
+        .map(|rd| {
+            rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.join("ground_truth.json").is_file()).collect()
+        })
         .unwrap_or_default();
     v.sort();
     v
@@ -52,7 +54,12 @@ pub fn bilinear(img: &image::GrayImage, x: f64, y: f64) -> Option<f64> {
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
     let (fx, fy) = (x - f64::from(x0), y - f64::from(y0));
     let p = |x, y| f64::from(img.get_pixel(x, y)[0]);
-    Some(p(x0, y0) * (1.0 - fx) * (1.0 - fy) + p(x1, y0) * fx * (1.0 - fy) + p(x0, y1) * (1.0 - fx) * fy + p(x1, y1) * fx * fy)
+    Some(
+        p(x0, y0) * (1.0 - fx) * (1.0 - fy)
+            + p(x1, y0) * fx * (1.0 - fy)
+            + p(x0, y1) * (1.0 - fx) * fy
+            + p(x1, y1) * fx * fy,
+    )
 }
 
 /// A tag's 8×8 cells read from an image, and the levels found around them.
@@ -87,7 +94,9 @@ pub fn read_tag(img: &image::GrayImage, corners: &[[f64; 2]; 4]) -> Option<TagRe
         }
         Some(sum / 9.0)
     };
-    let cells = (0..64).map(|i| mean(-1.0 + ((i % 8) as f64 + 0.5) / 4.0, -1.0 + ((i / 8) as f64 + 0.5) / 4.0)).collect::<Option<Vec<f64>>>()?;
+    let cells = (0..64)
+        .map(|i| mean(-1.0 + ((i % 8) as f64 + 0.5) / 4.0, -1.0 + ((i / 8) as f64 + 0.5) / 4.0))
+        .collect::<Option<Vec<f64>>>()?;
     let quiet = (0..8)
         .flat_map(|i| {
             let t = -1.0 + (f64::from(i) + 0.5) / 4.0;
@@ -95,7 +104,8 @@ pub fn read_tag(img: &image::GrayImage, corners: &[[f64; 2]; 4]) -> Option<TagRe
         })
         .map(|(u, v)| mean(u, v))
         .collect::<Option<Vec<f64>>>()?;
-    let border: Vec<f64> = (0..64).filter(|i| i % 8 == 0 || i % 8 == 7 || i / 8 == 0 || i / 8 == 7).map(|i| cells[i]).collect();
+    let border: Vec<f64> =
+        (0..64).filter(|i| i % 8 == 0 || i % 8 == 7 || i / 8 == 0 || i / 8 == 7).map(|i| cells[i]).collect();
     Some(TagReading {
         black: border.iter().sum::<f64>() / border.len() as f64,
         white: quiet.iter().sum::<f64>() / quiet.len() as f64,

@@ -63,9 +63,7 @@ impl TagBitmap {
 
     /// The 36 data bits read back from the pattern, in codeword order.
     pub fn code(&self) -> u64 {
-        BIT_XY.iter().fold(0u64, |acc, &(x, y)| {
-            (acc << 1) | u64::from(self.white[y as usize][x as usize])
-        })
+        BIT_XY.iter().fold(0u64, |acc, &(x, y)| (acc << 1) | u64::from(self.white[y as usize][x as usize]))
     }
 
     /// The pattern turned a quarter turn clockwise (as seen in the upright image).

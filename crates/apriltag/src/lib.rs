@@ -6,4 +6,4 @@ mod codes;
 
 pub mod family;
 
-pub use family::{TagBitmap, Tag36h11};
+pub use family::{Tag36h11, TagBitmap};

@@ -40,7 +40,14 @@ pub(crate) fn run(a: &DemoArgs) -> Result<()> {
 }
 
 pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary) {
-    println!("{} scene: {} frames in {} ({:.1} s, {:.2} s/frame)", scene.name(), s.frames, out.display(), s.seconds, s.seconds / s.frames.max(1) as f64);
+    println!(
+        "{} scene: {} frames in {} ({:.1} s, {:.2} s/frame)",
+        scene.name(),
+        s.frames,
+        out.display(),
+        s.seconds,
+        s.seconds / s.frames.max(1) as f64
+    );
     println!(
         "  tags a detector should find per frame: min {}, mean {:.1}, max {}; median tag side {:.0} px",
         s.detectable_tags.0, s.detectable_tags.1, s.detectable_tags.2, s.median_tag_side_px
@@ -48,4 +55,3 @@ pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary
     println!("  mandible marker travel relative to the maxilla: up to {:.1} mm", s.max_mandible_travel_mm);
     println!("  ground truth: {}", out.join("ground_truth.json").display());
 }
-

@@ -39,11 +39,11 @@ struct MarkerArgs {
     #[arg(long)]
     out: PathBuf,
     /// Edge length of the dodecahedron (mm).
-    #[arg(long, default_value_t = DEFAULT_EDGE_MM)]
+    #[arg(long, default_value_t = DEFAULT_EDGE_MM, allow_hyphen_values = true)]
     edge: f64,
     /// Side of each tag's black-border square (mm); default: the largest that leaves a
     /// one-cell white margin on the face.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     tag_size: Option<f64>,
 }
 
@@ -162,7 +162,10 @@ fn synth(a: &SynthArgs) -> Result<()> {
         let mut worst: f64 = 0.0;
         for roll in [0.0, 7.0, 30.0, 45.0] {
             let c = jawtrack_synth::selfcheck::edge_self_check(400.0, roll);
-            println!("{:7.0} {:8.1} {:5} {:10.4} {:10.4}", c.tag_side_px, roll, c.samples, c.max_error_px, c.rms_error_px);
+            println!(
+                "{:7.0} {:8.1} {:5} {:10.4} {:10.4}",
+                c.tag_side_px, roll, c.samples, c.max_error_px, c.rms_error_px
+            );
             worst = worst.max(c.max_error_px);
         }
         if worst >= 0.05 {

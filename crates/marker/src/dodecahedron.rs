@@ -57,11 +57,7 @@ impl Face {
 
     /// Signed distance (mm) from an in-plane point to the pentagon's boundary: positive inside.
     pub fn distance_inside(&self, p: &Vector3<f64>) -> f64 {
-        self.edge_normals()
-            .iter()
-            .enumerate()
-            .map(|(i, n)| (self.vertices[i] - p).dot(n))
-            .fold(f64::INFINITY, f64::min)
+        self.edge_normals().iter().enumerate().map(|(i, n)| (self.vertices[i] - p).dot(n)).fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -207,7 +203,10 @@ mod tests {
         }
         // 30 distinct edges, each of the given length: count vertex pairs at edge distance.
         let v = d.vertices();
-        let n = (0..20).flat_map(|i| (i + 1..20).map(move |j| (i, j))).filter(|&(i, j)| ((v[i] - v[j]).norm() - 12.7).abs() < 1e-9).count();
+        let n = (0..20)
+            .flat_map(|i| (i + 1..20).map(move |j| (i, j)))
+            .filter(|&(i, j)| ((v[i] - v[j]).norm() - 12.7).abs() < 1e-9)
+            .count();
         assert_eq!(n, 30);
     }
 
@@ -259,7 +258,8 @@ mod tests {
             if r > 0 {
                 assert!(f[3 * r - 1].normal.z > ring[0].normal.z + 0.1);
             }
-            let az: Vec<f64> = ring.iter().map(|x| x.normal.y.atan2(x.normal.x).rem_euclid(std::f64::consts::TAU)).collect();
+            let az: Vec<f64> =
+                ring.iter().map(|x| x.normal.y.atan2(x.normal.x).rem_euclid(std::f64::consts::TAU)).collect();
             assert!(az[0] < az[1] && az[1] < az[2], "ring {r}: {az:?}");
         }
         // The three faces around the top vertex each have it as their apex.

@@ -193,9 +193,12 @@ fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
         })
         .fold(0.0, f64::max);
     if off > PLANARITY_TOLERANCE_MM {
-        return Err(("face_polygon", format!(
-            "the face is not planar: a vertex is {off:.3} mm off the plane of the others (tolerance {PLANARITY_TOLERANCE_MM} mm)"
-        )));
+        return Err((
+            "face_polygon",
+            format!(
+                "the face is not planar: a vertex is {off:.3} mm off the plane of the others (tolerance {PLANARITY_TOLERANCE_MM} mm)"
+            ),
+        ));
     }
     let n = newell_normal(&t.face_polygon);
     if !n.iter().all(|v| v.is_finite()) {
@@ -233,11 +236,14 @@ fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
         let a = t.corners[(i + 1) % 4] - t.corners[i];
         let b = t.corners[(i + 2) % 4] - t.corners[(i + 1) % 4];
         if a.cross(&b).dot(&n) <= 0.0 {
-            return Err(("corners", format!(
-                "wind clockwise seen from outside at corner {} (mirrored, or not in detection order bottom-left, \
+            return Err((
+                "corners",
+                format!(
+                    "wind clockwise seen from outside at corner {} (mirrored, or not in detection order bottom-left, \
                  bottom-right, top-right, top-left)",
-                (i + 1) % 4
-            )));
+                    (i + 1) % 4
+                ),
+            ));
         }
         let side = a.norm();
         if (side - t.size).abs() > SIDE_TOLERANCE * t.size {
@@ -262,7 +268,11 @@ fn from_file(file: FileV1) -> Result<Marker, MarkerError> {
         .enumerate()
         .map(|(bi, b)| {
             let kind = BodyKind::from_name(&b.name).ok_or_else(|| {
-                field(&format!("bodies[{bi}]"), "name", &format!("must be \"maxilla\" or \"mandible\", got \"{}\"", b.name))
+                field(
+                    &format!("bodies[{bi}]"),
+                    "name",
+                    &format!("must be \"maxilla\" or \"mandible\", got \"{}\"", b.name),
+                )
             })?;
             let tags = b
                 .tags

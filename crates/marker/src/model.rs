@@ -199,11 +199,7 @@ impl Marker {
             .iter()
             .map(|&kind| Body {
                 kind,
-                tags: solid
-                    .faces()
-                    .iter()
-                    .map(|f| nominal_tag(f, kind.first_id() + f.index as u32, size))
-                    .collect(),
+                tags: solid.faces().iter().map(|f| nominal_tag(f, kind.first_id() + f.index as u32, size)).collect(),
             })
             .collect();
         Ok(Marker { edge, bodies })

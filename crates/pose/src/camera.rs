@@ -35,7 +35,8 @@ impl CameraIntrinsics {
 
     /// Checks that the numbers can describe a camera.
     pub fn validate(&self) -> Result<(), GeometryError> {
-        let all = [("fx", self.fx), ("fy", self.fy), ("cx", self.cx), ("cy", self.cy), ("k1", self.k1), ("k2", self.k2)];
+        let all =
+            [("fx", self.fx), ("fy", self.fy), ("cx", self.cx), ("cy", self.cy), ("k1", self.k1), ("k2", self.k2)];
         for (name, v) in all {
             if !v.is_finite() {
                 return Err(GeometryError::BadIntrinsics(format!("{name} is not finite")));

@@ -17,9 +17,9 @@ pub mod truth;
 mod synthesizer;
 
 pub use realism::Realism;
-pub use render::{Camera, LinearImage, PAPER_ALBEDO, INK_ALBEDO, RenderScene};
+pub use render::{Camera, INK_ALBEDO, LinearImage, PAPER_ALBEDO, RenderScene};
 pub use scenes::{SceneKind, SceneOptions};
-pub use synthesizer::{Frame, Resolution, SynthConfig, Synthesizer, to_bgra, write_scene, SceneSummary};
+pub use synthesizer::{Frame, Resolution, SceneSummary, SynthConfig, Synthesizer, to_bgra, write_scene};
 pub use truth::{FrameTruth, GroundTruth, TagTruth};
 
 /// Errors of the renderer.

@@ -144,7 +144,8 @@ pub fn add_glare(img: &mut LinearImage, glare: &[Glare]) {
         for y in (cy - r).max(0)..(cy + r + 1).min(img.height as isize) {
             for x in (cx - r).max(0)..(cx + r + 1).min(w as isize) {
                 let d2 = (x as f64 - g.center[0]).powi(2) + (y as f64 - g.center[1]).powi(2);
-                img.radiance[y as usize * w + x as usize] += (g.peak * (-d2 / (2.0 * g.sigma_px * g.sigma_px)).exp()) as f32;
+                img.radiance[y as usize * w + x as usize] +=
+                    (g.peak * (-d2 / (2.0 * g.sigma_px * g.sigma_px)).exp()) as f32;
             }
         }
     }

@@ -108,7 +108,11 @@ impl Realism {
                 return Err(format!("realism.{name} must be a non-negative number, got {v}"));
             }
         }
-        for (name, v) in [("vignetting", self.vignetting), ("occluder_probability", self.occluder_probability), ("glare_probability", self.glare_probability)] {
+        for (name, v) in [
+            ("vignetting", self.vignetting),
+            ("occluder_probability", self.occluder_probability),
+            ("glare_probability", self.glare_probability),
+        ] {
             if v > 1.0 {
                 return Err(format!("realism.{name} must be at most 1, got {v}"));
             }

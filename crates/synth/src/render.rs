@@ -165,7 +165,8 @@ impl Prepared {
                         let center = pose.transform_point(&f.center.into()).coords;
                         let tag = pb.body.tags.iter().find(|t| t.face == f.index).and_then(|t| {
                             let (x, y) = t.axes();
-                            let size = 0.5 * ((t.corners[1] - t.corners[0]).norm() + (t.corners[2] - t.corners[3]).norm());
+                            let size =
+                                0.5 * ((t.corners[1] - t.corners[0]).norm() + (t.corners[2] - t.corners[3]).norm());
                             Some(TagC {
                                 center: pose.transform_point(&t.center.into()).coords,
                                 x: pose.transform_vector(&x),
@@ -205,9 +206,11 @@ impl Prepared {
                                 (nrm, nrm.dot(&a))
                             })
                             .collect();
-                        let bbox = pts.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, q| {
-                            [b[0].min(q.x), b[1].min(q.y), b[2].max(q.x), b[3].max(q.y)]
-                        });
+                        let bbox = pts
+                            .iter()
+                            .fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, q| {
+                                [b[0].min(q.x), b[1].min(q.y), b[2].max(q.x), b[3].max(q.y)]
+                            });
                         ShapeC { edges, bbox, albedo: s.albedo }
                     })
                     .collect();
@@ -271,7 +274,15 @@ impl Prepared {
                     } else {
                         // The margin around the square is not convex: split it into the eight
                         // convex pieces of a 3×3 grid so the uniform-pixel shortcut stays exact.
-                        let band = |t: f64| if t < -1.0 { 0 } else if t > 1.0 { 2 } else { 1 };
+                        let band = |t: f64| {
+                            if t < -1.0 {
+                                0
+                            } else if t > 1.0 {
+                                2
+                            } else {
+                                1
+                            }
+                        };
                         (64 + band(u) * 3 + band(v), PAPER_ALBEDO)
                     }
                 }
@@ -297,7 +308,11 @@ impl Prepared {
             let d = p - pl.origin;
             let q = Vector2::new(d.dot(&pl.ex), d.dot(&pl.ey));
             let hit = pl.shapes.iter().enumerate().rev().find(|(_, s)| {
-                q.x >= s.bbox[0] && q.x <= s.bbox[2] && q.y >= s.bbox[1] && q.y <= s.bbox[3] && s.edges.iter().all(|(n, o)| n.dot(&q) >= *o)
+                q.x >= s.bbox[0]
+                    && q.x <= s.bbox[2]
+                    && q.y >= s.bbox[1]
+                    && q.y <= s.bbox[3]
+                    && s.edges.iter().all(|(n, o)| n.dot(&q) >= *o)
             });
             let (sid, albedo) = match (hit, pl.albedo) {
                 (Some((si, s)), _) => (si as u32 + 1, s.albedo),
@@ -414,7 +429,12 @@ pub fn render_linear(scene: &RenderScene<'_>) -> LinearImage {
             let mut rad = Vec::with_capacity(w);
             let mut dep = Vec::with_capacity(w);
             for x in 0..w {
-                let c = [corners[y * gw + x], corners[y * gw + x + 1], corners[(y + 1) * gw + x], corners[(y + 1) * gw + x + 1]];
+                let c = [
+                    corners[y * gw + x],
+                    corners[y * gw + x + 1],
+                    corners[(y + 1) * gw + x],
+                    corners[(y + 1) * gw + x + 1],
+                ];
                 if c.iter().all(|s| s.id == c[0].id) {
                     rad.push(c[0].value);
                     dep.push(c.iter().map(|s| s.depth).fold(f32::INFINITY, f32::min));
@@ -429,8 +449,15 @@ pub fn render_linear(scene: &RenderScene<'_>) -> LinearImage {
                 let (sx, sy) = pixel_shift(x, y);
                 for &(ox, oy) in &offsets {
                     let (ox, oy) = ((ox + sx) % 1.0, (oy + sy) % 1.0);
-                    let d = r00 * ((1.0 - ox) * (1.0 - oy)) + r10 * (ox * (1.0 - oy)) + r01 * ((1.0 - ox) * oy) + r11 * (ox * oy);
-                    let s = if d.z <= 0.0 { NOTHING } else { prepared.trace(&d, (x as f64 - 0.5 + ox, y as f64 - 0.5 + oy)) };
+                    let d = r00 * ((1.0 - ox) * (1.0 - oy))
+                        + r10 * (ox * (1.0 - oy))
+                        + r01 * ((1.0 - ox) * oy)
+                        + r11 * (ox * oy);
+                    let s = if d.z <= 0.0 {
+                        NOTHING
+                    } else {
+                        prepared.trace(&d, (x as f64 - 0.5 + ox, y as f64 - 0.5 + oy))
+                    };
                     sum += f64::from(s.value);
                     near = near.min(s.depth);
                 }

@@ -181,9 +181,14 @@ impl Rig {
                         let angle = amplitude_mm * s / horizontal;
                         // Sign so that the incisal point moves toward `side`.
                         let probe = rotation_about(&condyle, &Vector3::y_axis(), angle);
-                        let moved = probe.transform_point(&Point3::from(self.lower_incisal_point)).x - self.lower_incisal_point.x;
+                        let moved = probe.transform_point(&Point3::from(self.lower_incisal_point)).x
+                            - self.lower_incisal_point.x;
                         let angle = if moved * side >= 0.0 { angle } else { -angle };
-                        let open = rotation_about(&self.hinge_point, &Vector3::x_axis(), self.hinge_angle(0.3 * amplitude_mm * s));
+                        let open = rotation_about(
+                            &self.hinge_point,
+                            &Vector3::x_axis(),
+                            self.hinge_angle(0.3 * amplitude_mm * s),
+                        );
                         rotation_about(&condyle, &Vector3::y_axis(), angle) * open
                     }
                 }
@@ -193,7 +198,10 @@ impl Rig {
                 let open = 0.5 * (1.0 - phase.cos());
                 let hinge = rotation_about(&self.hinge_point, &Vector3::x_axis(), self.hinge_angle(opening_mm * open));
                 // Out on one side, back on the other: a loop in the frontal plane.
-                let lateral = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(lateral_mm * phase.sin() * open, 0.0, 0.0));
+                let lateral = Pose::from_parts(
+                    UnitQuaternion::identity(),
+                    Vector3::new(lateral_mm * phase.sin() * open, 0.0, 0.0),
+                );
                 lateral * hinge
             }
         }
@@ -290,7 +298,7 @@ impl Default for SceneOptions {
 
 /// The frames of a scene. `seed` draws the hand tremor and the glide amplitudes.
 pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<FrameSpec> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5ce_e5);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_cee5);
     let dt = 1.0 / opts.fps;
     let mut frames = Vec::new();
     match kind {
@@ -317,7 +325,13 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             }
         }
         SceneKind::Hinge => {
-            let view = View { distance_mm: 120.0, azimuth_deg: 30.0, elevation_deg: 0.0, target: [0.0, 20.0, -34.0], hand_seed: None };
+            let view = View {
+                distance_mm: 120.0,
+                azimuth_deg: 30.0,
+                elevation_deg: 0.0,
+                target: [0.0, 20.0, -34.0],
+                hand_seed: None,
+            };
             let period = 2.0;
             let mut start = 0.0;
             for opening in [10.0, 20.0, 30.0, 40.0] {
@@ -350,7 +364,13 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             }
         }
         SceneKind::Chew => {
-            let view = View { distance_mm: 110.0, azimuth_deg: 20.0, elevation_deg: 10.0, target: [0.0, 10.0, -36.0], hand_seed: Some(rng.random()) };
+            let view = View {
+                distance_mm: 110.0,
+                azimuth_deg: 20.0,
+                elevation_deg: 10.0,
+                target: [0.0, 10.0, -36.0],
+                hand_seed: Some(rng.random()),
+            };
             let motion = JawMotion::Chew { opening_mm: 18.0, lateral_mm: 5.0, period_s: 0.8 };
             let n = (opts.cycles as f64 * 0.8 / dt).round() as usize;
             frames.extend((0..n).map(|k| FrameSpec { t: k as f64 * dt, view, motion }));
@@ -392,7 +412,13 @@ mod tests {
 
     #[test]
     fn camera_looks_at_the_target_from_the_given_distance() {
-        let v = View { distance_mm: 100.0, azimuth_deg: 30.0, elevation_deg: 10.0, target: [0.0, 0.0, -38.0], hand_seed: None };
+        let v = View {
+            distance_mm: 100.0,
+            azimuth_deg: 30.0,
+            elevation_deg: 10.0,
+            target: [0.0, 0.0, -38.0],
+            hand_seed: None,
+        };
         let c = v.camera_from_head(0.0);
         let target = c.transform_point(&Point3::new(0.0, 0.0, -38.0));
         assert!(target.x.abs() < 1e-9 && target.y.abs() < 1e-9 && (target.z - 100.0).abs() < 1e-9);

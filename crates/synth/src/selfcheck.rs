@@ -58,7 +58,8 @@ pub fn edge_self_check(side_px: f64, roll_deg: f64) -> EdgeCheck {
     let black = f64::from(INK_ALBEDO) * shade;
     let white = f64::from(PAPER_ALBEDO) * shade;
 
-    let corners: Vec<Point2<f64>> = tag.corners.iter().map(|c| k.project(&pose.transform_point(&Point3::from(*c))).expect("in front")).collect();
+    let corners: Vec<Point2<f64>> =
+        tag.corners.iter().map(|c| k.project(&pose.transform_point(&Point3::from(*c))).expect("in front")).collect();
     let centre = k.project(&pose.transform_point(&Point3::from(tag.center))).expect("in front");
     let cell = side_px / 8.0;
     let half_window = (0.45 * cell).floor() as i64;

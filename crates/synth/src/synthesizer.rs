@@ -1,11 +1,11 @@
 //! Ties a scene, a marker, a camera and the realism settings into frames and their truth.
 
+use crate::SynthError;
 use crate::post::{self, Glare};
 use crate::realism::Realism;
 use crate::render::{Camera, PlacedBody, Plane, RenderScene, Shape, render_linear, sees_body_many};
 use crate::scenes::{FrameSpec, Rig, SceneKind, SceneOptions, scene_frames};
 use crate::truth::{FrameTruth, GroundTruth, PrintErrorTruth, TagTruth};
-use crate::SynthError;
 use jawtrack_marker::{BodyKind, Marker, PrintError};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Point2, Point3, UnitQuaternion, Vector3};
@@ -143,14 +143,24 @@ impl Synthesizer {
         let camera = Camera { intrinsics, width, height };
         let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
 
-        let shift = Normal::new(0.0, config.realism.print_error_mm / 2f64.sqrt()).map_err(|e| SynthError::Config(e.to_string()))?;
+        let shift = Normal::new(0.0, config.realism.print_error_mm / 2f64.sqrt())
+            .map_err(|e| SynthError::Config(e.to_string()))?;
         let turn = Normal::new(0.0, config.realism.print_error_deg).map_err(|e| SynthError::Config(e.to_string()))?;
         let mut errors = Vec::new();
         let mut print_errors = Vec::new();
         for (_, tag) in config.marker.tags() {
-            let e = PrintError { shift_x: shift.sample(&mut rng), shift_y: shift.sample(&mut rng), rotation: turn.sample(&mut rng).to_radians() };
+            let e = PrintError {
+                shift_x: shift.sample(&mut rng),
+                shift_y: shift.sample(&mut rng),
+                rotation: turn.sample(&mut rng).to_radians(),
+            };
             errors.push((tag.id, e));
-            print_errors.push(PrintErrorTruth { id: tag.id, shift_x: e.shift_x, shift_y: e.shift_y, rotation_deg: e.rotation.to_degrees() });
+            print_errors.push(PrintErrorTruth {
+                id: tag.id,
+                shift_x: e.shift_x,
+                shift_y: e.shift_y,
+                rotation_deg: e.rotation.to_degrees(),
+            });
         }
         let true_marker = config.marker.with_print_errors(&errors)?;
 
@@ -215,18 +225,36 @@ impl Synthesizer {
         (camera_from_head, camera_from_head * head_from_maxilla, camera_from_head * head_from_mandible)
     }
 
-    fn scene_at<'a>(&'a self, camera_from_head: &Pose, cam_max: Pose, cam_man: Pose, extra: &[Plane]) -> RenderScene<'a> {
+    fn scene_at<'a>(
+        &'a self,
+        camera_from_head: &Pose,
+        cam_max: Pose,
+        cam_man: Pose,
+        extra: &[Plane],
+    ) -> RenderScene<'a> {
         let edge = self.true_marker.edge;
         let bodies = BodyKind::ALL
             .iter()
             .zip([cam_max, cam_man])
-            .filter_map(|(k, pose)| self.true_marker.body(*k).map(|body| PlacedBody { body, edge, camera_from_body: pose }))
+            .filter_map(|(k, pose)| {
+                self.true_marker.body(*k).map(|body| PlacedBody { body, edge, camera_from_body: pose })
+            })
             .collect();
-        let head_from_plane = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 0.0, self.rig.face_plane_z));
-        let mut planes =
-            vec![Plane { camera_from_plane: *camera_from_head * head_from_plane, albedo: Some(FACE_ALBEDO), shapes: self.clutter.clone() }];
+        let head_from_plane =
+            Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 0.0, self.rig.face_plane_z));
+        let mut planes = vec![Plane {
+            camera_from_plane: *camera_from_head * head_from_plane,
+            albedo: Some(FACE_ALBEDO),
+            shapes: self.clutter.clone(),
+        }];
         planes.extend_from_slice(extra);
-        RenderScene { camera: self.camera, bodies, planes, light_dir: camera_from_head.transform_vector(&self.light_head), ambient: 0.35 }
+        RenderScene {
+            camera: self.camera,
+            bodies,
+            planes,
+            light_dir: camera_from_head.transform_vector(&self.light_head),
+            ambient: 0.35,
+        }
     }
 
     /// Renders frame `index` (0..len).
@@ -271,8 +299,13 @@ impl Synthesizer {
                 [p.1, p.2]
                     .iter()
                     .flat_map(|pose| {
-                        [Vector3::new(15.0, 0.0, 0.0), Vector3::new(0.0, 15.0, 0.0), Vector3::new(0.0, 0.0, 15.0), Vector3::zeros()]
-                            .map(|v| k.project(&pose.transform_point(&Point3::from(v))).unwrap_or(Point2::origin()))
+                        [
+                            Vector3::new(15.0, 0.0, 0.0),
+                            Vector3::new(0.0, 15.0, 0.0),
+                            Vector3::new(0.0, 0.0, 15.0),
+                            Vector3::zeros(),
+                        ]
+                        .map(|v| k.project(&pose.transform_point(&Point3::from(v))).unwrap_or(Point2::origin()))
                     })
                     .collect()
             };
@@ -283,7 +316,11 @@ impl Synthesizer {
         };
         let mut img = None::<crate::render::LinearImage>;
         for s in 0..sub {
-            let t = if sub == 1 { spec.t } else { spec.t + realism.exposure_s * ((f64::from(s) + 0.5) / f64::from(sub) - 0.5) };
+            let t = if sub == 1 {
+                spec.t
+            } else {
+                spec.t + realism.exposure_s * ((f64::from(s) + 0.5) / f64::from(sub) - 0.5)
+            };
             let (ch, cx, cm) = self.poses_at(&spec, t);
             let scene = self.scene_at(&ch, cx, cm, &extra);
             let one = render_linear(&scene);
@@ -302,11 +339,12 @@ impl Synthesizer {
         let inv = 1.0 / sub as f32;
         img.radiance.iter_mut().for_each(|v| *v *= inv);
 
-        let focus_mm = (realism.f_number > 0.0).then(|| {
-            realism.focus_distance_mm.unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
-        });
+        let focus_mm = (realism.f_number > 0.0)
+            .then(|| realism.focus_distance_mm.unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z)));
         if let Some(focus) = focus_mm {
-            post::defocus(&mut img, |d| post::defocus_sigma_px(&k, realism.f_number, realism.focal_length_mm, focus, d));
+            post::defocus(&mut img, |d| {
+                post::defocus_sigma_px(&k, realism.f_number, realism.focal_length_mm, focus, d)
+            });
         }
         post::add_glare(&mut img, &glare);
         post::illumination(&mut img, realism.vignetting, realism.lighting_gradient, self.gradient_dir);
@@ -426,7 +464,10 @@ fn make_clutter(n: u32, rng: &mut ChaCha8Rng) -> Vec<Shape> {
                     .collect();
                 shapes.push(Shape { polygon, albedo: rng.random_range(0.1..0.8) });
             }
-            _ => shapes.push(Shape { polygon: poly(rng.random_range(6.0..20.0), rng.random_range(0.4..1.5)), albedo: rng.random_range(0.05..0.3) }),
+            _ => shapes.push(Shape {
+                polygon: poly(rng.random_range(6.0..20.0), rng.random_range(0.4..1.5)),
+                albedo: rng.random_range(0.05..0.3),
+            }),
         }
     }
     shapes
@@ -435,7 +476,8 @@ fn make_clutter(n: u32, rng: &mut ChaCha8Rng) -> Vec<Shape> {
 /// A convex occluder (a fingertip or lip edge) halfway between the camera and a tag.
 fn make_occluder(tag_center: &Vector3<f64>, rng: &mut ChaCha8Rng) -> Plane {
     let depth = tag_center.z * rng.random_range(0.5..0.75);
-    let p = tag_center * (depth / tag_center.z) + Vector3::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0), 0.0) * (depth / tag_center.z);
+    let p = tag_center * (depth / tag_center.z)
+        + Vector3::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0), 0.0) * (depth / tag_center.z);
     let r = rng.random_range(2.0..4.5) * depth / tag_center.z;
     let stretch = rng.random_range(1.0..2.5);
     let rot: f64 = rng.random_range(0.0..std::f64::consts::TAU);
@@ -484,10 +526,15 @@ pub struct SceneSummary {
 
 /// Renders every frame of a scene into `dir` (PNG per frame and `ground_truth.json`, written
 /// last), calling `progress(done, total)` after each frame.
-pub fn write_scene(config: SynthConfig, dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<SceneSummary, SynthError> {
-    let io = |p: &Path, e: &dyn std::fmt::Display| SynthError::Io { path: p.display().to_string(), reason: e.to_string() };
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
+pub fn write_scene(
+    config: SynthConfig,
+    dir: &Path,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<SceneSummary, SynthError> {
+    let io =
+        |p: &Path, e: &dyn std::fmt::Display| SynthError::Io { path: p.display().to_string(), reason: e.to_string() };
     let synth = Synthesizer::new(config)?;
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
     let start = std::time::Instant::now();
     let mut truth = synth.header();
     let mut counts = Vec::new();
