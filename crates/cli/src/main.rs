@@ -29,8 +29,30 @@ enum Command {
         /// The marker file.
         file: PathBuf,
     },
+    /// Write the harness CAD: printable tag sheets (SVG, true mm), the body with its mounting
+    /// post (STL) and the marker file.
+    Harness(HarnessArgs),
     /// Render a synthetic scene: PNG frames and ground_truth.json.
     Synth(SynthArgs),
+}
+
+#[derive(Args)]
+struct HarnessArgs {
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Edge length of the dodecahedron (mm).
+    #[arg(long, default_value_t = DEFAULT_EDGE_MM, allow_hyphen_values = true)]
+    edge: f64,
+    /// Tag side (mm); default: the largest with a one-cell white margin.
+    #[arg(long, allow_hyphen_values = true)]
+    tag_size: Option<f64>,
+    /// Length of the mounting post below the body's bottom vertex (mm).
+    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
+    post_length: f64,
+    /// Diameter of the mounting post (mm).
+    #[arg(long, default_value_t = 4.0, allow_hyphen_values = true)]
+    post_diameter: f64,
 }
 
 #[derive(Args)]
@@ -99,6 +121,7 @@ fn main() {
         Command::Demo(a) => demo::run(&a),
         Command::Marker(a) => marker(&a),
         Command::CheckMarker { file } => check_marker(&file),
+        Command::Harness(a) => harness(&a),
         Command::Synth(a) => synth(&a),
     };
     if let Err(e) = result {
@@ -112,6 +135,21 @@ fn marker(a: &MarkerArgs) -> Result<()> {
     m.save(&a.out)?;
     let size = m.bodies[0].tags[0].size;
     println!("wrote {} (edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
+    Ok(())
+}
+
+fn harness(a: &HarnessArgs) -> Result<()> {
+    let marker = Marker::nominal(a.edge, a.tag_size)?;
+    let params = jawtrack_harness::HarnessParams {
+        post_length: a.post_length,
+        post_diameter: a.post_diameter,
+        ..jawtrack_harness::HarnessParams::default()
+    };
+    let written = jawtrack_harness::write_harness(&a.out, &marker, &params)?;
+    for p in &written {
+        println!("wrote {}", p.display());
+    }
+    println!("print the sheets at 100 % and check the 10 mm bar; see harness-cad/README.md for assembly");
     Ok(())
 }
 

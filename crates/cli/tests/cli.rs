@@ -97,3 +97,18 @@ fn self_check_passes() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("ok: every edge within"));
 }
+
+#[test]
+fn harness_writes_sheets_body_and_marker() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("h");
+    let o = jawtrack(&["harness", "--out", out.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["tags-maxilla.svg", "tags-mandible.svg", "dodecahedron-with-post.stl", "marker.json"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let bad = dir.path().join("bad");
+    refused(&jawtrack(&["harness", "--out", bad.to_str().expect("utf-8"), "--post-diameter", "12"]), "post");
+    refused(&jawtrack(&["harness", "--out", bad.to_str().expect("utf-8"), "--post-length", "-1"]), "post_length");
+    assert!(!bad.exists(), "nothing written on refusal");
+}
