@@ -26,21 +26,21 @@ pub(crate) fn run(a: &DemoArgs) -> Result<()> {
         intrinsics: None,
         seed: a.seed,
         realism: Realism::default(),
-        // One 20 mm opening cycle per amplitude at 10 frames/s: 80 frames.
-        options: SceneOptions { frames_per_view: 1, cycles: 1, fps: 10.0 },
+        // One cycle per opening (10, 20, 30, 40 mm) sampled at 4 frames/s: 32 frames.
+        options: SceneOptions { frames_per_view: 1, cycles: 1, fps: 4.0 },
         marker: jawtrack_marker::Marker::default(),
         stride: 1,
         max_frames: None,
     };
-    println!("JawTrack demo: rendering a hinge-opening session (10–40 mm) at 1080p with the synthetic rig…");
+    say!("JawTrack demo: rendering a hinge-opening session (10–40 mm) at 1080p with the synthetic rig…");
     let summary = render_with_progress(config, &a.out)?;
     print_scene_summary(SceneKind::Hinge, &a.out, &summary);
-    println!("Detection and tracking of these frames arrive with the detector and tracker; see the README.");
+    say!("Detection and tracking of these frames arrive with the detector and tracker; see the README.");
     Ok(())
 }
 
 pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary) {
-    println!(
+    say!(
         "{} scene: {} frames in {} ({:.1} s, {:.2} s/frame)",
         scene.name(),
         s.frames,
@@ -48,10 +48,13 @@ pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary
         s.seconds,
         s.seconds / s.frames.max(1) as f64
     );
-    println!(
+    say!(
         "  tags a detector should find per frame: min {}, mean {:.1}, max {}; median tag side {:.0} px",
-        s.detectable_tags.0, s.detectable_tags.1, s.detectable_tags.2, s.median_tag_side_px
+        s.detectable_tags.0,
+        s.detectable_tags.1,
+        s.detectable_tags.2,
+        s.median_tag_side_px
     );
-    println!("  mandible marker travel relative to the maxilla: up to {:.1} mm", s.max_mandible_travel_mm);
-    println!("  ground truth: {}", out.join("ground_truth.json").display());
+    say!("  mandible marker travel relative to the maxilla: up to {:.1} mm", s.max_mandible_travel_mm);
+    say!("  ground truth: {}", out.join("ground_truth.json").display());
 }

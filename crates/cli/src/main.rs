@@ -1,6 +1,17 @@
 //! `jawtrack`: the command line of JawTrack. Each subcommand is a thin layer over a library
 //! crate; this file only parses arguments, reports progress and prints results.
 
+/// `println!` that ends the program quietly when stdout is closed (`jawtrack … | head`)
+/// instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout(), $($arg)*).is_err() {
+            std::process::exit(0);
+        }
+    }};
+}
+
 mod demo;
 
 use anyhow::{Context, Result, bail};
@@ -134,7 +145,7 @@ fn marker(a: &MarkerArgs) -> Result<()> {
     let m = Marker::nominal(a.edge, a.tag_size)?;
     m.save(&a.out)?;
     let size = m.bodies[0].tags[0].size;
-    println!("wrote {} (edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
+    say!("wrote {} (edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
     Ok(())
 }
 
@@ -147,18 +158,18 @@ fn harness(a: &HarnessArgs) -> Result<()> {
     };
     let written = jawtrack_harness::write_harness(&a.out, &marker, &params)?;
     for p in &written {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
-    println!("print the sheets at 100 % and check the 10 mm bar; see harness-cad/README.md for assembly");
+    say!("print the sheets at 100 % and check the 10 mm bar; see harness-cad/README.md for assembly");
     Ok(())
 }
 
 fn check_marker(file: &Path) -> Result<()> {
     let m = Marker::load(file)?;
-    println!("{}: valid marker file, edge {} mm", file.display(), m.edge);
+    say!("{}: valid marker file, edge {} mm", file.display(), m.edge);
     for b in &m.bodies {
         let ids: Vec<String> = b.tags.iter().map(|t| t.id.to_string()).collect();
-        println!("  {}: {} tags, ids {}", b.kind, b.tags.len(), ids.join(" "));
+        say!("  {}: {} tags, ids {}", b.kind, b.tags.len(), ids.join(" "));
     }
     Ok(())
 }
@@ -196,20 +207,17 @@ pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfi
 
 fn synth(a: &SynthArgs) -> Result<()> {
     if a.self_check {
-        println!("side_px roll_deg rows  max_err_px rms_err_px");
+        say!("side_px roll_deg rows  max_err_px rms_err_px");
         let mut worst: f64 = 0.0;
         for roll in [0.0, 7.0, 30.0, 45.0] {
             let c = jawtrack_synth::selfcheck::edge_self_check(400.0, roll);
-            println!(
-                "{:7.0} {:8.1} {:5} {:10.4} {:10.4}",
-                c.tag_side_px, roll, c.samples, c.max_error_px, c.rms_error_px
-            );
+            say!("{:7.0} {:8.1} {:5} {:10.4} {:10.4}", c.tag_side_px, roll, c.samples, c.max_error_px, c.rms_error_px);
             worst = worst.max(c.max_error_px);
         }
         if worst >= 0.05 {
             bail!("edge error {worst:.4} px exceeds 0.05 px");
         }
-        println!("ok: every edge within {worst:.4} px of its projection");
+        say!("ok: every edge within {worst:.4} px of its projection");
         return Ok(());
     }
     let Some(scene) = a.scene else { bail!("--scene is required (static, hinge, excursion or chew)") };

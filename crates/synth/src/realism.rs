@@ -17,7 +17,7 @@ pub struct Realism {
     pub focus_distance_mm: Option<f64>,
     /// Exposure time (s) for motion blur; 0 renders an instant.
     pub exposure_s: f64,
-    /// Most sub-frames averaged for motion blur (enough for ≤ 0.5 px motion between them).
+    /// Most sub-frames averaged for motion blur (enough for ≤ 1 px motion between them).
     pub max_subframes: u32,
     /// Electrons collected at white paper in full light (shot noise); 0 = no noise at all.
     pub full_well_e: f64,

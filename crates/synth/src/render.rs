@@ -388,17 +388,15 @@ fn pixel_shift(x: usize, y: usize) -> (f64, f64) {
     (a / SAMPLES as f64, b / SAMPLES as f64)
 }
 
-/// Viewing rays through the pixel corners: (W+1)×(H+1) directions with z = 1, corner (i, j)
-/// being the image point (i − ½, j − ½). Rays inside a pixel are interpolated from these,
-/// exactly without distortion and to ~1e-6 px with it.
-fn corner_rays(cam: &Camera) -> Vec<Vector3<f64>> {
-    let w = cam.width as usize + 1;
-    let h = cam.height as usize + 1;
+/// Viewing rays through the pixel corners of the window `[x0, y0, x1, y1)`: (x1−x0+1)×(y1−y0+1)
+/// directions with z = 1, corner (i, j) being the image point (i − ½, j − ½). Rays inside a
+/// pixel are interpolated from these, exactly without distortion and to ~1e-6 px with it.
+fn corner_rays(cam: &Camera, win: [usize; 4]) -> Vec<Vector3<f64>> {
     let k = &cam.intrinsics;
-    (0..h)
+    (win[1]..=win[3])
         .into_par_iter()
         .flat_map_iter(|j| {
-            (0..w).map(move |i| {
+            (win[0]..=win[2]).map(move |i| {
                 let p = Point2::new(i as f64 - 0.5, j as f64 - 0.5);
                 // Beyond the distortion model's fold the ray is meaningless; look nowhere.
                 k.unproject(&p).unwrap_or_else(|| Vector3::new(0.0, 0.0, -1.0))
@@ -407,23 +405,50 @@ fn corner_rays(cam: &Camera) -> Vec<Vector3<f64>> {
         .collect()
 }
 
+/// The pixel window `[x0, y0, x1, y1)` that holds every body of the scene, or `None` if no
+/// body is on screen.
+pub fn bodies_window(scene: &RenderScene<'_>) -> Option<[usize; 4]> {
+    let cam = &scene.camera;
+    let (w, h) = (f64::from(cam.width), f64::from(cam.height));
+    scene
+        .bodies
+        .iter()
+        .filter_map(|b| sphere_bbox(cam, &b.camera_from_body.translation(), Dodecahedron::new(b.edge).circumradius()))
+        .map(|b| {
+            let x0 = b[0].floor().clamp(0.0, w) as usize;
+            let y0 = b[1].floor().clamp(0.0, h) as usize;
+            let x1 = (b[2].ceil() + 1.0).clamp(0.0, w) as usize;
+            let y1 = (b[3].ceil() + 1.0).clamp(0.0, h) as usize;
+            [x0, y0, x1, y1]
+        })
+        .filter(|b| b[2] > b[0] && b[3] > b[1])
+        .reduce(|a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])])
+}
+
 /// Renders the linear radiance and depth of one instant.
 pub fn render_linear(scene: &RenderScene<'_>) -> LinearImage {
     let cam = scene.camera;
+    render_window(scene, [0, 0, cam.width as usize, cam.height as usize])
+}
+
+/// Renders only the pixels of the window `[x0, y0, x1, y1)`; the result has the window's size.
+/// A pixel comes out exactly as in a full render.
+pub fn render_window(scene: &RenderScene<'_>, win: [usize; 4]) -> LinearImage {
+    let cam = scene.camera;
     let prepared = Prepared::new(scene);
-    let rays = corner_rays(&cam);
-    let gw = cam.width as usize + 1;
+    let rays = corner_rays(&cam, win);
+    let gw = win[2] - win[0] + 1;
     let corners: Vec<Sample> = rays
         .par_iter()
         .enumerate()
         .map(|(idx, d)| {
-            let (i, j) = (idx % gw, idx / gw);
+            let (i, j) = (win[0] + idx % gw, win[1] + idx / gw);
             if d.z <= 0.0 { NOTHING } else { prepared.trace(d, (i as f64 - 0.5, j as f64 - 0.5)) }
         })
         .collect();
     let offsets = sample_offsets();
-    let w = cam.width as usize;
-    let rows: Vec<(Vec<f32>, Vec<f32>)> = (0..cam.height as usize)
+    let w = win[2] - win[0];
+    let rows: Vec<(Vec<f32>, Vec<f32>)> = (0..win[3] - win[1])
         .into_par_iter()
         .map(|y| {
             let mut rad = Vec::with_capacity(w);
@@ -446,7 +471,7 @@ pub fn render_linear(scene: &RenderScene<'_>) -> LinearImage {
                 let r11 = rays[(y + 1) * gw + x + 1];
                 let mut sum = 0.0f64;
                 let mut near = f32::INFINITY;
-                let (sx, sy) = pixel_shift(x, y);
+                let (sx, sy) = pixel_shift(win[0] + x, win[1] + y);
                 for &(ox, oy) in &offsets {
                     let (ox, oy) = ((ox + sx) % 1.0, (oy + sy) % 1.0);
                     let d = r00 * ((1.0 - ox) * (1.0 - oy))
@@ -456,7 +481,7 @@ pub fn render_linear(scene: &RenderScene<'_>) -> LinearImage {
                     let s = if d.z <= 0.0 {
                         NOTHING
                     } else {
-                        prepared.trace(&d, (x as f64 - 0.5 + ox, y as f64 - 0.5 + oy))
+                        prepared.trace(&d, ((win[0] + x) as f64 - 0.5 + ox, (win[1] + y) as f64 - 0.5 + oy))
                     };
                     sum += f64::from(s.value);
                     near = near.min(s.depth);
@@ -467,13 +492,13 @@ pub fn render_linear(scene: &RenderScene<'_>) -> LinearImage {
             (rad, dep)
         })
         .collect();
-    let mut radiance = Vec::with_capacity(w * cam.height as usize);
-    let mut depth = Vec::with_capacity(w * cam.height as usize);
+    let mut radiance = Vec::with_capacity(w * (win[3] - win[1]));
+    let mut depth = Vec::with_capacity(w * (win[3] - win[1]));
     for (r, d) in rows {
         radiance.extend(r);
         depth.extend(d);
     }
-    LinearImage { width: cam.width, height: cam.height, radiance, depth }
+    LinearImage { width: w as u32, height: (win[3] - win[1]) as u32, radiance, depth }
 }
 
 fn sees_body_prepared(prepared: &Prepared, cam: &Camera, body: usize, px: &Point2<f64>) -> bool {

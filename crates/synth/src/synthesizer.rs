@@ -3,7 +3,7 @@
 use crate::SynthError;
 use crate::post::{self, Glare};
 use crate::realism::Realism;
-use crate::render::{Camera, PlacedBody, Plane, RenderScene, Shape, render_linear, sees_body_many};
+use crate::render::{self, Camera, PlacedBody, Plane, RenderScene, Shape, render_linear, sees_body_many};
 use crate::scenes::{FrameSpec, Rig, SceneKind, SceneOptions, scene_frames};
 use crate::truth::{FrameTruth, GroundTruth, PrintErrorTruth, TagTruth};
 use jawtrack_marker::{BodyKind, Marker, PrintError};
@@ -290,7 +290,8 @@ impl Synthesizer {
             }
         }
 
-        // Motion blur: enough sub-frames that nothing moves more than ½ px between two.
+        // Motion blur: enough sub-frames that nothing moves more than 1 px between two (the
+        // blur stays symmetric about mid-exposure, so the true pose is its centre).
         let sub = if realism.exposure_s > 0.0 {
             let (t0, t1) = (spec.t - realism.exposure_s / 2.0, spec.t + realism.exposure_s / 2.0);
             let a = self.poses_at(&spec, t0);
@@ -310,34 +311,58 @@ impl Synthesizer {
                     .collect()
             };
             let moved = probe(&a).iter().zip(probe(&b)).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max);
-            ((moved / 0.5).ceil() as u32).clamp(1, realism.max_subframes)
+            (moved.ceil() as u32).clamp(1, realism.max_subframes)
         } else {
             1
         };
-        let mut img = None::<crate::render::LinearImage>;
-        for s in 0..sub {
-            let t = if sub == 1 {
-                spec.t
-            } else {
-                spec.t + realism.exposure_s * ((f64::from(s) + 0.5) / f64::from(sub) - 0.5)
-            };
-            let (ch, cx, cm) = self.poses_at(&spec, t);
-            let scene = self.scene_at(&ch, cx, cm, &extra);
-            let one = render_linear(&scene);
-            img = Some(match img {
-                None => one,
-                Some(mut acc) => {
-                    acc.radiance.iter_mut().zip(&one.radiance).for_each(|(a, b)| *a += b);
-                    if s == sub / 2 {
-                        acc.depth = one.depth;
-                    }
-                    acc
+        let times: Vec<f64> = (0..sub)
+            .map(|s| {
+                if sub == 1 {
+                    spec.t
+                } else {
+                    spec.t + realism.exposure_s * ((f64::from(s) + 0.5) / f64::from(sub) - 0.5)
                 }
-            });
+            })
+            .collect();
+        let scenes: Vec<RenderScene<'_>> = times
+            .iter()
+            .map(|&t| {
+                let (ch, cx, cm) = self.poses_at(&spec, t);
+                self.scene_at(&ch, cx, cm, &extra)
+            })
+            .collect();
+        let mid = sub as usize / 2;
+        let mut img = render_linear(&scenes[mid]);
+        if sub > 1 {
+            // With the camera still (a tripod) only the markers move: re-render just their
+            // window for each sub-frame. A moving camera moves everything.
+            let still = times.iter().all(|&t| self.poses_at(&spec, t).0.distance_to(&cam_head) == (0.0, 0.0));
+            let full = [0, 0, self.camera.width as usize, self.camera.height as usize];
+            let win = if still {
+                scenes
+                    .iter()
+                    .filter_map(render::bodies_window)
+                    .reduce(|a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])])
+            } else {
+                Some(full)
+            };
+            if let Some(win) = win {
+                let ww = win[2] - win[0];
+                let mut acc = vec![0.0f32; ww * (win[3] - win[1])];
+                for scene in &scenes {
+                    let part = render::render_window(scene, win);
+                    acc.iter_mut().zip(&part.radiance).for_each(|(a, b)| *a += b);
+                }
+                let inv = 1.0 / sub as f32;
+                let w = self.camera.width as usize;
+                for (row, chunk) in acc.chunks(ww).enumerate() {
+                    let y = win[1] + row;
+                    for (x, v) in chunk.iter().enumerate() {
+                        img.radiance[y * w + win[0] + x] = v * inv;
+                    }
+                }
+            }
         }
-        let mut img = img.ok_or_else(|| SynthError::Config("no sub-frames".into()))?;
-        let inv = 1.0 / sub as f32;
-        img.radiance.iter_mut().for_each(|v| *v *= inv);
 
         let focus_mm = (realism.f_number > 0.0)
             .then(|| realism.focus_distance_mm.unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z)));
@@ -495,12 +520,13 @@ fn make_occluder(tag_center: &Vector3<f64>, rng: &mut ChaCha8Rng) -> Plane {
     }
 }
 
-/// Writes an 8-bit gray PNG, compressed as far as the encoder goes (fixtures live in git).
+/// Writes an 8-bit gray PNG. The encoder's fast mode (fdeflate) is both the quickest and, on
+/// noisy frames, the smallest: measured 5 ms and 910 kB against 520 ms and 913 kB for "best".
 fn write_png(path: &Path, frame: &Frame) -> Result<(), Box<dyn std::error::Error>> {
     use image::ImageEncoder;
     use image::codecs::png::{CompressionType, FilterType, PngEncoder};
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    PngEncoder::new_with_quality(file, CompressionType::Best, FilterType::Adaptive).write_image(
+    PngEncoder::new_with_quality(file, CompressionType::Fast, FilterType::Adaptive).write_image(
         &frame.luma,
         frame.width,
         frame.height,
