@@ -8,12 +8,12 @@
 
 use jawtrack_apriltag::Tag36h11;
 use jawtrack_synth::render::{INK_ALBEDO, tag_texture};
-use jawtrack_tests::{read_tag, shared_data};
+use jawtrack_tests::{read_tag, say_skipped, shared_data};
 
 #[test]
 fn rendered_tags_match_the_reference_decoding_of_real_photos() {
     let Some(data) = shared_data() else {
-        eprintln!("SKIPPED: ../shared/data is not present");
+        say_skipped("rendered tags vs reference photos: ../shared/data is not present");
         return;
     };
     let dir = data.join("photos");

@@ -15,6 +15,13 @@ pub fn shared_data() -> Option<PathBuf> {
     p.is_dir().then_some(p)
 }
 
+/// Says that a test skipped part of its work, on the terminal even when cargo captures test
+/// output (it captures `print!`/`eprint!`, not writes to the stderr handle).
+pub fn say_skipped(what: &str) {
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stderr(), "SKIPPED: {what}");
+}
+
 /// Fixture sets: every folder of `fixtures/` holding a `ground_truth.json`, sorted.
 pub fn fixture_sets() -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(fixtures_dir())

@@ -52,12 +52,8 @@ struct HarnessArgs {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
-    /// Edge length of the dodecahedron (mm).
-    #[arg(long, default_value_t = DEFAULT_EDGE_MM, allow_hyphen_values = true)]
-    edge: f64,
-    /// Tag side (mm); default: the largest with a one-cell white margin.
-    #[arg(long, allow_hyphen_values = true)]
-    tag_size: Option<f64>,
+    #[command(flatten)]
+    geometry: GeometryArgs,
     /// Length of the mounting post below the body's bottom vertex (mm).
     #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
     post_length: f64,
@@ -66,11 +62,9 @@ struct HarnessArgs {
     post_diameter: f64,
 }
 
+/// The marker's printed geometry, shared by the commands that make a marker.
 #[derive(Args)]
-struct MarkerArgs {
-    /// Where to write the marker file (JSON).
-    #[arg(long)]
-    out: PathBuf,
+struct GeometryArgs {
     /// Edge length of the dodecahedron (mm).
     #[arg(long, default_value_t = DEFAULT_EDGE_MM, allow_hyphen_values = true)]
     edge: f64,
@@ -78,6 +72,21 @@ struct MarkerArgs {
     /// one-cell white margin on the face.
     #[arg(long, allow_hyphen_values = true)]
     tag_size: Option<f64>,
+}
+
+impl GeometryArgs {
+    fn marker(&self) -> Result<Marker> {
+        Ok(Marker::nominal(self.edge, self.tag_size)?)
+    }
+}
+
+#[derive(Args)]
+struct MarkerArgs {
+    /// Where to write the marker file (JSON).
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    geometry: GeometryArgs,
 }
 
 #[derive(Args)]
@@ -142,7 +151,7 @@ fn main() {
 }
 
 fn marker(a: &MarkerArgs) -> Result<()> {
-    let m = Marker::nominal(a.edge, a.tag_size)?;
+    let m = a.geometry.marker()?;
     m.save(&a.out)?;
     let size = m.bodies[0].tags[0].size;
     say!("wrote {} (edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
@@ -150,7 +159,7 @@ fn marker(a: &MarkerArgs) -> Result<()> {
 }
 
 fn harness(a: &HarnessArgs) -> Result<()> {
-    let marker = Marker::nominal(a.edge, a.tag_size)?;
+    let marker = a.geometry.marker()?;
     let params = jawtrack_harness::HarnessParams {
         post_length: a.post_length,
         post_diameter: a.post_diameter,

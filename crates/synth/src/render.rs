@@ -513,3 +513,88 @@ pub(crate) fn sees_body_many(scene: &RenderScene<'_>, body: usize, pts: &[Point2
     let prepared = Prepared::new(scene);
     pts.iter().map(|p| sees_body_prepared(&prepared, &scene.camera, body, p)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jawtrack_marker::{BodyKind, Marker};
+    use nalgebra::{Point3, UnitQuaternion};
+
+    /// With strong radial distortion, the pixel where the camera model projects a cell's centre
+    /// shows that cell's colour: rendering and projection agree on the distortion.
+    #[test]
+    fn distorted_rendering_agrees_with_the_projection() {
+        let marker = Marker::default();
+        let body = marker.body(BodyKind::Maxilla).expect("maxilla");
+        let k = CameraIntrinsics { fx: 900.0, fy: 900.0, cx: 319.5, cy: 239.5, k1: -0.25, k2: 0.08 };
+        let cam = Camera { intrinsics: k, width: 640, height: 480 };
+        // Off-centre, where distortion moves points by several pixels.
+        let pose = Pose::from_parts(UnitQuaternion::from_euler_angles(2.8, 0.3, 0.4), Vector3::new(28.0, 14.0, 110.0));
+        let scene = RenderScene {
+            camera: cam,
+            bodies: vec![PlacedBody { body, edge: marker.edge, camera_from_body: pose }],
+            planes: vec![],
+            light_dir: Vector3::new(0.0, 0.0, -1.0),
+            ambient: 0.35,
+        };
+        let img = render_linear(&scene);
+        let solid = Dodecahedron::new(marker.edge);
+        let (mut checked, mut moved) = (0, 0.0f64);
+        for tag in &body.tags {
+            let face = &solid.faces()[tag.face];
+            let n = pose.transform_vector(&face.normal);
+            let c = pose.transform_point(&Point3::from(tag.center));
+            if n.dot(&c.coords.normalize()) > -0.5 {
+                continue; // keep faces seen within 60° of head-on
+            }
+            let shade = (0.35 + 0.65 * n.dot(&Vector3::new(0.0, 0.0, -1.0)).max(0.0)) as f32;
+            let bm = Tag36h11::bitmap(tag.id).expect("id");
+            for cy in 0..8 {
+                for cx in 0..8 {
+                    let (u, v) = (-1.0 + (cx as f64 + 0.5) / 4.0, -1.0 + (cy as f64 + 0.5) / 4.0);
+                    let p = pose.transform_point(&Point3::from(tag.point_at(u, v)));
+                    let px = k.project(&p).expect("in front");
+                    let pinhole = CameraIntrinsics { k1: 0.0, k2: 0.0, ..k }.project(&p).expect("in front");
+                    moved = moved.max((px - pinhole).norm());
+                    if px.x < 1.0 || px.y < 1.0 || px.x > 638.0 || px.y > 478.0 {
+                        continue;
+                    }
+                    let (x, y) = (px.x.round() as usize, px.y.round() as usize);
+                    let want = if bm.is_white(cx, cy) { PAPER_ALBEDO } else { INK_ALBEDO } * shade;
+                    let got = img.radiance[y * 640 + x];
+                    assert!((got - want).abs() < 1e-4, "tag {} cell ({cx},{cy}) at {px:?}: {got} vs {want}", tag.id);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked >= 96, "{checked} cells checked");
+        assert!(moved > 5.0, "distortion moved cells by only {moved} px");
+    }
+
+    #[test]
+    fn a_window_renders_exactly_as_the_full_frame() {
+        let marker = Marker::default();
+        let body = marker.body(BodyKind::Mandible).expect("mandible");
+        let cam = Camera { intrinsics: CameraIntrinsics::pinhole(800.0, 800.0, 159.5, 119.5), width: 320, height: 240 };
+        let scene = RenderScene {
+            camera: cam,
+            bodies: vec![PlacedBody {
+                body,
+                edge: marker.edge,
+                camera_from_body: Pose::from_axis_angle(Vector3::new(2.9, 0.2, 0.1), Vector3::new(0.0, 0.0, 120.0)),
+            }],
+            planes: vec![],
+            light_dir: Vector3::new(0.2, -0.5, -1.0),
+            ambient: 0.35,
+        };
+        let full = render_linear(&scene);
+        let win = bodies_window(&scene).expect("on screen");
+        let part = render_window(&scene, win);
+        for y in win[1]..win[3] {
+            for x in win[0]..win[2] {
+                assert_eq!(part.radiance[(y - win[1]) * (win[2] - win[0]) + (x - win[0])], full.radiance[y * 320 + x]);
+            }
+        }
+        assert!(full.radiance.iter().any(|&v| v > 0.0), "something was rendered");
+    }
+}

@@ -597,3 +597,27 @@ pub fn write_scene(
         seconds: start.elapsed().as_secs_f64(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bgra_repeats_luma_with_opaque_alpha() {
+        assert_eq!(to_bgra(&[0, 7, 255]), vec![0, 0, 0, 255, 7, 7, 7, 255, 255, 255, 255, 255]);
+    }
+
+    #[test]
+    fn bad_settings_are_refused_by_name() {
+        let mut c = SynthConfig::new(SceneKind::Static);
+        c.realism.f_number = -1.0;
+        let e = Synthesizer::new(c).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("f_number"), "{e}");
+        let mut c = SynthConfig::new(SceneKind::Static);
+        c.stride = 0;
+        assert!(Synthesizer::new(c).is_err());
+        let c = SynthConfig::new(SceneKind::Static);
+        let s = Synthesizer::new(c).expect("defaults are valid");
+        assert!(s.render(s.len()).is_err(), "a frame past the end is an error, not a panic");
+    }
+}
