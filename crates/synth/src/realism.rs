@@ -13,7 +13,7 @@ pub struct Realism {
     /// Physical focal length (mm); with the f-number it sets the aperture.
     pub focal_length_mm: f64,
     /// Distance the lens is focused at (mm along the optical axis); `None` focuses on the
-    /// markers' midpoint, as autofocus would.
+    /// median depth of the tags facing the camera, as autofocus would.
     pub focus_distance_mm: Option<f64>,
     /// Exposure time (s) for motion blur; 0 renders an instant.
     pub exposure_s: f64,

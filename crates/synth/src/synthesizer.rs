@@ -364,8 +364,14 @@ impl Synthesizer {
             }
         }
 
-        let focus_mm = (realism.f_number > 0.0)
-            .then(|| realism.focus_distance_mm.unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z)));
+        // Autofocus locks on what has contrast: the tags facing the camera (median depth).
+        let focus_mm = (realism.f_number > 0.0).then(|| {
+            realism.focus_distance_mm.unwrap_or_else(|| {
+                let mut z: Vec<f64> = tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z).collect();
+                z.sort_by(f64::total_cmp);
+                z.get(z.len() / 2).copied().unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
+            })
+        });
         if let Some(focus) = focus_mm {
             post::defocus(&mut img, |d| {
                 post::defocus_sigma_px(&k, realism.f_number, realism.focal_length_mm, focus, d)

@@ -1,0 +1,196 @@
+//! The AprilTag C library (AprilRobotics, 3.4.5 as vendored by `apriltag-sys`) behind a safe
+//! wrapper, for tests and benchmarks only: it is the reference our detector must match or
+//! beat, and an independent check of the renderer. Nothing in the product depends on it.
+//!
+//! Results are converted to JawTrack's pixel convention (centre of the top-left pixel at
+//! (0, 0); the C library reports +0.5 px) and keep the library's corner order (bottom-left,
+//! bottom-right, top-right, top-left of the upright tag).
+
+// The one crate allowed to call C: every unsafe block below says why it is sound.
+#![allow(unsafe_code)]
+
+use apriltag_sys as sys;
+
+/// Detector settings with the C library's meaning.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceParams {
+    /// Decimation before quad detection (1, 1.5, 2, 3, 4).
+    pub quad_decimate: f32,
+    /// Gaussian blur before quad detection (px, 0 = none).
+    pub quad_sigma: f32,
+    /// Worker threads.
+    pub nthreads: i32,
+    /// Refine edges at full resolution.
+    pub refine_edges: bool,
+    /// Sharpening of the decoded samples.
+    pub decode_sharpening: f64,
+    /// Bit errors corrected (0–2 here; the library allows 3 at a large memory cost).
+    pub max_hamming: i32,
+    /// Minimum difference between a quad's white and black (the C default is 5).
+    pub min_white_black_diff: i32,
+}
+
+impl Default for ReferenceParams {
+    /// The C library's own defaults (decimate 2, no blur, 1 thread, refine edges, sharpening
+    /// 0.25), with max_hamming 2.
+    fn default() -> Self {
+        ReferenceParams {
+            quad_decimate: 2.0,
+            quad_sigma: 0.0,
+            nthreads: 1,
+            refine_edges: true,
+            decode_sharpening: 0.25,
+            max_hamming: 2,
+            min_white_black_diff: 5,
+        }
+    }
+}
+
+/// One tag found by the C library.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceDetection {
+    /// tag36h11 id.
+    pub id: u32,
+    /// Bits corrected.
+    pub hamming: u32,
+    /// The library's decision margin.
+    pub margin: f32,
+    /// Centre (px, our convention).
+    pub center: [f64; 2],
+    /// Corners (px, our convention) in the library's order.
+    pub corners: [[f64; 2]; 4],
+}
+
+/// Why the C library was not called.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ReferenceError {
+    /// Width, height or stride that cannot describe the buffer.
+    BadImage(String),
+    /// The library could not be set up.
+    Setup(&'static str),
+}
+
+impl std::fmt::Display for ReferenceError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReferenceError::BadImage(s) => write!(f, "bad image: {s}"),
+            ReferenceError::Setup(s) => write!(f, "reference detector: {s}"),
+        }
+    }
+}
+
+impl std::error::Error for ReferenceError {}
+
+/// A tag36h11 detector of the C library.
+pub struct ReferenceDetector {
+    td: *mut sys::apriltag_detector_t,
+    family: *mut sys::apriltag_family_t,
+}
+
+impl ReferenceDetector {
+    /// Creates a detector for tag36h11 with these settings.
+    pub fn new(params: &ReferenceParams) -> Result<Self, ReferenceError> {
+        if !(0..=2).contains(&params.max_hamming) {
+            return Err(ReferenceError::Setup("max_hamming must be 0, 1 or 2"));
+        }
+        // SAFETY: plain constructors; null results are checked before any use, and both objects
+        // are owned by the returned value, which frees them once in Drop.
+        unsafe {
+            let td = sys::apriltag_detector_create();
+            if td.is_null() {
+                return Err(ReferenceError::Setup("apriltag_detector_create failed"));
+            }
+            let family = sys::tag36h11_create();
+            if family.is_null() {
+                sys::apriltag_detector_destroy(td);
+                return Err(ReferenceError::Setup("tag36h11_create failed"));
+            }
+            sys::apriltag_detector_add_family_bits(td, family, params.max_hamming);
+            (*td).quad_decimate = params.quad_decimate;
+            (*td).quad_sigma = params.quad_sigma;
+            (*td).nthreads = params.nthreads.max(1);
+            (*td).refine_edges = params.refine_edges;
+            (*td).decode_sharpening = params.decode_sharpening;
+            (*td).qtp.min_white_black_diff = params.min_white_black_diff;
+            Ok(ReferenceDetector { td, family })
+        }
+    }
+
+    /// Detects tags in an 8-bit gray image of `width × height` pixels, rows `stride` bytes apart.
+    pub fn detect(
+        &mut self,
+        pixels: &[u8],
+        width: usize,
+        height: usize,
+        stride: usize,
+    ) -> Result<Vec<ReferenceDetection>, ReferenceError> {
+        if width == 0 || height == 0 {
+            return Err(ReferenceError::BadImage(format!("empty image {width}×{height}")));
+        }
+        if stride < width {
+            return Err(ReferenceError::BadImage(format!("stride {stride} < width {width}")));
+        }
+        let needed = stride * (height - 1) + width;
+        if pixels.len() < needed {
+            return Err(ReferenceError::BadImage(format!("buffer of {} bytes, {needed} needed", pixels.len())));
+        }
+        let to_i32 = |v: usize, what: &str| {
+            i32::try_from(v).map_err(|_| ReferenceError::BadImage(format!("{what} {v} too large")))
+        };
+        let mut image = sys::image_u8 {
+            width: to_i32(width, "width")?,
+            height: to_i32(height, "height")?,
+            stride: to_i32(stride, "stride")?,
+            // The library only reads its input image; the cast to *mut is what its C signature asks.
+            buf: pixels.as_ptr().cast_mut(),
+        };
+        let mut out = Vec::new();
+        // SAFETY: `image` describes `pixels` exactly (bounds checked above) and outlives the call;
+        // the returned zarray holds `size` pointers to detections, read before it is destroyed.
+        unsafe {
+            let dets = sys::apriltag_detector_detect(self.td, &mut image);
+            if dets.is_null() {
+                return Ok(out);
+            }
+            let n = usize::try_from((*dets).size).unwrap_or(0);
+            let items = (*dets).data.cast::<*mut sys::apriltag_detection_t>();
+            for i in 0..n {
+                let d = &**items.add(i);
+                out.push(ReferenceDetection {
+                    id: u32::try_from(d.id).unwrap_or(u32::MAX),
+                    hamming: u32::try_from(d.hamming).unwrap_or(u32::MAX),
+                    margin: d.decision_margin,
+                    center: [d.c[0] - 0.5, d.c[1] - 0.5],
+                    corners: d.p.map(|p| [p[0] - 0.5, p[1] - 0.5]),
+                });
+            }
+            sys::apriltag_detections_destroy(dets);
+        }
+        Ok(out)
+    }
+}
+
+impl Drop for ReferenceDetector {
+    fn drop(&mut self) {
+        // SAFETY: both pointers were created in `new` and are freed exactly once here.
+        unsafe {
+            sys::apriltag_detector_destroy(self.td);
+            sys::tag36h11_destroy(self.family);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_buffers_are_refused_not_read() {
+        let mut d = ReferenceDetector::new(&ReferenceParams::default()).expect("detector");
+        assert!(d.detect(&[0; 10], 4, 4, 4).is_err());
+        assert!(d.detect(&[0; 16], 4, 4, 3).is_err());
+        assert!(d.detect(&[], 0, 0, 0).is_err());
+        assert_eq!(d.detect(&[128; 64 * 64], 64, 64, 64), Ok(vec![]));
+        assert!(ReferenceDetector::new(&ReferenceParams { max_hamming: 3, ..ReferenceParams::default() }).is_err());
+    }
+}
