@@ -1,0 +1,163 @@
+//! Detector settings. Names, meanings and defaults follow the AprilTag C library so results
+//! and benchmarks compare like with like; each says what it trades.
+
+use crate::DetectError;
+
+/// A rectangle of the full frame to search (px); detections keep full-frame coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Roi {
+    /// Left column.
+    pub x: usize,
+    /// Top row.
+    pub y: usize,
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+}
+
+/// Settings of the quad finder (the C library's `apriltag_quad_thresh_params`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuadThreshold {
+    /// Smallest connected boundary (in pixels of the decimated image) considered a quad
+    /// candidate. Lower finds smaller tags and costs time on noise.
+    pub min_cluster_pixels: usize,
+    /// Corner candidates examined per cluster. More survives odd shapes, costs time.
+    pub max_nmaxima: usize,
+    /// Cosine of the smallest corner angle a quad may have: rejects slivers; higher accepts
+    /// only squarer quads (C: cos 10°).
+    pub cos_critical_rad: f32,
+    /// Largest mean squared error of a side's line fit (px²): lower rejects curved or
+    /// blurred sides, higher accepts more false quads.
+    pub max_line_fit_mse: f32,
+    /// Smallest brightness difference between the light and dark side of a quad's boundary.
+    /// The C default 5 keeps low-contrast tags but makes noisy frames slow (every speck of
+    /// noise becomes a region); higher is faster and drops faint tags.
+    pub min_white_black_diff: u8,
+    /// Close and open the threshold image to repair broken edges (slow; for poor images).
+    pub deglitch: bool,
+}
+
+impl Default for QuadThreshold {
+    fn default() -> Self {
+        QuadThreshold {
+            min_cluster_pixels: 5,
+            max_nmaxima: 10,
+            cos_critical_rad: 10f32.to_radians().cos(),
+            max_line_fit_mse: 10.0,
+            min_white_black_diff: 5,
+            deglitch: false,
+        }
+    }
+}
+
+/// Detector settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectorConfig {
+    /// Decimation of the image for quad finding: 1, 1.5, 2, 3 or 4. Higher is faster and
+    /// misses small tags; corners are refined at full resolution either way.
+    pub quad_decimate: f32,
+    /// Gaussian blur σ (px) before quad finding; negative sharpens. Helps on noisy frames,
+    /// hurts tiny tags.
+    pub quad_sigma: f32,
+    /// Worker threads.
+    pub nthreads: usize,
+    /// Refine each edge at full resolution from the image gradient. Costs little, gains much
+    /// corner accuracy, most of all with decimation.
+    pub refine_edges: bool,
+    /// Sharpening of the decoded bit samples: helps small, blurred tags decode.
+    pub decode_sharpening: f64,
+    /// Bit errors corrected when decoding, 0–2. More recovers damaged tags and raises the
+    /// false-positive rate; 3 or more is refused (the C library's table for 3 takes
+    /// hundreds of MB and decodes noise).
+    pub max_hamming: u32,
+    /// Quad finder settings.
+    pub quad: QuadThreshold,
+    /// Search only this rectangle.
+    pub roi: Option<Roi>,
+}
+
+impl Default for DetectorConfig {
+    /// The C library's defaults: decimate 2, no blur, one thread, refine edges, sharpening
+    /// 0.25, and max_hamming 2.
+    fn default() -> Self {
+        DetectorConfig {
+            quad_decimate: 2.0,
+            quad_sigma: 0.0,
+            nthreads: 1,
+            refine_edges: true,
+            decode_sharpening: 0.25,
+            max_hamming: 2,
+            quad: QuadThreshold::default(),
+            roi: None,
+        }
+    }
+}
+
+impl DetectorConfig {
+    /// Checks every setting, naming the first bad one.
+    pub fn validate(&self) -> Result<(), DetectError> {
+        let bad = |s: String| Err(DetectError::BadConfig(s));
+        if ![1.0, 1.5, 2.0, 3.0, 4.0].contains(&self.quad_decimate) {
+            return bad(format!("quad_decimate must be 1, 1.5, 2, 3 or 4, got {}", self.quad_decimate));
+        }
+        if !self.quad_sigma.is_finite() || self.quad_sigma.abs() > 4.0 {
+            return bad(format!("quad_sigma must be between -4 and 4 px, got {}", self.quad_sigma));
+        }
+        if self.nthreads == 0 {
+            return bad("nthreads must be at least 1".into());
+        }
+        if !self.decode_sharpening.is_finite() || self.decode_sharpening < 0.0 {
+            return bad(format!("decode_sharpening must be a non-negative number, got {}", self.decode_sharpening));
+        }
+        if self.max_hamming > 2 {
+            return bad(format!(
+                "max_hamming {} is refused: at most 2 (3 needs a very large table and accepts noise as tags)",
+                self.max_hamming
+            ));
+        }
+        let q = &self.quad;
+        if q.max_nmaxima == 0 {
+            return bad("quad.max_nmaxima must be at least 1".into());
+        }
+        if !q.cos_critical_rad.is_finite() || !(-1.0..=1.0).contains(&q.cos_critical_rad) {
+            return bad(format!("quad.cos_critical_rad is a cosine, in [-1, 1]; got {}", q.cos_critical_rad));
+        }
+        if !q.max_line_fit_mse.is_finite() || q.max_line_fit_mse <= 0.0 {
+            return bad(format!("quad.max_line_fit_mse must be positive, got {}", q.max_line_fit_mse));
+        }
+        if let Some(r) = self.roi
+            && (r.width == 0 || r.height == 0)
+        {
+            return bad(format!("roi must not be empty, got {}×{}", r.width, r.height));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_bad_settings_named() {
+        assert!(DetectorConfig::default().validate().is_ok());
+        let d = DetectorConfig::default();
+        let cases: Vec<(DetectorConfig, &str)> = vec![
+            (DetectorConfig { quad_decimate: 2.5, ..d }, "quad_decimate"),
+            (DetectorConfig { quad_sigma: f32::NAN, ..d }, "quad_sigma"),
+            (DetectorConfig { nthreads: 0, ..d }, "nthreads"),
+            (DetectorConfig { decode_sharpening: -1.0, ..d }, "decode_sharpening"),
+            (DetectorConfig { max_hamming: 3, ..d }, "max_hamming 3 is refused"),
+            (DetectorConfig { quad: QuadThreshold { cos_critical_rad: 2.0, ..d.quad }, ..d }, "cos_critical_rad"),
+            (DetectorConfig { quad: QuadThreshold { max_line_fit_mse: 0.0, ..d.quad }, ..d }, "max_line_fit_mse"),
+            (DetectorConfig { roi: Some(Roi { x: 0, y: 0, width: 0, height: 5 }), ..d }, "roi"),
+        ];
+        for (c, word) in cases {
+            let e = c.validate().expect_err(word).to_string();
+            assert!(e.contains(word), "{e}");
+        }
+        // The cosine, not the angle, as the C library expects.
+        assert!((d.quad.cos_critical_rad - 0.984_807_7).abs() < 1e-6);
+    }
+}
