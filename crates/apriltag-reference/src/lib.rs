@@ -28,6 +28,11 @@ pub struct ReferenceParams {
     pub max_hamming: i32,
     /// Minimum difference between a quad's white and black (the C default is 5).
     pub min_white_black_diff: i32,
+    /// Close and open the threshold image (the C `deglitch`).
+    pub deglitch: bool,
+    /// The library's debug mode: it writes its stage images (`debug_preprocess.pnm`,
+    /// `debug_threshold.pnm`, …) into the current directory. For stage-by-stage comparisons.
+    pub debug: bool,
 }
 
 impl Default for ReferenceParams {
@@ -42,6 +47,8 @@ impl Default for ReferenceParams {
             decode_sharpening: 0.25,
             max_hamming: 2,
             min_white_black_diff: 5,
+            deglitch: false,
+            debug: false,
         }
     }
 }
@@ -112,6 +119,8 @@ impl ReferenceDetector {
             (*td).refine_edges = params.refine_edges;
             (*td).decode_sharpening = params.decode_sharpening;
             (*td).qtp.min_white_black_diff = params.min_white_black_diff;
+            (*td).qtp.deglitch = i32::from(params.deglitch);
+            (*td).debug = params.debug;
             Ok(ReferenceDetector { td, family })
         }
     }

@@ -1,19 +1,24 @@
 //! AprilTag detection for JawTrack, after the AprilRobotics C library's structure: the
 //! tag36h11 family ([`family`]), borrowed frames ([`image`]), the detector's settings
-//! ([`config`]) and decoding sampled patterns to ids ([`decode`]). The quad-finding pipeline
-//! (threshold, connected components, gradient clusters, quad fit, sampling, edge refinement)
-//! is being ported stage by stage onto these.
+//! ([`config`]), decoding sampled patterns to ids ([`decode`]), and the pipeline's stages
+//! ported one by one and checked bit for bit against C: [`preprocess`] (decimation) and
+//! [`threshold`]. Connected components, gradient clusters, quad fitting, sampling and edge
+//! refinement come next.
 
 mod codes;
 
 pub mod config;
 pub mod decode;
 pub mod family;
+pub mod gray;
 pub mod image;
+pub mod preprocess;
+pub mod threshold;
 
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};
 pub use family::{Tag36h11, TagBitmap};
+pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra};
 
 /// Why detection could not run.

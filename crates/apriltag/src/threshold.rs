@@ -1,0 +1,156 @@
+//! The adaptive threshold of the AprilTag C library (`threshold` in apriltag_quad_thresh.c),
+//! ported to give the same image bit for bit: each 4×4 tile's min and max, spread over its
+//! 3×3 tile neighbourhood, set the tile's threshold at their midpoint; tiles with less contrast
+//! than `min_white_black_diff` become 127 ("unknown") so flat areas make no regions. Pixels
+//! right of or below the last whole tile use the nearest tile, without the contrast test, as
+//! in C. The optional deglitch closes the result with 3×3 max then min filters.
+
+use crate::gray::Gray;
+use crate::image::ImageView;
+
+const TILE: usize = 4;
+
+/// Thresholds an image to 0 (dark), 255 (light) and 127 (too flat to tell).
+pub fn threshold(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool) -> Gray {
+    let (w, h) = (im.width(), im.height());
+    let (tw, th) = (w / TILE, h / TILE);
+    let mut out = Gray::filled(w, h, 127);
+    if tw == 0 || th == 0 {
+        // Smaller than one tile: nothing can be told apart.
+        return out;
+    }
+    let mut tmax = vec![0u8; tw * th];
+    let mut tmin = vec![255u8; tw * th];
+    for ty in 0..th {
+        for dy in 0..TILE {
+            let row = im.row(ty * TILE + dy);
+            for tx in 0..tw {
+                let px = &row[tx * TILE..tx * TILE + TILE];
+                let i = ty * tw + tx;
+                for &v in px {
+                    tmax[i] = tmax[i].max(v);
+                    tmin[i] = tmin[i].min(v);
+                }
+            }
+        }
+    }
+    // Spread over the 3×3 tile neighbourhood so thresholds do not jump between tiles.
+    let mut smax = vec![0u8; tw * th];
+    let mut smin = vec![255u8; tw * th];
+    for ty in 0..th {
+        for tx in 0..tw {
+            let (mut hi, mut lo) = (0u8, 255u8);
+            for ny in ty.saturating_sub(1)..(ty + 2).min(th) {
+                for nx in tx.saturating_sub(1)..(tx + 2).min(tw) {
+                    hi = hi.max(tmax[ny * tw + nx]);
+                    lo = lo.min(tmin[ny * tw + nx]);
+                }
+            }
+            smax[ty * tw + tx] = hi;
+            smin[ty * tw + tx] = lo;
+        }
+    }
+    let cut = |v: u8, lo: u8, hi: u8| -> u8 {
+        let t = lo as i32 + (hi as i32 - lo as i32) / 2;
+        if i32::from(v) > t { 255 } else { 0 }
+    };
+    for ty in 0..th {
+        for tx in 0..tw {
+            let (lo, hi) = (smin[ty * tw + tx], smax[ty * tw + tx]);
+            if i32::from(hi) - i32::from(lo) < i32::from(min_white_black_diff) {
+                continue; // stays 127
+            }
+            for dy in 0..TILE {
+                let y = ty * TILE + dy;
+                let row = im.row(y);
+                for dx in 0..TILE {
+                    let x = tx * TILE + dx;
+                    out.data[y * w + x] = cut(row[x], lo, hi);
+                }
+            }
+        }
+    }
+    for y in 0..h {
+        let x0 = if y >= th * TILE { 0 } else { tw * TILE };
+        let ty = (y / TILE).min(th - 1);
+        let row = im.row(y);
+        for (x, &v) in row.iter().enumerate().skip(x0) {
+            let tx = (x / TILE).min(tw - 1);
+            out.data[y * w + x] = cut(v, smin[ty * tw + tx], smax[ty * tw + tx]);
+        }
+    }
+    if deglitch {
+        close_3x3(&mut out);
+    }
+    out
+}
+
+/// 3×3 max then 3×3 min over the interior, as C does it: the intermediate image's border is
+/// 0, and the min pass reads it, so pixels next to the border can only darken.
+fn close_3x3(im: &mut Gray) {
+    let (w, h) = (im.width, im.height);
+    if w < 3 || h < 3 {
+        return;
+    }
+    let mut dilated = vec![0u8; w * h];
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let mut m = 0u8;
+            for yy in y - 1..=y + 1 {
+                for xx in x - 1..=x + 1 {
+                    m = m.max(im.data[yy * w + xx]);
+                }
+            }
+            dilated[y * w + x] = m;
+        }
+    }
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let mut m = 255u8;
+            for yy in y - 1..=y + 1 {
+                for xx in x - 1..=x + 1 {
+                    m = m.min(dilated[yy * w + xx]);
+                }
+            }
+            im.data[y * w + x] = m;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flat_areas_are_unknown_and_edges_split_at_the_midpoint() {
+        let (w, h) = (16, 8);
+        let data: Vec<u8> = (0..w * h).map(|i| if i % w < 8 { 40 } else { 200 }).collect();
+        let t = threshold(&ImageView::new(&data, w, h, w).expect("valid"), 5, false);
+        // Tiles near the edge see both levels: dark → 0, light → 255.
+        assert_eq!(t.data[3 * w + 7], 0);
+        assert_eq!(t.data[3 * w + 8], 255);
+        // Far from it, with the neighbourhood holding one level only: unknown.
+        let flat = vec![100u8; 64];
+        let t = threshold(&ImageView::new(&flat, 8, 8, 8).expect("valid"), 5, false);
+        assert!(t.data.iter().all(|&v| v == 127));
+        // Tiny images are all unknown rather than an error.
+        let t = threshold(&ImageView::new(&[0, 255, 0], 3, 1, 3).expect("valid"), 5, false);
+        assert_eq!(t.data, vec![127; 3]);
+    }
+
+    #[test]
+    fn deglitch_fills_single_pixel_holes() {
+        let (w, h) = (12, 12);
+        let mut data = vec![0u8; w * h];
+        for y in 2..10 {
+            for x in 2..10 {
+                data[y * w + x] = 255;
+            }
+        }
+        data[5 * w + 5] = 0;
+        let mut g = Gray { width: w, height: h, data };
+        close_3x3(&mut g);
+        assert_eq!(g.data[5 * w + 5], 255, "the hole is closed");
+        assert_eq!(g.data[w + 1], 0, "next to the border the zero border leaks in");
+    }
+}
