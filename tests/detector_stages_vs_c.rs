@@ -2,16 +2,17 @@
 //! library writes each stage's image into the current directory; this binary (its own process,
 //! one test, so changing directory is safe) runs it in a temporary folder and compares.
 
-use jawtrack_apriltag::{ImageView, preprocess, threshold};
+use jawtrack_apriltag::{ImageView, components, preprocess, threshold};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_tests::fixture_sets;
+use std::collections::HashMap;
 
 fn read_pnm(path: &std::path::Path) -> image::GrayImage {
     image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_luma8()
 }
 
 #[test]
-fn decimation_and_threshold_match_c_bit_for_bit() {
+fn decimation_threshold_and_regions_match_c() {
     let dir = tempfile_dir();
     std::env::set_current_dir(&dir).expect("enter the temporary folder");
     let mut frames = Vec::new();
@@ -60,12 +61,44 @@ fn decimation_and_threshold_match_c_bit_for_bit() {
             let ours_thr = threshold::threshold(&ours_pre.view().expect("non-empty"), diff as u8, deglitch);
             let differing = ours_thr.data.iter().zip(c_thr.as_raw()).filter(|(a, b)| a != b).count();
             assert_eq!(differing, 0, "{label}: {differing} threshold pixels differ");
+            compare_segmentation(&ours_thr, &dir.join("debug_segmentation.pnm"), &label);
             compared += 1;
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
     use std::io::Write as _;
-    let _ = writeln!(std::io::stderr(), "decimation and threshold equal C's on {compared} frame/setting pairs");
+    let _ =
+        writeln!(std::io::stderr(), "decimation, threshold and regions equal C's on {compared} frame/setting pairs");
+}
+
+/// C colours every region of at least 5 pixels (`min_cluster_pixels`) with a random colour
+/// and leaves smaller ones black. Ours must mark the same pixels, each of our regions must
+/// carry one colour (we never merge two of C's), and we may have more regions than C has
+/// colours only by the chance of two random colours coinciding (we never split one of C's).
+fn compare_segmentation(thr: &jawtrack_apriltag::Gray, c_path: &std::path::Path, label: &str) {
+    let c = image::open(c_path).expect("segmentation pnm").to_rgb8();
+    let mut uf = components::connected_components(thr);
+    let mut colour_of: HashMap<u32, [u8; 3]> = HashMap::new();
+    for (i, p) in c.pixels().enumerate() {
+        let root = uf.find(i as u32);
+        let big = uf.set_size(root) >= 5;
+        let coloured = p.0 != [0, 0, 0];
+        assert_eq!(big, coloured, "{label}: pixel {i} region size disagrees with C");
+        if big {
+            let prev = *colour_of.entry(root).or_insert(p.0);
+            assert_eq!(prev, p.0, "{label}: our region at pixel {i} spans two of C's");
+        }
+    }
+    let colours: std::collections::HashSet<[u8; 3]> = colour_of.values().copied().collect();
+    let n = colour_of.len() as f64;
+    let expected_coincidences = n * n / (2.0 * 150f64.powi(3));
+    let extra = colour_of.len() - colours.len();
+    assert!(
+        (extra as f64) <= 3.0 * expected_coincidences + 3.0,
+        "{label}: {} regions but {} colours (chance coincidences expected: {expected_coincidences:.1})",
+        colour_of.len(),
+        colours.len()
+    );
 }
 
 fn tempfile_dir() -> std::path::PathBuf {
