@@ -2,7 +2,7 @@
 //! library writes each stage's image into the current directory; this binary (its own process,
 //! one test, so changing directory is safe) runs it in a temporary folder and compares.
 
-use jawtrack_apriltag::{ImageView, components, preprocess, threshold};
+use jawtrack_apriltag::{ImageView, clusters, components, preprocess, threshold};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_tests::fixture_sets;
 use std::collections::HashMap;
@@ -12,7 +12,7 @@ fn read_pnm(path: &std::path::Path) -> image::GrayImage {
 }
 
 #[test]
-fn decimation_threshold_and_regions_match_c() {
+fn decimation_threshold_regions_and_clusters_match_c() {
     let dir = tempfile_dir();
     std::env::set_current_dir(&dir).expect("enter the temporary folder");
     let mut frames = Vec::new();
@@ -62,13 +62,16 @@ fn decimation_threshold_and_regions_match_c() {
             let differing = ours_thr.data.iter().zip(c_thr.as_raw()).filter(|(a, b)| a != b).count();
             assert_eq!(differing, 0, "{label}: {differing} threshold pixels differ");
             compare_segmentation(&ours_thr, &dir.join("debug_segmentation.pnm"), &label);
+            compare_clusters(&ours_thr, &dir.join("debug_clusters.pnm"), &label);
             compared += 1;
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
     use std::io::Write as _;
-    let _ =
-        writeln!(std::io::stderr(), "decimation, threshold and regions equal C's on {compared} frame/setting pairs");
+    let _ = writeln!(
+        std::io::stderr(),
+        "decimation, threshold, regions and cluster points equal C's on {compared} frame/setting pairs"
+    );
 }
 
 /// C colours every region of at least 5 pixels (`min_cluster_pixels`) with a random colour
@@ -99,6 +102,21 @@ fn compare_segmentation(thr: &jawtrack_apriltag::Gray, c_path: &std::path::Path,
         colour_of.len(),
         colours.len()
     );
+}
+
+/// C paints every cluster point (x/2, y/2) in its cluster's colour; which colour wins where
+/// clusters overlap depends on C's hash order, so compare where points are, exactly.
+fn compare_clusters(thr: &jawtrack_apriltag::Gray, c_path: &std::path::Path, label: &str) {
+    let c = image::open(c_path).expect("clusters pnm").to_rgb8();
+    let mut uf = components::connected_components(thr);
+    let ours = clusters::gradient_clusters(thr, &mut uf);
+    let mut painted = vec![false; thr.width * thr.height];
+    for p in ours.iter().flatten() {
+        painted[usize::from(p.y / 2) * thr.width + usize::from(p.x / 2)] = true;
+    }
+    let differing = c.pixels().zip(&painted).filter(|(px, ours)| (px.0 != [0, 0, 0]) != **ours).count();
+    assert_eq!(differing, 0, "{label}: {differing} pixels differ in where cluster points lie");
+    assert!(painted.iter().any(|&p| p), "{label}: no clusters at all");
 }
 
 fn tempfile_dir() -> std::path::PathBuf {

@@ -1,11 +1,12 @@
 //! AprilTag detection for JawTrack, after the AprilRobotics C library's structure: the
 //! tag36h11 family ([`family`]), borrowed frames ([`image`]), the detector's settings
 //! ([`config`]), decoding sampled patterns to ids ([`decode`]), and the pipeline's stages
-//! ported one by one and checked against C: [`preprocess`] (decimation), [`threshold`] and
-//! [`components`]. Gradient clusters, quad fitting, sampling and edge refinement come next.
+//! ported one by one and checked against C: [`preprocess`] (decimation), [`threshold`],
+//! [`components`] and [`clusters`]. Quad fitting, sampling and edge refinement come next.
 
 mod codes;
 
+pub mod clusters;
 pub mod components;
 pub mod config;
 pub mod decode;
