@@ -104,14 +104,8 @@ mod tests {
         for p in c {
             let (x, y) = (f64::from(p.x) / 2.0, f64::from(p.y) / 2.0);
             assert!((4.5..=14.5).contains(&x) && (4.5..=14.5).contains(&y), "{p:?}");
-            let on_edge = x == 4.5 || x == 14.5 || y == 4.5 || y == 14.5;
-            assert!(
-                on_edge
-                    || (x - 4.5).abs() < 0.6
-                    || (y - 4.5).abs() < 0.6
-                    || (x - 14.5).abs() < 0.6
-                    || (y - 14.5).abs() < 0.6
-            );
+            let to_border = [(x - 4.5).abs(), (x - 14.5).abs(), (y - 4.5).abs(), (y - 14.5).abs()];
+            assert!(to_border.iter().copied().fold(f64::INFINITY, f64::min) <= 0.5, "{p:?} off the border");
             let outward = f64::from(p.gx) * (x - 9.5) + f64::from(p.gy) * (y - 9.5);
             assert!(outward >= 0.0, "gradient points from dark to light: {p:?}");
         }
