@@ -2,7 +2,7 @@
 //! library writes each stage's image into the current directory; this binary (its own process,
 //! one test, so changing directory is safe) runs it in a temporary folder and compares.
 
-use jawtrack_apriltag::{ImageView, clusters, components, preprocess, threshold};
+use jawtrack_apriltag::{ImageView, QuadThreshold, clusters, components, preprocess, quads, threshold};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_tests::fixture_sets;
 use std::collections::HashMap;
@@ -12,7 +12,7 @@ fn read_pnm(path: &std::path::Path) -> image::GrayImage {
 }
 
 #[test]
-fn decimation_threshold_regions_and_clusters_match_c() {
+fn decimation_threshold_regions_clusters_and_quads_match_c() {
     let dir = tempfile_dir();
     std::env::set_current_dir(&dir).expect("enter the temporary folder");
     let mut frames = Vec::new();
@@ -25,6 +25,7 @@ fn decimation_threshold_regions_and_clusters_match_c() {
     }
     assert!(frames.len() >= 4, "fixtures missing");
     let mut compared = 0;
+    let mut total_quads = 0;
     for path in &frames {
         let img = image::open(path).expect("png").to_luma8();
         let (w, h) = (img.width() as usize, img.height() as usize);
@@ -63,6 +64,7 @@ fn decimation_threshold_regions_and_clusters_match_c() {
             assert_eq!(differing, 0, "{label}: {differing} threshold pixels differ");
             compare_segmentation(&ours_thr, &dir.join("debug_segmentation.pnm"), &label);
             compare_clusters(&ours_thr, &dir.join("debug_clusters.pnm"), &label);
+            total_quads += compare_quads(&ours_pre, &ours_thr, &dir.join("debug_lines.ps"), decimate, diff, &label);
             compared += 1;
         }
     }
@@ -70,8 +72,9 @@ fn decimation_threshold_regions_and_clusters_match_c() {
     use std::io::Write as _;
     let _ = writeln!(
         std::io::stderr(),
-        "decimation, threshold, regions and cluster points equal C's on {compared} frame/setting pairs"
+        "decimation, threshold, regions, cluster points and {total_quads} quads equal C's on {compared} frame/setting pairs"
     );
+    assert!(total_quads > 100, "too few quads compared: {total_quads}");
 }
 
 /// C colours every region of at least 5 pixels (`min_cluster_pixels`) with a random colour
@@ -117,6 +120,46 @@ fn compare_clusters(thr: &jawtrack_apriltag::Gray, c_path: &std::path::Path, lab
     let differing = c.pixels().zip(&painted).filter(|(px, ours)| (px.0 != [0, 0, 0]) != **ours).count();
     assert_eq!(differing, 0, "{label}: {differing} pixels differ in where cluster points lie");
     assert!(painted.iter().any(|&p| p), "{label}: no clusters at all");
+}
+
+/// C prints every fitted quad into `debug_lines.ps` (`x y moveto x y lineto … stroke`, in
+/// the decimated image's coordinates, 15 decimals of its float corners). Ours must be the same
+/// quads, corner for corner; only their order (C's hash order) may differ.
+fn compare_quads(
+    pre: &jawtrack_apriltag::Gray,
+    thr: &jawtrack_apriltag::Gray,
+    ps: &std::path::Path,
+    decimate: f32,
+    diff: i32,
+    label: &str,
+) -> usize {
+    let text = std::fs::read_to_string(ps).expect("debug_lines.ps");
+    let mut theirs: Vec<[f32; 8]> = text
+        .lines()
+        .filter(|l| l.contains("moveto"))
+        .map(|l| {
+            let v: Vec<f32> = l.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+            std::array::from_fn(|i| v[i])
+        })
+        .collect();
+    let mut uf = components::connected_components(thr);
+    let cl = clusters::gradient_clusters(thr, &mut uf);
+    let q = QuadThreshold { min_white_black_diff: diff as u8, ..QuadThreshold::default() };
+    let mut ours: Vec<[f32; 8]> = quads::fit_quads(&cl, &pre.view().expect("non-empty"), &q, decimate)
+        .iter()
+        .map(|q| [q.p[0][0], q.p[0][1], q.p[1][0], q.p[1][1], q.p[2][0], q.p[2][1], q.p[3][0], q.p[3][1]])
+        .collect();
+    let key = |a: &[f32; 8], b: &[f32; 8]| {
+        a.iter().zip(b).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal)
+    };
+    theirs.sort_by(key);
+    ours.sort_by(key);
+    assert_eq!(ours.len(), theirs.len(), "{label}: {} quads, C has {}", ours.len(), theirs.len());
+    for (a, b) in ours.iter().zip(&theirs) {
+        let worst = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-3, "{label}: quad {a:?} vs C {b:?}");
+    }
+    ours.len()
 }
 
 fn tempfile_dir() -> std::path::PathBuf {

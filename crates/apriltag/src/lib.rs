@@ -2,7 +2,8 @@
 //! tag36h11 family ([`family`]), borrowed frames ([`image`]), the detector's settings
 //! ([`config`]), decoding sampled patterns to ids ([`decode`]), and the pipeline's stages
 //! ported one by one and checked against C: [`preprocess`] (decimation), [`threshold`],
-//! [`components`] and [`clusters`]. Quad fitting, sampling and edge refinement come next.
+//! [`components`], [`clusters`] and [`quads`]. Sampling and decoding the quads, edge
+//! refinement and removing overlapping detections come next.
 
 mod codes;
 
@@ -14,6 +15,7 @@ pub mod family;
 pub mod gray;
 pub mod image;
 pub mod preprocess;
+pub mod quads;
 pub mod threshold;
 
 pub use config::{DetectorConfig, QuadThreshold, Roi};

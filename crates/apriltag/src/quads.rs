@@ -1,0 +1,393 @@
+//! Quad fitting (C: `fit_quad`, `quad_segment_maxima`, `fit_line`, `compute_lfps`, `ptsort`):
+//! each cluster's points are sorted by angle around its centre, a weighted line-fit error is
+//! computed over a sliding window, its four best maxima (the corners) are chosen by the
+//! smallest total line-fit error, and the four fitted lines are intersected.
+//!
+//! Ported for identical results: C mixes `float` and `double` (`sqrtf` inside double maths,
+//! `float` corners and angles) and sorts with a merge sort that is not stable; both are
+//! reproduced, since ties and rounding decide which maxima win.
+
+use crate::clusters::Pt;
+use crate::config::QuadThreshold;
+use crate::image::ImageView;
+
+/// A quad in the coordinates of the image it was fitted on (decimated, C's pixel corners:
+/// the centre of pixel (0, 0) at (0.5, 0.5)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quad {
+    /// Corners, counter-clockwise in the image (y down), as C orders them.
+    pub p: [[f32; 2]; 4],
+}
+
+/// Running sums of weighted point moments along the sorted cluster.
+#[derive(Debug, Clone, Copy, Default)]
+struct LineFitPt {
+    mx: f64,
+    my: f64,
+    mxx: f64,
+    myy: f64,
+    mxy: f64,
+    w: f64,
+}
+
+/// C's `sqrtf` applied to a double: computed in single precision.
+fn sqrtf(v: f64) -> f64 {
+    f64::from((v as f32).sqrt())
+}
+
+struct LineFit {
+    /// Point on the line (mean), and unit normal.
+    params: [f64; 4],
+    err: f64,
+    mse: f64,
+}
+
+fn fit_line(lfps: &[LineFitPt], i0: usize, i1: usize) -> LineFit {
+    let sz = lfps.len();
+    let (m, n) = if i0 < i1 {
+        let mut m = lfps[i1];
+        if i0 > 0 {
+            let a = lfps[i0 - 1];
+            m = LineFitPt {
+                mx: m.mx - a.mx,
+                my: m.my - a.my,
+                mxx: m.mxx - a.mxx,
+                myy: m.myy - a.myy,
+                mxy: m.mxy - a.mxy,
+                w: m.w - a.w,
+            };
+        }
+        (m, i1 - i0 + 1)
+    } else {
+        let (last, a, b) = (lfps[sz - 1], lfps[i0 - 1], lfps[i1]);
+        (
+            LineFitPt {
+                mx: last.mx - a.mx + b.mx,
+                my: last.my - a.my + b.my,
+                mxx: last.mxx - a.mxx + b.mxx,
+                myy: last.myy - a.myy + b.myy,
+                mxy: last.mxy - a.mxy + b.mxy,
+                w: last.w - a.w + b.w,
+            },
+            sz - i0 + i1 + 1,
+        )
+    };
+    // Wrapped ranges sum as C does, (last − a) + b, left to right.
+    let ex = m.mx / m.w;
+    let ey = m.my / m.w;
+    let cxx = m.mxx / m.w - ex * ex;
+    let cxy = m.mxy / m.w - ex * ey;
+    let cyy = m.myy / m.w - ey * ey;
+    let root = sqrtf((cxx - cyy) * (cxx - cyy) + 4.0 * cxy * cxy);
+    let eig_small = 0.5 * (cxx + cyy - root);
+    let eig = 0.5 * (cxx + cyy + root);
+    let (nx1, ny1) = (cxx - eig, cxy);
+    let m1 = nx1 * nx1 + ny1 * ny1;
+    let (nx2, ny2) = (cxy, cyy - eig);
+    let m2 = nx2 * nx2 + ny2 * ny2;
+    let (nx, ny, mm) = if m1 > m2 { (nx1, ny1, m1) } else { (nx2, ny2, m2) };
+    let length = sqrtf(mm);
+    let (px, py) = if length.abs() < 1e-12 { (0.0, 0.0) } else { (nx / length, ny / length) };
+    LineFit { params: [ex, ey, px, py], err: n as f64 * eig_small, mse: eig_small }
+}
+
+fn compute_lfps(pts: &[Pt], im: &ImageView<'_>) -> Vec<LineFitPt> {
+    let mut out = Vec::with_capacity(pts.len());
+    let mut acc = LineFitPt::default();
+    let (w, h) = (im.width() as i64, im.height() as i64);
+    for p in pts {
+        let x = f64::from(p.x) * 0.5 + 0.5;
+        let y = f64::from(p.y) * 0.5 + 0.5;
+        let (ix, iy) = (x as i64, y as i64);
+        let mut weight = 1.0;
+        if ix > 0 && ix + 1 < w && iy > 0 && iy + 1 < h {
+            let at = |x: i64, y: i64| i32::from(im.get(x as usize, y as usize).unwrap_or(0));
+            let gx = at(ix + 1, iy) - at(ix - 1, iy);
+            let gy = at(ix, iy + 1) - at(ix, iy - 1);
+            weight = f64::from(gx * gx + gy * gy).sqrt() + 1.0;
+        }
+        acc.mx += weight * x;
+        acc.my += weight * y;
+        acc.mxx += weight * x * x;
+        acc.mxy += weight * x * y;
+        acc.myy += weight * y * y;
+        acc.w += weight;
+        out.push(acc);
+    }
+    out
+}
+
+/// C's `ptsort`: sorting networks up to 5, then a merge sort that takes from the right half
+/// on ties (so not stable).
+fn ptsort(pts: &mut [(Pt, f32)]) {
+    let sz = pts.len();
+    let swap = |a: &mut [(Pt, f32)], i: usize, j: usize| {
+        if a[i].1 - a[j].1 > 0.0 {
+            a.swap(i, j);
+        }
+    };
+    match sz {
+        0 | 1 => {}
+        2 => swap(pts, 0, 1),
+        3 => {
+            swap(pts, 0, 1);
+            swap(pts, 1, 2);
+            swap(pts, 0, 1);
+        }
+        4 => {
+            for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                swap(pts, i, j);
+            }
+        }
+        5 => {
+            for (i, j) in [(0, 1), (3, 4), (1, 2), (0, 1), (0, 3), (2, 4), (1, 2), (2, 3), (1, 2)] {
+                swap(pts, i, j);
+            }
+        }
+        _ => {
+            let mut tmp = pts.to_vec();
+            let asz = sz / 2;
+            let (a, b) = tmp.split_at_mut(asz);
+            ptsort(a);
+            ptsort(b);
+            let (mut ai, mut bi, mut out) = (0, 0, 0);
+            while ai < a.len() && bi < b.len() {
+                if a[ai].1 - b[bi].1 < 0.0 {
+                    pts[out] = a[ai];
+                    ai += 1;
+                } else {
+                    pts[out] = b[bi];
+                    bi += 1;
+                }
+                out += 1;
+            }
+            for &v in a[ai..].iter().chain(&b[bi..]) {
+                pts[out] = v;
+                out += 1;
+            }
+        }
+    }
+}
+
+fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
+    let sz = lfps.len();
+    let ksz = (sz / 12).min(20);
+    if ksz < 2 {
+        return None;
+    }
+    let errs: Vec<f64> = (0..sz).map(|i| fit_line(lfps, (i + sz - ksz) % sz, (i + ksz) % sz).err).collect();
+    // Smooth with a Gaussian of σ = 1 cut at 5 % (7 taps, single-precision weights as in C).
+    let sigma = 1.0f64;
+    let fsz = 2 * (((-(0.05f64.ln()) * 2.0 * sigma * sigma).sqrt() + 1.0) as usize) + 1;
+    let f: Vec<f32> = (0..fsz)
+        .map(|i| {
+            let j = i as i64 - (fsz / 2) as i64;
+            ((-(j * j) as f64) / (2.0 * sigma * sigma)).exp() as f32
+        })
+        .collect();
+    let smoothed: Vec<f64> = (0..sz)
+        .map(|iy| {
+            let mut acc = 0.0f64;
+            for (i, fi) in f.iter().enumerate() {
+                acc += errs[(iy + i + sz - fsz / 2) % sz] * f64::from(*fi);
+            }
+            acc
+        })
+        .collect();
+    let mut maxima: Vec<(usize, f64)> = (0..sz)
+        .filter(|&i| smoothed[i] > smoothed[(i + 1) % sz] && smoothed[i] > smoothed[(i + sz - 1) % sz])
+        .map(|i| (i, smoothed[i]))
+        .collect();
+    if maxima.len() < 4 {
+        return None;
+    }
+    if maxima.len() > q.max_nmaxima {
+        let mut sorted: Vec<f64> = maxima.iter().map(|m| m.1).collect();
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        let thresh = sorted[q.max_nmaxima];
+        maxima.retain(|m| m.1 > thresh);
+    }
+    let n = maxima.len();
+    let max_dot = f64::from(q.cos_critical_rad);
+    let max_mse = f64::from(q.max_line_fit_mse);
+    let mut best = None;
+    let mut best_error = f64::from(f32::INFINITY);
+    for m0 in 0..n.saturating_sub(3) {
+        let i0 = maxima[m0].0;
+        for m1 in m0 + 1..n.saturating_sub(2) {
+            let i1 = maxima[m1].0;
+            let l01 = fit_line(lfps, i0, i1);
+            if l01.mse > max_mse {
+                continue;
+            }
+            for m2 in m1 + 1..n.saturating_sub(1) {
+                let i2 = maxima[m2].0;
+                let l12 = fit_line(lfps, i1, i2);
+                if l12.mse > max_mse {
+                    continue;
+                }
+                let dot = l01.params[2] * l12.params[2] + l01.params[3] * l12.params[3];
+                if dot.abs() > max_dot {
+                    continue;
+                }
+                for &(i3, _) in &maxima[m2 + 1..] {
+                    let l23 = fit_line(lfps, i2, i3);
+                    if l23.mse > max_mse {
+                        continue;
+                    }
+                    let l30 = fit_line(lfps, i3, i0);
+                    if l30.mse > max_mse {
+                        continue;
+                    }
+                    let err = l01.err + l12.err + l23.err + l30.err;
+                    if err < best_error {
+                        best_error = err;
+                        best = Some([i0, i1, i2, i3]);
+                    }
+                }
+            }
+        }
+    }
+    let best = best?;
+    (best_error / (sz as f64) < max_mse).then_some(best)
+}
+
+/// Fits a quad to one cluster, or `None` if it is not a plausible tag border. `im` is the image
+/// the clusters were found on; `min_tag_width` is the smallest tag (in its pixels) to keep.
+pub fn fit_quad(cluster: &[Pt], im: &ImageView<'_>, q: &QuadThreshold, min_tag_width: i32) -> Option<Quad> {
+    let sz = cluster.len();
+    if sz < 24 {
+        return None;
+    }
+    let (mut xmin, mut xmax, mut ymin, mut ymax) = (cluster[0].x, cluster[0].x, cluster[0].y, cluster[0].y);
+    for p in &cluster[1..] {
+        xmax = xmax.max(p.x);
+        xmin = xmin.min(p.x);
+        ymax = ymax.max(p.y);
+        ymin = ymin.min(p.y);
+    }
+    if (i32::from(xmax) - i32::from(xmin)) * (i32::from(ymax) - i32::from(ymin)) < min_tag_width {
+        return None;
+    }
+    let cx = ((f64::from(xmin) + f64::from(xmax)) * 0.5 + 0.05118) as f32;
+    let cy = ((f64::from(ymin) + f64::from(ymax)) * 0.5 - 0.028581) as f32;
+    let mut dot = 0.0f32;
+    // C's quadrant offsets (2 << 15 = 65536) keep the four quadrants' slopes apart.
+    let quadrants = [[-65536.0f32, 0.0], [131072.0, 65536.0]];
+    let mut pts: Vec<(Pt, f32)> = Vec::with_capacity(sz);
+    for p in cluster {
+        let mut dx = f32::from(p.x) - cx;
+        let mut dy = f32::from(p.y) - cy;
+        dot += dx * f32::from(p.gx) + dy * f32::from(p.gy);
+        let quadrant = quadrants[usize::from(dy > 0.0)][usize::from(dx > 0.0)];
+        if dy < 0.0 {
+            dy = -dy;
+            dx = -dx;
+        }
+        if dx < 0.0 {
+            let t = dx;
+            dx = dy;
+            dy = -t;
+        }
+        pts.push((*p, quadrant + dy / dx));
+    }
+    // tag36h11 has a normal (dark outside light) border: reject reversed ones.
+    if dot < 0.0 {
+        return None;
+    }
+    ptsort(&mut pts);
+    let sorted: Vec<Pt> = pts.iter().map(|p| p.0).collect();
+    let lfps = compute_lfps(&sorted, im);
+    let idx = segment_maxima(&lfps, q)?;
+    let mut lines = [[0.0f64; 4]; 4];
+    for i in 0..4 {
+        let l = fit_line(&lfps, idx[i], idx[(i + 1) & 3]);
+        if l.mse > f64::from(q.max_line_fit_mse) {
+            return None;
+        }
+        lines[i] = l.params;
+    }
+    let mut p = [[0.0f32; 2]; 4];
+    for i in 0..4 {
+        let (a, b) = (lines[i], lines[(i + 1) & 3]);
+        let (a00, a01, a10, a11) = (a[3], -b[3], -a[2], b[2]);
+        let (b0, b1) = (-a[0] + b[0], -a[1] + b[1]);
+        let det = a00 * a11 - a10 * a01;
+        if det.abs() < 0.001 {
+            return None;
+        }
+        let (w00, w01) = (a11 / det, -a01 / det);
+        let l0 = w00 * b0 + w01 * b1;
+        p[i] = [(a[0] + l0 * a00) as f32, (a[1] + l0 * a10) as f32];
+    }
+    let pd = |i: usize| [f64::from(p[i][0]), f64::from(p[i][1])];
+    let dist = |i: usize, j: usize| ((pd(j)[0] - pd(i)[0]).powi(2) + (pd(j)[1] - pd(i)[1]).powi(2)).sqrt();
+    let heron = |a: f64, b: f64, c: f64| {
+        let s = (a + b + c) / 2.0;
+        (s * (s - a) * (s - b) * (s - c)).sqrt()
+    };
+    let area = heron(dist(0, 1), dist(1, 2), dist(2, 0)) + heron(dist(2, 3), dist(3, 0), dist(0, 2));
+    if area < 0.95 * f64::from(min_tag_width) * f64::from(min_tag_width) {
+        return None;
+    }
+    let cos_crit = f64::from(q.cos_critical_rad);
+    for i in 0..4 {
+        let (p0, p1, p2) = (pd(i), pd((i + 1) & 3), pd((i + 2) & 3));
+        let (dx1, dy1) = (p1[0] - p0[0], p1[1] - p0[1]);
+        let (dx2, dy2) = (p2[0] - p1[0], p2[1] - p1[1]);
+        let cos = (dx1 * dx2 + dy1 * dy2) / ((dx1 * dx1 + dy1 * dy1) * (dx2 * dx2 + dy2 * dy2)).sqrt();
+        if cos > cos_crit || cos < -cos_crit || dx1 * dy2 < dy1 * dx2 {
+            return None;
+        }
+    }
+    Some(Quad { p })
+}
+
+/// Fits quads to every cluster of a `w × h` image, with C's size limits per cluster.
+pub fn fit_quads(clusters: &[Vec<Pt>], im: &ImageView<'_>, q: &QuadThreshold, quad_decimate: f32) -> Vec<Quad> {
+    // The smallest tag border is 8 cells; C divides it by the decimation (as an int) and keeps
+    // at least 3.
+    let mut min_tag_width = (8.0 / quad_decimate) as i32;
+    if quad_decimate <= 1.0 {
+        min_tag_width = 8;
+    }
+    let min_tag_width = min_tag_width.max(3);
+    let max_points = 2 * (2 * im.width() + 2 * im.height());
+    clusters
+        .iter()
+        .filter(|c| c.len() >= q.min_cluster_pixels && c.len() <= max_points)
+        .filter_map(|c| fit_quad(c, im, q, min_tag_width))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clusters::gradient_clusters;
+    use crate::components::connected_components;
+    use crate::threshold::threshold;
+
+    #[test]
+    fn a_dark_square_gives_its_four_corners() {
+        let (w, h) = (60, 60);
+        let mut data = vec![230u8; w * h];
+        for y in 15..45 {
+            for x in 15..45 {
+                data[y * w + x] = 20;
+            }
+        }
+        let im = ImageView::new(&data, w, h, w).expect("valid");
+        let t = threshold(&im, 5, false);
+        let mut uf = connected_components(&t);
+        let clusters = gradient_clusters(&t, &mut uf);
+        let quads = fit_quads(&clusters, &im, &QuadThreshold::default(), 1.0);
+        assert_eq!(quads.len(), 1, "{quads:?}");
+        // The boundary runs between pixels 14|15 and 44|45, i.e. at 15 and 45 in C's
+        // corner-origin coordinates.
+        let mut corners: Vec<[f32; 2]> = quads[0].p.to_vec();
+        corners.sort_by(|a, b| (a[0] + 3.0 * a[1]).total_cmp(&(b[0] + 3.0 * b[1])));
+        for (c, want) in corners.iter().zip([[15.0, 15.0], [45.0, 15.0], [15.0, 45.0], [45.0, 45.0]]) {
+            assert!((c[0] - want[0]).abs() < 0.6 && (c[1] - want[1]).abs() < 0.6, "{c:?} vs {want:?}");
+        }
+    }
+}
