@@ -146,12 +146,22 @@ impl ReferenceDetector {
         let to_i32 = |v: usize, what: &str| {
             i32::try_from(v).map_err(|_| ReferenceError::BadImage(format!("{what} {v} too large")))
         };
+        // With a blur and no decimation the library blurs its input in place: give it a copy.
+        // SAFETY (of reading `self.td`): created in `new`, valid until Drop.
+        let writes_input = unsafe { (*self.td).quad_sigma != 0.0 && (*self.td).quad_decimate <= 1.0 };
+        let mut copy = Vec::new();
+        let buf = if writes_input {
+            copy.extend_from_slice(&pixels[..needed]);
+            copy.as_mut_ptr()
+        } else {
+            // Otherwise the library only reads it; *mut is what its C signature asks.
+            pixels.as_ptr().cast_mut()
+        };
         let mut image = sys::image_u8 {
             width: to_i32(width, "width")?,
             height: to_i32(height, "height")?,
             stride: to_i32(stride, "stride")?,
-            // The library only reads its input image; the cast to *mut is what its C signature asks.
-            buf: pixels.as_ptr().cast_mut(),
+            buf,
         };
         let mut out = Vec::new();
         // SAFETY: `image` describes `pixels` exactly (bounds checked above) and outlives the call;

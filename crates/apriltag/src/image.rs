@@ -66,6 +66,18 @@ impl<'a> ImageView<'a> {
         &self.data[y * self.stride..y * self.stride + self.width]
     }
 
+    /// The window of `width × height` pixels whose top-left pixel is (x, y), sharing the
+    /// buffer.
+    pub fn sub_view(&self, x: usize, y: usize, width: usize, height: usize) -> Result<ImageView<'a>, DetectError> {
+        if x + width > self.width || y + height > self.height {
+            return Err(DetectError::BadImage(format!(
+                "window {width}×{height} at ({x}, {y}) leaves the {}×{} image",
+                self.width, self.height
+            )));
+        }
+        ImageView::new(&self.data[y * self.stride + x..], width, height, self.stride)
+    }
+
     /// Pixel (x, y), or `None` outside the image.
     pub fn get(&self, x: usize, y: usize) -> Option<u8> {
         (x < self.width && y < self.height).then(|| self.data[y * self.stride + x])

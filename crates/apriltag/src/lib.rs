@@ -2,8 +2,12 @@
 //! tag36h11 family ([`family`]), borrowed frames ([`image`]), the detector's settings
 //! ([`config`]), decoding sampled patterns to ids ([`decode`]), and the pipeline's stages
 //! ported one by one and checked against C: [`preprocess`] (decimation), [`threshold`],
-//! [`components`], [`clusters`] and [`quads`]. Sampling and decoding the quads, edge
-//! refinement and removing overlapping detections come next.
+//! [`components`], [`clusters`], [`quads`], and in [`detector`] edge refinement, decoding
+//! and removal of overlapping duplicates. [`Detector`] runs them: on our fixtures and the
+//! real photos it returns exactly the C library's tags and corners (`tests/detector_vs_c.rs`).
+//!
+//! Not yet: `quad_sigma` other than 0 (refused), threads (one is used), linear-light edge
+//! refinement and the speed work — the detector is C's algorithm, not yet better than it.
 
 mod codes;
 
@@ -11,6 +15,7 @@ pub mod clusters;
 pub mod components;
 pub mod config;
 pub mod decode;
+pub mod detector;
 pub mod family;
 pub mod gray;
 pub mod image;
@@ -20,6 +25,7 @@ pub mod threshold;
 
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};
+pub use detector::{Detection, Detector};
 pub use family::{Tag36h11, TagBitmap};
 pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra};

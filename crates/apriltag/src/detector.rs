@@ -1,0 +1,559 @@
+//! The detector: the stages of the C library's `apriltag_detector_detect` in order — decimate,
+//! threshold, regions, clusters, quads; then per quad at full resolution edge refinement,
+//! homography, decoding against a gray model of the border with sharpening; then removal of
+//! overlapping duplicates. Each stage is a port that reproduces C's results (see the stage
+//! modules); this one adds only the bookkeeping and JawTrack's pixel convention.
+
+use crate::DetectError;
+use crate::clusters::gradient_clusters;
+use crate::components::connected_components;
+use crate::config::DetectorConfig;
+use crate::decode::CodeTable;
+use crate::family::Tag36h11;
+use crate::image::ImageView;
+use crate::preprocess::decimate;
+use crate::quads::{Quad, fit_quads};
+use crate::threshold::threshold;
+
+/// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
+/// (0, 0); the C library reports 0.5 more).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Detection {
+    /// tag36h11 id.
+    pub id: u32,
+    /// Bits corrected.
+    pub hamming: u32,
+    /// How far the sampled bits sit from the threshold on average (the weaker of the light
+    /// and dark bits); low values mean a doubtful decode.
+    pub decision_margin: f32,
+    /// Centre (px).
+    pub center: [f64; 2],
+    /// Corners (px): bottom-left, bottom-right, top-right, top-left of the upright tag.
+    pub corners: [[f64; 2]; 4],
+    /// Homography from tag coordinates ([−1, 1]², y down) to pixels, row-major 3×3.
+    pub homography: [f64; 9],
+}
+
+/// A tag36h11 detector.
+#[derive(Debug, Clone)]
+pub struct Detector {
+    config: DetectorConfig,
+    table: CodeTable,
+}
+
+impl Detector {
+    /// Checks the settings and builds the decoding table.
+    pub fn new(config: DetectorConfig) -> Result<Self, DetectError> {
+        config.validate()?;
+        if config.quad_sigma != 0.0 {
+            return Err(DetectError::BadConfig(
+                "quad_sigma other than 0 is not implemented in this detector yet".into(),
+            ));
+        }
+        let table = CodeTable::new(config.max_hamming)?;
+        Ok(Detector { config, table })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &DetectorConfig {
+        &self.config
+    }
+
+    /// Detects tags, sorted by id. With a region of interest, only tags inside it are found,
+    /// in full-frame coordinates.
+    pub fn detect(&self, frame: &ImageView<'_>) -> Result<Vec<Detection>, DetectError> {
+        let (view, ox, oy) = match self.config.roi {
+            None => (*frame, 0.0, 0.0),
+            Some(r) => {
+                if r.x + r.width > frame.width() || r.y + r.height > frame.height() {
+                    return Err(DetectError::BadConfig(format!(
+                        "roi {}×{} at ({}, {}) leaves the {}×{} frame",
+                        r.width,
+                        r.height,
+                        r.x,
+                        r.y,
+                        frame.width(),
+                        frame.height()
+                    )));
+                }
+                (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
+            }
+        };
+        let mut dets = self.detect_view(&view);
+        for d in &mut dets {
+            d.center[0] += ox;
+            d.center[1] += oy;
+            for c in &mut d.corners {
+                c[0] += ox;
+                c[1] += oy;
+            }
+            // Move the homography with the window: pixels' = pixels + offset.
+            let h = d.homography;
+            d.homography = [
+                h[0] + ox * h[6],
+                h[1] + ox * h[7],
+                h[2] + ox * h[8],
+                h[3] + oy * h[6],
+                h[4] + oy * h[7],
+                h[5] + oy * h[8],
+                h[6],
+                h[7],
+                h[8],
+            ];
+        }
+        Ok(dets)
+    }
+
+    fn detect_view(&self, im: &ImageView<'_>) -> Vec<Detection> {
+        let c = &self.config;
+        let decimated;
+        let quad_im = if c.quad_decimate > 1.0 {
+            decimated = decimate(im, c.quad_decimate);
+            match decimated.view() {
+                Ok(v) => v,
+                Err(_) => return Vec::new(), // too small to hold a tag
+            }
+        } else {
+            *im
+        };
+        let t = threshold(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch);
+        let mut uf = connected_components(&t);
+        let clusters = gradient_clusters(&t, &mut uf);
+        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, c.quad_decimate);
+        if c.quad_decimate > 1.0 {
+            for q in &mut quads {
+                for p in &mut q.p {
+                    p[0] *= c.quad_decimate;
+                    p[1] *= c.quad_decimate;
+                }
+            }
+        }
+        let mut dets = Vec::new();
+        for mut q in quads {
+            if c.refine_edges {
+                refine_edges(im, &mut q, c.quad_decimate);
+            }
+            let Some(h) = homography(&q) else { continue };
+            if let Some(d) = decode_quad(im, &h, &self.table, c.decode_sharpening) {
+                dets.push(d);
+            }
+        }
+        let mut dets = reconcile(dets);
+        // C sorts by id; ties keep a deterministic order here (by position).
+        dets.sort_by(|a, b| {
+            a.id.cmp(&b.id).then(a.center[0].total_cmp(&b.center[0])).then(a.center[1].total_cmp(&b.center[1]))
+        });
+        for d in &mut dets {
+            // JawTrack's pixel convention.
+            d.center = [d.center[0] - 0.5, d.center[1] - 0.5];
+            for p in &mut d.corners {
+                p[0] -= 0.5;
+                p[1] -= 0.5;
+            }
+            let h = d.homography;
+            d.homography = [
+                h[0] - 0.5 * h[6],
+                h[1] - 0.5 * h[7],
+                h[2] - 0.5 * h[8],
+                h[3] - 0.5 * h[6],
+                h[4] - 0.5 * h[7],
+                h[5] - 0.5 * h[8],
+                h[6],
+                h[7],
+                h[8],
+            ];
+        }
+        dets
+    }
+}
+
+/// C's `refine_edges`: each edge is re-fitted at full resolution to the points of strongest
+/// gradient found along its normal, and the corners re-intersected.
+fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32) {
+    let (w, h) = (im.width() as i64, im.height() as i64);
+    let px = |x: i64, y: i64| f64::from(im.get(x as usize, y as usize).unwrap_or(0));
+    let mut lines = [[0.0f64; 4]; 4];
+    for (edge, line) in lines.iter_mut().enumerate() {
+        let (a, b) = (edge, (edge + 1) & 3);
+        let (pa, pb) = (quad.p[a].map(f64::from), quad.p[b].map(f64::from));
+        let mut nx = pb[1] - pa[1];
+        let mut ny = -pb[0] + pa[0];
+        let mag = (nx * nx + ny * ny).sqrt();
+        nx /= mag;
+        ny /= mag;
+        let nsamples = 16.max((mag / 8.0) as i64);
+        let (mut mx, mut my, mut mxx, mut mxy, mut myy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for s in 0..nsamples {
+            let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
+            let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
+            let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
+            let (mut mn, mut mcount) = (0.0, 0.0);
+            let range = (f64::from(quad_decimate) + 1.0) as i64;
+            let steps_per_unit = 4;
+            let step_length = 1.0 / steps_per_unit as f64;
+            let max_steps = 2 * steps_per_unit * range + 1;
+            for step in 0..max_steps {
+                let nn = -(range as f64) + step_length * step as f64;
+                let sample = |off: f64| -> Option<f64> {
+                    let x = x0 + (nn + off) * nx - 0.5;
+                    let y = y0 + (nn + off) * ny - 0.5;
+                    // modf: integer part toward zero, fraction with the sign of the value.
+                    let (xi, yi) = (x.trunc(), y.trunc());
+                    let (fa, fb) = (x - xi, y - yi);
+                    let (xi, yi) = (xi as i64, yi as i64);
+                    if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
+                        return None;
+                    }
+                    Some(
+                        (1.0 - fa) * (1.0 - fb) * px(xi, yi)
+                            + fa * (1.0 - fb) * px(xi + 1, yi)
+                            + (1.0 - fa) * fb * px(xi, yi + 1)
+                            + fa * fb * px(xi + 1, yi + 1),
+                    )
+                };
+                let Some(g1) = sample(1.0) else { continue };
+                let Some(g2) = sample(-1.0) else { continue };
+                if g1 < g2 {
+                    continue; // the gradient runs backwards here
+                }
+                let weight = (g2 - g1) * (g2 - g1);
+                mn += weight * nn;
+                mcount += weight;
+            }
+            if mcount == 0.0 {
+                continue;
+            }
+            let n0 = mn / mcount;
+            let (bx, by) = (x0 + n0 * nx, y0 + n0 * ny);
+            mx += bx;
+            my += by;
+            mxx += bx * bx;
+            mxy += bx * by;
+            myy += by * by;
+            n += 1.0;
+        }
+        let (ex, ey) = (mx / n, my / n);
+        let cxx = mxx / n - ex * ex;
+        let cxy = mxy / n - ex * ey;
+        let cyy = myy / n - ey * ey;
+        let theta = 0.5 * ((-2.0 * cxy) as f32).atan2((cyy - cxx) as f32);
+        *line = [ex, ey, f64::from(theta.cos()), f64::from(theta.sin())];
+    }
+    for i in 0..4 {
+        let (a, b) = (lines[i], lines[(i + 1) & 3]);
+        let (a00, a01, a10, a11) = (a[3], -b[3], -a[2], b[2]);
+        let (b0, b1) = (-a[0] + b[0], -a[1] + b[1]);
+        let det = a00 * a11 - a10 * a01;
+        if det.abs() > 0.001 {
+            let (w00, w01) = (a11 / det, -a01 / det);
+            let l0 = w00 * b0 + w01 * b1;
+            quad.p[(i + 1) & 3] = [(a[0] + l0 * a00) as f32, (a[1] + l0 * a10) as f32];
+        }
+    }
+}
+
+/// C's `homography_compute2`: the homography taking tag coordinates (−1,−1), (1,−1), (1,1),
+/// (−1,1) to the quad's corners, by Gaussian elimination with partial pivoting. `None` when
+/// singular (as C's also gives up when the inverse does not exist).
+fn homography(q: &Quad) -> Option<[f64; 9]> {
+    let tag = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    let mut a = [0.0f64; 72];
+    for i in 0..4 {
+        let (x, y) = tag[i];
+        let (u, v) = (f64::from(q.p[i][0]), f64::from(q.p[i][1]));
+        a[(2 * i) * 9..(2 * i) * 9 + 9].copy_from_slice(&[x, y, 1.0, 0.0, 0.0, 0.0, -x * u, -y * u, u]);
+        a[(2 * i + 1) * 9..(2 * i + 1) * 9 + 9].copy_from_slice(&[0.0, 0.0, 0.0, x, y, 1.0, -x * v, -y * v, v]);
+    }
+    for col in 0..8 {
+        let (mut max_val, mut max_row) = (0.0f64, None);
+        for row in col..8 {
+            let v = a[row * 9 + col].abs();
+            if v > max_val {
+                max_val = v;
+                max_row = Some(row);
+            }
+        }
+        let max_row = max_row?;
+        if max_val < 1e-10 {
+            return None;
+        }
+        if max_row != col {
+            for i in col..9 {
+                a.swap(col * 9 + i, max_row * 9 + i);
+            }
+        }
+        for i in col + 1..8 {
+            let f = a[i * 9 + col] / a[col * 9 + col];
+            a[i * 9 + col] = 0.0;
+            for j in col + 1..9 {
+                a[i * 9 + j] -= f * a[col * 9 + j];
+            }
+        }
+    }
+    for col in (0..8).rev() {
+        let mut sum = 0.0;
+        for i in col + 1..8 {
+            sum += a[col * 9 + i] * a[i * 9 + 8];
+        }
+        a[col * 9 + 8] = (a[col * 9 + 8] - sum) / a[col * 9 + col];
+    }
+    let h = [a[8], a[17], a[26], a[35], a[44], a[53], a[62], a[71], 1.0];
+    let det = h[0] * h[4] * h[8] - h[0] * h[5] * h[7] + h[1] * h[5] * h[6] - h[1] * h[3] * h[8] + h[2] * h[3] * h[7]
+        - h[2] * h[4] * h[6];
+    (det != 0.0).then_some(h)
+}
+
+fn project(h: &[f64; 9], x: f64, y: f64) -> (f64, f64) {
+    let z = h[6] * x + h[7] * y + h[8];
+    ((h[0] * x + h[1] * y + h[2]) / z, (h[3] * x + h[4] * y + h[5]) / z)
+}
+
+/// A least-squares plane of gray values over the tag: C's `graymodel`.
+#[derive(Default)]
+struct GrayModel {
+    a: [[f64; 3]; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+}
+
+impl GrayModel {
+    fn add(&mut self, x: f64, y: f64, gray: f64) {
+        self.a[0][0] += x * x;
+        self.a[0][1] += x * y;
+        self.a[0][2] += x;
+        self.a[1][1] += y * y;
+        self.a[1][2] += y;
+        self.a[2][2] += 1.0;
+        self.b[0] += x * gray;
+        self.b[1] += y * gray;
+        self.b[2] += gray;
+    }
+
+    /// C's `mat33_sym_solve`: Cholesky of the upper triangle, inverse, two products.
+    fn solve(&mut self) {
+        let a = [self.a[0][0], self.a[0][1], self.a[0][2], 0.0, self.a[1][1], self.a[1][2], 0.0, 0.0, self.a[2][2]];
+        let mut l = [0.0f64; 9];
+        l[0] = a[0].sqrt();
+        l[3] = a[1] / l[0];
+        l[6] = a[2] / l[0];
+        l[4] = (a[4] - l[3] * l[3]).sqrt();
+        l[7] = (a[5] - l[3] * l[6]) / l[4];
+        l[8] = (a[8] - l[6] * l[6] - l[7] * l[7]).sqrt();
+        let mut m = [0.0f64; 9];
+        m[0] = 1.0 / l[0];
+        m[3] = -l[3] * m[0] / l[4];
+        m[4] = 1.0 / l[4];
+        m[6] = (-l[6] * m[0] - l[7] * m[3]) / l[8];
+        m[7] = -l[7] * m[4] / l[8];
+        m[8] = 1.0 / l[8];
+        let b = self.b;
+        let t = [m[0] * b[0], m[3] * b[0] + m[4] * b[1], m[6] * b[0] + m[7] * b[1] + m[8] * b[2]];
+        self.c = [m[0] * t[0] + m[3] * t[1] + m[6] * t[2], m[4] * t[1] + m[7] * t[2], m[8] * t[2]];
+    }
+
+    fn at(&self, x: f64, y: f64) -> f64 {
+        self.c[0] * x + self.c[1] * y + self.c[2]
+    }
+}
+
+/// C's `value_for_pixel`: bilinear interpolation in C's pixel-corner convention; `None`
+/// outside the image.
+fn value_for_pixel(im: &ImageView<'_>, px: f64, py: f64) -> Option<f64> {
+    let x1 = (px - 0.5).floor() as i64;
+    let x2 = (px - 0.5).ceil() as i64;
+    let x = px - 0.5 - x1 as f64;
+    let y1 = (py - 0.5).floor() as i64;
+    let y2 = (py - 0.5).ceil() as i64;
+    let y = py - 0.5 - y1 as f64;
+    if x1 < 0 || x2 >= im.width() as i64 || y1 < 0 || y2 >= im.height() as i64 {
+        return None;
+    }
+    let p = |x: i64, y: i64| f64::from(im.get(x as usize, y as usize).unwrap_or(0));
+    Some(p(x1, y1) * (1.0 - x) * (1.0 - y) + p(x2, y1) * x * (1.0 - y) + p(x1, y2) * (1.0 - x) * y + p(x2, y2) * x * y)
+}
+
+fn decode_quad(im: &ImageView<'_>, h: &[f64; 9], table: &CodeTable, sharpening: f64) -> Option<Detection> {
+    let wab = Tag36h11::WIDTH_AT_BORDER as f64;
+    let total = Tag36h11::TOTAL_WIDTH;
+    // Sample lines just outside (white) and just inside (black) each side of the border.
+    let patterns: [[f32; 5]; 8] = [
+        [-0.5, 0.5, 0.0, 1.0, 1.0],
+        [0.5, 0.5, 0.0, 1.0, 0.0],
+        [wab as f32 + 0.5, 0.5, 0.0, 1.0, 1.0],
+        [wab as f32 - 0.5, 0.5, 0.0, 1.0, 0.0],
+        [0.5, -0.5, 1.0, 0.0, 1.0],
+        [0.5, 0.5, 1.0, 0.0, 0.0],
+        [0.5, wab as f32 + 0.5, 1.0, 0.0, 1.0],
+        [0.5, wab as f32 - 0.5, 1.0, 0.0, 0.0],
+    ];
+    let (mut white, mut black) = (GrayModel::default(), GrayModel::default());
+    for p in &patterns {
+        for i in 0..Tag36h11::WIDTH_AT_BORDER {
+            let tx01 = (f64::from(p[0]) + i as f64 * f64::from(p[2])) / wab;
+            let ty01 = (f64::from(p[1]) + i as f64 * f64::from(p[3])) / wab;
+            let (tx, ty) = (2.0 * (tx01 - 0.5), 2.0 * (ty01 - 0.5));
+            let (px, py) = project(h, tx, ty);
+            let (ix, iy) = (px as i64, py as i64);
+            if ix < 0 || iy < 0 || ix >= im.width() as i64 || iy >= im.height() as i64 {
+                continue;
+            }
+            let v = f64::from(im.get(ix as usize, iy as usize).unwrap_or(0));
+            if p[4] != 0.0 { white.add(tx, ty, v) } else { black.add(tx, ty, v) }
+        }
+    }
+    white.solve();
+    black.solve();
+    // tag36h11's border is dark inside light: anything else is not this family.
+    if white.at(0.0, 0.0) - black.at(0.0, 0.0) < 0.0 {
+        return None;
+    }
+    let min_coord = (Tag36h11::WIDTH_AT_BORDER as i64 - total as i64) / 2;
+    let mut values = vec![0.0f64; total * total];
+    let cell = |bx: u8, by: u8| ((i64::from(by) - min_coord) as usize) * total + (i64::from(bx) - min_coord) as usize;
+    for &(bx, by) in Tag36h11::bit_cells() {
+        let tx = 2.0 * ((f64::from(bx) + 0.5) / wab - 0.5);
+        let ty = 2.0 * ((f64::from(by) + 0.5) / wab - 0.5);
+        let (px, py) = project(h, tx, ty);
+        let Some(v) = value_for_pixel(im, px, py) else { continue };
+        let thresh = (black.at(tx, ty) + white.at(tx, ty)) / 2.0;
+        values[cell(bx, by)] = v - thresh;
+    }
+    sharpen(&mut values, total, sharpening);
+    let (mut white_score, mut black_score) = (0.0f32, 0.0f32);
+    let (mut white_count, mut black_count) = (1.0f32, 1.0f32);
+    let mut rcode = 0u64;
+    for &(bx, by) in Tag36h11::bit_cells() {
+        rcode <<= 1;
+        let v = values[cell(bx, by)];
+        if v > 0.0 {
+            white_score += v as f32;
+            white_count += 1.0;
+            rcode |= 1;
+        } else {
+            black_score -= v as f32;
+            black_count += 1.0;
+        }
+    }
+    let decoded = table.decode(rcode)?;
+    let margin = (white_score / white_count).min(black_score / black_count);
+    if margin < 0.0 {
+        return None;
+    }
+    // C counts its own (counter-clockwise) quarter turns; ours are clockwise.
+    let c_turns = (4 - decoded.rotation) % 4;
+    let theta = f64::from(c_turns) * std::f64::consts::PI / 2.0;
+    let (c, s) = (theta.cos(), theta.sin());
+    let r = [c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0];
+    let mut hr = [0.0f64; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            hr[i * 3 + j] = (0..3).map(|k| h[i * 3 + k] * r[k * 3 + j]).sum();
+        }
+    }
+    let center = project(&hr, 0.0, 0.0);
+    let corners: [[f64; 2]; 4] = std::array::from_fn(|i| {
+        let tx = if i == 1 || i == 2 { 1.0 } else { -1.0 };
+        let ty = if i < 2 { 1.0 } else { -1.0 };
+        let (x, y) = project(&hr, tx, ty);
+        [x, y]
+    });
+    Some(Detection {
+        id: decoded.id,
+        hamming: decoded.hamming,
+        decision_margin: margin,
+        center: [center.0, center.1],
+        corners,
+        homography: hr,
+    })
+}
+
+/// C's `sharpen`: add `k` times a 3×3 Laplacian (4-neighbour) of the sampled values.
+fn sharpen(values: &mut [f64], size: usize, k: f64) {
+    let kernel = [0.0, -1.0, 0.0, -1.0, 4.0, -1.0, 0.0, -1.0, 0.0];
+    let mut sharpened = vec![0.0f64; size * size];
+    for y in 0..size as i64 {
+        for x in 0..size as i64 {
+            let mut acc = 0.0;
+            for i in 0..3i64 {
+                for j in 0..3i64 {
+                    let (yy, xx) = (y + i - 1, x + j - 1);
+                    if yy < 0 || yy > size as i64 - 1 || xx < 0 || xx > size as i64 - 1 {
+                        continue;
+                    }
+                    acc += values[(yy as usize) * size + xx as usize] * kernel[(i * 3 + j) as usize];
+                }
+            }
+            sharpened[(y as usize) * size + x as usize] = acc;
+        }
+    }
+    for (v, s) in values.iter_mut().zip(&sharpened) {
+        *v += k * s;
+    }
+}
+
+/// C's reconciliation: of two detections of the same id whose quads overlap, keep the one with
+/// fewer corrected bits, then the larger margin, then the smaller corner coordinates.
+fn reconcile(mut dets: Vec<Detection>) -> Vec<Detection> {
+    let mut i0 = 0;
+    while i0 < dets.len() {
+        let mut i1 = i0 + 1;
+        let mut removed_i0 = false;
+        while i1 < dets.len() {
+            let (a, b) = (&dets[i0], &dets[i1]);
+            if a.id != b.id || !convex_quads_overlap(&a.corners, &b.corners) {
+                i1 += 1;
+                continue;
+            }
+            let mut pref = prefer_smaller(0, f64::from(a.hamming), f64::from(b.hamming));
+            pref = prefer_smaller(pref, -f64::from(a.decision_margin), -f64::from(b.decision_margin));
+            for i in 0..4 {
+                pref = prefer_smaller(pref, a.corners[i][0], b.corners[i][0]);
+                pref = prefer_smaller(pref, a.corners[i][1], b.corners[i][1]);
+            }
+            if pref < 0 {
+                dets.remove(i1);
+            } else {
+                dets.remove(i0);
+                removed_i0 = true;
+                break;
+            }
+        }
+        if !removed_i0 {
+            i0 += 1;
+        }
+    }
+    dets
+}
+
+fn prefer_smaller(pref: i32, q0: f64, q1: f64) -> i32 {
+    if pref != 0 {
+        pref
+    } else if q0 < q1 {
+        -1
+    } else if q1 < q0 {
+        1
+    } else {
+        0
+    }
+}
+
+/// Whether two convex quadrilaterals share any area (separating-axis test).
+fn convex_quads_overlap(a: &[[f64; 2]; 4], b: &[[f64; 2]; 4]) -> bool {
+    for poly in [a, b] {
+        for i in 0..4 {
+            let (p, q) = (poly[i], poly[(i + 1) % 4]);
+            let axis = [q[1] - p[1], p[0] - q[0]];
+            let proj = |pts: &[[f64; 2]; 4]| {
+                pts.iter()
+                    .map(|c| c[0] * axis[0] + c[1] * axis[1])
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+            };
+            let (a0, a1) = proj(a);
+            let (b0, b1) = proj(b);
+            if a1 < b0 || b1 < a0 {
+                return false;
+            }
+        }
+    }
+    true
+}
