@@ -13,6 +13,7 @@ macro_rules! say {
 }
 
 mod demo;
+mod detect;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
@@ -45,6 +46,8 @@ enum Command {
     Harness(HarnessArgs),
     /// Render a synthetic scene: PNG frames and ground_truth.json.
     Synth(SynthArgs),
+    /// Detect tag36h11 tags in images; one JSON line per image.
+    Detect(detect::DetectArgs),
 }
 
 #[derive(Args)]
@@ -143,6 +146,7 @@ fn main() {
         Command::CheckMarker { file } => check_marker(&file),
         Command::Harness(a) => harness(&a),
         Command::Synth(a) => synth(&a),
+        Command::Detect(a) => detect::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

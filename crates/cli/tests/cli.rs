@@ -112,3 +112,21 @@ fn harness_writes_sheets_body_and_marker() {
     refused(&jawtrack(&["harness", "--out", bad.to_str().expect("utf-8"), "--post-length", "-1"]), "post_length");
     assert!(!bad.exists(), "nothing written on refusal");
 }
+
+#[test]
+fn detect_prints_one_json_line_per_image() {
+    let frame = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-static-1080p/frame_0000.png");
+    let o = jawtrack(&["detect", "--decimate", "2", frame, frame]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2);
+    let v: serde_json::Value = serde_json::from_str(lines[0]).expect("json line");
+    assert_eq!(v["width"], 1920);
+    let ids: Vec<u64> = v["detections"].as_array().expect("array").iter().filter_map(|d| d["id"].as_u64()).collect();
+    assert!(ids.len() >= 6 && ids.iter().all(|&id| id < 24), "{ids:?}");
+    assert!(v["detections"][0]["corners"].as_array().is_some_and(|c| c.len() == 4));
+    refused(&jawtrack(&["detect", "--max-hamming", "3", frame]), "max_hamming 3 is refused");
+    refused(&jawtrack(&["detect", "--decimate", "2.5", frame]), "quad_decimate");
+    refused(&jawtrack(&["detect", "/nonexistent.png"]), "/nonexistent.png");
+}
