@@ -46,8 +46,10 @@ fn frames() -> Vec<PathBuf> {
 fn same_tags_and_corners_as_c() {
     let (mut images, mut tags, mut worst) = (0, 0, 0.0f64);
     for decimate in [2.0f32, 1.0] {
+        // C's behaviour exactly: edges refined on the encoded values.
         let ours =
-            Detector::new(DetectorConfig { quad_decimate: decimate, ..DetectorConfig::default() }).expect("detector");
+            Detector::new(DetectorConfig { quad_decimate: decimate, linear_edges: false, ..DetectorConfig::default() })
+                .expect("detector");
         let mut c = ReferenceDetector::new(&ReferenceParams { quad_decimate: decimate, ..ReferenceParams::default() })
             .expect("reference");
         for path in frames() {

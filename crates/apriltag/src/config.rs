@@ -65,6 +65,10 @@ pub struct DetectorConfig {
     /// Refine each edge at full resolution from the image gradient. Costs little, gains much
     /// corner accuracy, most of all with decimation.
     pub refine_edges: bool,
+    /// Refine edges in linear light, reading the frame as sRGB-encoded (as phone frames are).
+    /// A blurred edge thresholded in encoded values moves toward its dark side by a fraction of
+    /// the blur; in linear light it stays put. `false` reproduces the C library exactly.
+    pub linear_edges: bool,
     /// Sharpening of the decoded bit samples: helps small, blurred tags decode.
     pub decode_sharpening: f64,
     /// Bit errors corrected when decoding, 0–2. More recovers damaged tags and raises the
@@ -78,14 +82,15 @@ pub struct DetectorConfig {
 }
 
 impl Default for DetectorConfig {
-    /// The C library's defaults: decimate 2, no blur, one thread, refine edges, sharpening
-    /// 0.25, and max_hamming 2.
+    /// The C library's defaults (decimate 2, no blur, one thread, refine edges, sharpening
+    /// 0.25, max_hamming 2), with edges refined in linear light.
     fn default() -> Self {
         DetectorConfig {
             quad_decimate: 2.0,
             quad_sigma: 0.0,
             nthreads: 1,
             refine_edges: true,
+            linear_edges: true,
             decode_sharpening: 0.25,
             max_hamming: 2,
             quad: QuadThreshold::default(),

@@ -131,7 +131,7 @@ impl Detector {
         let mut dets = Vec::new();
         for mut q in quads {
             if c.refine_edges {
-                refine_edges(im, &mut q, c.quad_decimate);
+                refine_edges(im, &mut q, c.quad_decimate, if c.linear_edges { &SRGB_TO_LINEAR } else { &IDENTITY });
             }
             let Some(h) = homography(&q) else { continue };
             if let Some(d) = decode_quad(im, &h, &self.table, c.decode_sharpening) {
@@ -167,11 +167,31 @@ impl Detector {
     }
 }
 
+/// Pixel values as they are (what C uses).
+static IDENTITY: [f64; 256] = {
+    let mut t = [0.0; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = i as f64;
+        i += 1;
+    }
+    t
+};
+
+/// sRGB-encoded values to linear light, on the same 0–255 scale.
+static SRGB_TO_LINEAR: std::sync::LazyLock<[f64; 256]> = std::sync::LazyLock::new(|| {
+    std::array::from_fn(|i| {
+        let v = i as f64 / 255.0;
+        255.0 * if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+    })
+});
+
 /// C's `refine_edges`: each edge is re-fitted at full resolution to the points of strongest
-/// gradient found along its normal, and the corners re-intersected.
-fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32) {
+/// gradient found along its normal, and the corners re-intersected. `lut` maps pixel values
+/// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges).
+fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[f64; 256]) {
     let (w, h) = (im.width() as i64, im.height() as i64);
-    let px = |x: i64, y: i64| f64::from(im.get(x as usize, y as usize).unwrap_or(0));
+    let px = |x: i64, y: i64| lut[usize::from(im.get(x as usize, y as usize).unwrap_or(0))];
     let mut lines = [[0.0f64; 4]; 4];
     for (edge, line) in lines.iter_mut().enumerate() {
         let (a, b) = (edge, (edge + 1) & 3);
