@@ -24,6 +24,10 @@ pub(crate) struct DetectArgs {
     /// Refine edges at full resolution.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     refine_edges: bool,
+    /// Refine edges in linear light, reading the images as sRGB (as phone frames are);
+    /// false reproduces the C library exactly.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    linear_edges: bool,
     /// Run each image this many times and report the median time.
     #[arg(long, default_value_t = 1)]
     repeat: usize,
@@ -41,6 +45,7 @@ pub(crate) fn run(a: &DetectArgs) -> Result<()> {
         quad_sigma: a.sigma,
         nthreads: a.threads,
         refine_edges: a.refine_edges,
+        linear_edges: a.linear_edges,
         max_hamming: a.max_hamming,
         ..DetectorConfig::default()
     })?;

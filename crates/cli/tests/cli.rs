@@ -126,6 +126,8 @@ fn detect_prints_one_json_line_per_image() {
     let ids: Vec<u64> = v["detections"].as_array().expect("array").iter().filter_map(|d| d["id"].as_u64()).collect();
     assert!(ids.len() >= 6 && ids.iter().all(|&id| id < 24), "{ids:?}");
     assert!(v["detections"][0]["corners"].as_array().is_some_and(|c| c.len() == 4));
+    let c_mode = jawtrack(&["detect", "--linear-edges", "false", frame]);
+    assert!(c_mode.status.success(), "{}", stderr(&c_mode));
     refused(&jawtrack(&["detect", "--max-hamming", "3", frame]), "max_hamming 3 is refused");
     refused(&jawtrack(&["detect", "--decimate", "2.5", frame]), "quad_decimate");
     refused(&jawtrack(&["detect", "/nonexistent.png"]), "/nonexistent.png");
