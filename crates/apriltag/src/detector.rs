@@ -12,7 +12,7 @@ use crate::decode::CodeTable;
 use crate::family::Tag36h11;
 use crate::image::ImageView;
 use crate::preprocess::decimate;
-use crate::quads::{Quad, fit_quads};
+use crate::quads::{Quad, fit_quads, intersect_lines};
 use crate::threshold::threshold;
 
 /// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
@@ -260,14 +260,10 @@ fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[
         *line = [ex, ey, f64::from(theta.cos()), f64::from(theta.sin())];
     }
     for i in 0..4 {
-        let (a, b) = (lines[i], lines[(i + 1) & 3]);
-        let (a00, a01, a10, a11) = (a[3], -b[3], -a[2], b[2]);
-        let (b0, b1) = (-a[0] + b[0], -a[1] + b[1]);
-        let det = a00 * a11 - a10 * a01;
+        // C keeps the old corner when the refined edges are near parallel.
+        let (det, corner) = intersect_lines(&lines[i], &lines[(i + 1) & 3]);
         if det.abs() > 0.001 {
-            let (w00, w01) = (a11 / det, -a01 / det);
-            let l0 = w00 * b0 + w01 * b1;
-            quad.p[(i + 1) & 3] = [(a[0] + l0 * a00) as f32, (a[1] + l0 * a10) as f32];
+            quad.p[(i + 1) & 3] = corner;
         }
     }
 }

@@ -252,6 +252,17 @@ fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
     (best_error / (sz as f64) < max_mse).then_some(best)
 }
 
+/// Where two lines (point, unit normal: `[x, y, nx, ny]`) meet, as C computes it, with the
+/// determinant of the system so each caller can apply its own test of near-parallel lines.
+pub(crate) fn intersect_lines(a: &[f64; 4], b: &[f64; 4]) -> (f64, [f32; 2]) {
+    let (a00, a01, a10, a11) = (a[3], -b[3], -a[2], b[2]);
+    let (b0, b1) = (-a[0] + b[0], -a[1] + b[1]);
+    let det = a00 * a11 - a10 * a01;
+    let (w00, w01) = (a11 / det, -a01 / det);
+    let l0 = w00 * b0 + w01 * b1;
+    (det, [(a[0] + l0 * a00) as f32, (a[1] + l0 * a10) as f32])
+}
+
 /// Fits a quad to one cluster, or `None` if it is not a plausible tag border. `im` is the image
 /// the clusters were found on; `min_tag_width` is the smallest tag (in its pixels) to keep.
 pub fn fit_quad(cluster: &[Pt], im: &ImageView<'_>, q: &QuadThreshold, min_tag_width: i32) -> Option<Quad> {
@@ -309,16 +320,11 @@ pub fn fit_quad(cluster: &[Pt], im: &ImageView<'_>, q: &QuadThreshold, min_tag_w
     }
     let mut p = [[0.0f32; 2]; 4];
     for i in 0..4 {
-        let (a, b) = (lines[i], lines[(i + 1) & 3]);
-        let (a00, a01, a10, a11) = (a[3], -b[3], -a[2], b[2]);
-        let (b0, b1) = (-a[0] + b[0], -a[1] + b[1]);
-        let det = a00 * a11 - a10 * a01;
+        let (det, corner) = intersect_lines(&lines[i], &lines[(i + 1) & 3]);
         if det.abs() < 0.001 {
             return None;
         }
-        let (w00, w01) = (a11 / det, -a01 / det);
-        let l0 = w00 * b0 + w01 * b1;
-        p[i] = [(a[0] + l0 * a00) as f32, (a[1] + l0 * a10) as f32];
+        p[i] = corner;
     }
     let pd = |i: usize| [f64::from(p[i][0]), f64::from(p[i][1])];
     let dist = |i: usize, j: usize| ((pd(j)[0] - pd(i)[0]).powi(2) + (pd(j)[1] - pd(i)[1]).powi(2)).sqrt();

@@ -296,6 +296,12 @@ impl Default for SceneOptions {
     }
 }
 
+/// The frames of one movement cycle of `period` seconds from `start`, `dt` apart.
+fn one_cycle(start: f64, period: f64, dt: f64, view: View, motion: JawMotion) -> impl Iterator<Item = FrameSpec> {
+    let n = (period / dt).round() as usize;
+    (0..n).map(move |i| FrameSpec { t: start + i as f64 * dt, view, motion })
+}
+
 /// The frames of a scene. `seed` draws the hand tremor and the glide amplitudes.
 pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<FrameSpec> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_cee5);
@@ -337,8 +343,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             for opening in [10.0, 20.0, 30.0, 40.0] {
                 for _ in 0..opts.cycles {
                     let motion = JawMotion::Hinge { opening_mm: opening, start_s: start, period_s: period };
-                    let n = (period / dt).round() as usize;
-                    frames.extend((0..n).map(|i| FrameSpec { t: start + i as f64 * dt, view, motion }));
+                    frames.extend(one_cycle(start, period, dt, view, motion));
                     start += period;
                 }
             }
@@ -357,8 +362,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                 for _ in 0..opts.cycles {
                     let amplitude_mm = rng.random_range(4.0..6.0);
                     let motion = JawMotion::Glide { direction, amplitude_mm, start_s: start, period_s: period };
-                    let n = (period / dt).round() as usize;
-                    frames.extend((0..n).map(|k| FrameSpec { t: start + k as f64 * dt, view, motion }));
+                    frames.extend(one_cycle(start, period, dt, view, motion));
                     start += period;
                 }
             }

@@ -77,25 +77,18 @@ pub fn edge_self_check(side_px: f64, roll_deg: f64) -> EdgeCheck {
                 continue;
             }
             let p = a + d * frac;
-            if vertical {
-                let y = p.y.round() as i64;
-                let x_true = a.x + d.x * (y as f64 - a.y) / d.y;
-                let xc = x_true.round() as i64;
-                let (x0, x1) = (xc - half_window, xc + half_window);
-                let sum: f64 = (x0..=x1).map(|x| (at(x, y) - black) / (white - black)).sum();
-                let black_left = centre.x < x_true;
-                let e = if black_left { x1 as f64 + 0.5 - sum } else { x0 as f64 - 0.5 + sum };
-                errors.push(e - x_true);
-            } else {
-                let x = p.x.round() as i64;
-                let y_true = a.y + d.y * (x as f64 - a.x) / d.x;
-                let yc = y_true.round() as i64;
-                let (y0, y1) = (yc - half_window, yc + half_window);
-                let sum: f64 = (y0..=y1).map(|y| (at(x, y) - black) / (white - black)).sum();
-                let black_above = centre.y < y_true;
-                let e = if black_above { y1 as f64 + 0.5 - sum } else { y0 as f64 - 0.5 + sum };
-                errors.push(e - y_true);
-            }
+            // Work in (along, across) coordinates: across the edge runs x for a near-vertical
+            // edge (fit along a row), y otherwise (fit along a column).
+            let swap = |v: Point2<f64>| if vertical { (v.y, v.x) } else { (v.x, v.y) };
+            let ((pa, _), (aa, ac), (da, dc), (_, cc)) = (swap(p), swap(a), swap(Point2::from(d)), swap(centre));
+            let line = pa.round() as i64;
+            let edge_true = ac + dc * (line as f64 - aa) / da;
+            let mid = edge_true.round() as i64;
+            let (lo, hi) = (mid - half_window, mid + half_window);
+            let value = |k: i64| if vertical { at(k, line) } else { at(line, k) };
+            let sum: f64 = (lo..=hi).map(|k| (value(k) - black) / (white - black)).sum();
+            let e = if cc < edge_true { hi as f64 + 0.5 - sum } else { lo as f64 - 0.5 + sum };
+            errors.push(e - edge_true);
         }
     }
     let max = errors.iter().map(|e| e.abs()).fold(0.0, f64::max);
