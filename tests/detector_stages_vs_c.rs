@@ -2,6 +2,7 @@
 //! library writes each stage's image into the current directory; this binary (its own process,
 //! one test, so changing directory is safe) runs it in a temporary folder and compares.
 
+use jawtrack_apriltag::workers::Workers;
 use jawtrack_apriltag::{ImageView, QuadThreshold, clusters, components, preprocess, quads, threshold};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_tests::fixture_sets;
@@ -144,11 +145,13 @@ fn compare_quads(
         .collect();
     let mut uf = components::connected_components(thr);
     let cl = clusters::gradient_clusters(thr, &mut uf);
-    let q = QuadThreshold { min_white_black_diff: diff as u8, ..QuadThreshold::default() };
-    let mut ours: Vec<[f32; 8]> = quads::fit_quads(&cl, &pre.view().expect("non-empty"), &q, decimate)
-        .iter()
-        .map(|q| [q.p[0][0], q.p[0][1], q.p[1][0], q.p[1][1], q.p[2][0], q.p[2][1], q.p[3][0], q.p[3][1]])
-        .collect();
+    let q = QuadThreshold { min_white_black_diff: diff as u8, ..QuadThreshold::reference() };
+    // Two threads: the pool must find C's quads just as one thread does.
+    let mut ours: Vec<[f32; 8]> =
+        quads::fit_quads(&cl, &pre.view().expect("non-empty"), &q, decimate, &Workers::new(2))
+            .iter()
+            .map(|q| [q.p[0][0], q.p[0][1], q.p[1][0], q.p[1][1], q.p[2][0], q.p[2][1], q.p[3][0], q.p[3][1]])
+            .collect();
     let key = |a: &[f32; 8], b: &[f32; 8]| {
         a.iter().zip(b).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal)
     };

@@ -48,8 +48,7 @@ fn same_tags_and_corners_as_c() {
     for decimate in [2.0f32, 1.0] {
         // C's behaviour exactly: edges refined on the encoded values.
         let ours =
-            Detector::new(DetectorConfig { quad_decimate: decimate, linear_edges: false, ..DetectorConfig::default() })
-                .expect("detector");
+            Detector::new(DetectorConfig { quad_decimate: decimate, ..DetectorConfig::reference() }).expect("detector");
         let mut c = ReferenceDetector::new(&ReferenceParams { quad_decimate: decimate, ..ReferenceParams::default() })
             .expect("reference");
         for path in frames() {

@@ -6,7 +6,7 @@
 
 use crate::components::UnionFind;
 use crate::gray::Gray;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 /// Regions smaller than this take no part in clusters (hard-coded in C as well).
 const MIN_REGION_PIXELS: u32 = 25;
@@ -24,61 +24,98 @@ pub struct Pt {
     pub gy: i16,
 }
 
+/// Marks a pixel that takes no part in clusters: unknown (127) or in a small region.
+const NO_REGION: u32 = u32::MAX;
+
 /// Boundary clusters of a threshold image whose regions are `uf`, in order of first
 /// appearance in the scan.
 pub fn gradient_clusters(t: &Gray, uf: &mut UnionFind) -> Vec<Vec<Pt>> {
+    gradient_clusters_with(t, uf, &mut Vec::new())
+}
+
+/// [`gradient_clusters`] with a caller's buffer for each pixel's region.
+pub fn gradient_clusters_with(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>) -> Vec<Vec<Pt>> {
     let (w, h) = (t.width, t.height);
-    let mut index: HashMap<(u32, u32), usize> = HashMap::new();
-    let mut clusters: Vec<Vec<Pt>> = Vec::new();
     if w < 3 || h < 3 {
-        return clusters;
+        return Vec::new();
     }
+    // Each pixel's region, looked up once rather than up to five times in the scan below.
+    region.clear();
+    region.extend(t.data.iter().enumerate().map(|(i, &v)| {
+        if v == 127 {
+            return NO_REGION;
+        }
+        let rep = uf.find(i as u32);
+        if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep }
+    }));
+    let region = &region[..];
+    let mut out = Clusters::default();
+    let d = &t.data;
     for y in 1..h - 1 {
         let mut connected_last = false;
         for x in 1..w - 1 {
-            let v0 = t.data[y * w + x];
-            if v0 == 127 {
+            let i0 = y * w + x;
+            let rep0 = region[i0];
+            if rep0 == NO_REGION {
                 connected_last = false;
                 continue;
             }
-            let rep0 = uf.find((y * w + x) as u32);
-            if uf.set_size(rep0) < MIN_REGION_PIXELS {
+            let v0 = d[i0];
+            let below = i0 + w;
+            // Inside a region: nothing to do (the common case, checked in one go).
+            if d[i0 + 1] == v0 && d[below - 1] == v0 && d[below] == v0 && d[below + 1] == v0 {
                 connected_last = false;
                 continue;
             }
-            let mut conn = |dx: isize, dy: isize, uf: &mut UnionFind| -> bool {
-                let (x1, y1) = ((x as isize + dx) as usize, (y as isize + dy) as usize);
-                let v1 = t.data[y1 * w + x1];
-                if u16::from(v0) + u16::from(v1) != 255 {
+            let mut conn = |i1: usize, dx: i16, dy: i16| -> bool {
+                let v1 = d[i1];
+                let rep1 = region[i1];
+                if u16::from(v0) + u16::from(v1) != 255 || rep1 == NO_REGION {
                     return false;
                 }
-                let rep1 = uf.find((y1 * w + x1) as u32);
-                if uf.set_size(rep1) < MIN_REGION_PIXELS {
-                    return false;
-                }
-                let key = (rep0.min(rep1), rep0.max(rep1));
-                let i = *index.entry(key).or_insert_with(|| {
-                    clusters.push(Vec::new());
-                    clusters.len() - 1
-                });
                 let g = i16::from(v1) - i16::from(v0);
-                clusters[i].push(Pt {
-                    x: (2 * x as isize + dx) as u16,
-                    y: (2 * y as isize + dy) as u16,
-                    gx: dx as i16 * g,
-                    gy: dy as i16 * g,
-                });
+                let p = Pt { x: (2 * x as i16 + dx) as u16, y: (2 * y as i16 + dy) as u16, gx: dx * g, gy: dy * g };
+                out.push(rep0, rep1, p);
                 true
             };
-            conn(1, 0, uf);
-            conn(0, 1, uf);
+            conn(i0 + 1, 1, 0);
+            conn(below, 0, 1);
             if !connected_last {
-                conn(-1, 1, uf);
+                conn(below - 1, -1, 1);
             }
-            connected_last = conn(1, 1, uf);
+            connected_last = conn(below + 1, 1, 1);
         }
     }
-    clusters
+    out.clusters
+}
+
+/// Clusters keyed by their pair of regions, in order of creation.
+#[derive(Default)]
+struct Clusters {
+    index: FxHashMap<u64, usize>,
+    /// The last key and its cluster: runs of points share one, so most lookups are skipped.
+    last: Option<(u64, usize)>,
+    clusters: Vec<Vec<Pt>>,
+}
+
+impl Clusters {
+    #[inline(always)]
+    fn push(&mut self, rep0: u32, rep1: u32, p: Pt) {
+        let key = (u64::from(rep0.min(rep1)) << 32) | u64::from(rep0.max(rep1));
+        let i = match self.last {
+            Some((k, i)) if k == key => i,
+            _ => {
+                let n = self.clusters.len();
+                let i = *self.index.entry(key).or_insert(n);
+                if i == n {
+                    self.clusters.push(Vec::new());
+                }
+                self.last = Some((key, i));
+                i
+            }
+        };
+        self.clusters[i].push(p);
+    }
 }
 
 #[cfg(test)]

@@ -18,6 +18,14 @@ impl UnionFind {
         UnionFind { parent: (0..n as u32).collect(), size: vec![1; n] }
     }
 
+    /// Makes this `n` singleton sets again, reusing the allocation.
+    pub fn reset(&mut self, n: usize) {
+        self.parent.clear();
+        self.parent.extend(0..n as u32);
+        self.size.clear();
+        self.size.resize(n, 1);
+    }
+
     /// The representative of `i`'s set.
     pub fn find(&mut self, mut i: u32) -> u32 {
         while self.parent[i as usize] != i {
@@ -47,10 +55,17 @@ impl UnionFind {
 
 /// Labels the regions of a threshold image (values 0, 127, 255).
 pub fn connected_components(t: &Gray) -> UnionFind {
+    let mut uf = UnionFind::new(0);
+    connected_components_into(t, &mut uf);
+    uf
+}
+
+/// [`connected_components`] into `uf`, reusing its allocation.
+pub fn connected_components_into(t: &Gray, uf: &mut UnionFind) {
     let (w, h) = (t.width, t.height);
-    let mut uf = UnionFind::new(w * h);
+    uf.reset(w * h);
     if w < 3 {
-        return uf; // the scan covers columns 1..w-1 only, as in C
+        return; // the scan covers columns 1..w-1 only, as in C
     }
     let px = |x: usize, y: usize| t.data[y * w + x];
     let idx = |x: usize, y: usize| (y * w + x) as u32;
@@ -88,7 +103,6 @@ pub fn connected_components(t: &Gray) -> UnionFind {
             }
         }
     }
-    uf
 }
 
 #[cfg(test)]

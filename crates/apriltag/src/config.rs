@@ -30,16 +30,19 @@ pub struct QuadThreshold {
     /// Largest mean squared error of a side's line fit (px²): lower rejects curved or
     /// blurred sides, higher accepts more false quads.
     pub max_line_fit_mse: f32,
-    /// Smallest brightness difference between the light and dark side of a quad's boundary.
-    /// The C default 5 keeps low-contrast tags but makes noisy frames slow (every speck of
-    /// noise becomes a region); higher is faster and drops faint tags.
+    /// Smallest brightness difference (grey levels) over a 12 × 12 pixel neighbourhood for its
+    /// pixels to be split into dark and light; flatter neighbourhoods take no part. Lower keeps
+    /// fainter tags but lets sensor noise through, where every speck becomes a region to fit
+    /// (C's 5 is 5–7× slower than 20 on noisy frames); higher is faster and drops faint tags.
+    /// Default 20.
     pub min_white_black_diff: u8,
     /// Close and open the threshold image to repair broken edges (slow; for poor images).
     pub deglitch: bool,
 }
 
-impl Default for QuadThreshold {
-    fn default() -> Self {
+impl QuadThreshold {
+    /// The C library's defaults.
+    pub fn reference() -> Self {
         QuadThreshold {
             min_cluster_pixels: 5,
             max_nmaxima: 10,
@@ -48,6 +51,16 @@ impl Default for QuadThreshold {
             min_white_black_diff: 5,
             deglitch: false,
         }
+    }
+}
+
+impl Default for QuadThreshold {
+    /// C's defaults except `min_white_black_diff` 20 (C: 5), for phone frames: sensor noise
+    /// of a few grey levels makes every flat patch pass C's contrast test, and each speck
+    /// becomes a region to cluster and fit, 5–7× slower. At 20 no tag of our rendered
+    /// sets or of the real photos is lost (at 40 one faint photo tag is; see BENCHMARKS.md).
+    fn default() -> Self {
+        QuadThreshold { min_white_black_diff: 20, ..QuadThreshold::reference() }
     }
 }
 
@@ -83,7 +96,8 @@ pub struct DetectorConfig {
 
 impl Default for DetectorConfig {
     /// The C library's defaults (decimate 2, no blur, one thread, refine edges, sharpening
-    /// 0.25, max_hamming 2), with edges refined in linear light.
+    /// 0.25, max_hamming 2), with edges refined in linear light and the quad finder's
+    /// contrast threshold raised for noisy frames (see [`QuadThreshold::default`]).
     fn default() -> Self {
         DetectorConfig {
             quad_decimate: 2.0,
@@ -100,6 +114,12 @@ impl Default for DetectorConfig {
 }
 
 impl DetectorConfig {
+    /// The C library's defaults exactly, edges refined as C does (in encoded values): the
+    /// settings under which this detector returns the C library's results.
+    pub fn reference() -> Self {
+        DetectorConfig { linear_edges: false, quad: QuadThreshold::reference(), ..DetectorConfig::default() }
+    }
+
     /// Checks every setting, naming the first bad one.
     pub fn validate(&self) -> Result<(), DetectError> {
         let bad = |s: String| Err(DetectError::BadConfig(s));

@@ -5,15 +5,18 @@
 //! modules); this one adds only the bookkeeping and JawTrack's pixel convention.
 
 use crate::DetectError;
-use crate::clusters::gradient_clusters;
-use crate::components::connected_components;
+use crate::clusters::gradient_clusters_with;
+use crate::components::{UnionFind, connected_components_into};
 use crate::config::DetectorConfig;
 use crate::decode::CodeTable;
 use crate::family::Tag36h11;
+use crate::gray::Gray;
 use crate::image::ImageView;
-use crate::preprocess::decimate;
+use crate::preprocess::decimate_into;
 use crate::quads::{Quad, fit_quads, intersect_lines};
-use crate::threshold::threshold;
+use crate::threshold::threshold_into;
+use crate::workers::Workers;
+use std::sync::{Arc, Mutex, TryLockError};
 
 /// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
 /// (0, 0); the C library reports 0.5 more).
@@ -35,10 +38,35 @@ pub struct Detection {
 }
 
 /// A tag36h11 detector.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Detector {
     config: DetectorConfig,
     table: CodeTable,
+    /// Shared by clones: a pool of `nthreads` threads.
+    workers: Arc<Workers>,
+    /// Frame-sized buffers kept between frames: allocating them afresh costs a page fault
+    /// per 4 kB, as much time as the stage that fills them. Not shared by clones.
+    scratch: Mutex<Scratch>,
+}
+
+impl Clone for Detector {
+    fn clone(&self) -> Self {
+        Detector {
+            config: self.config,
+            table: self.table.clone(),
+            workers: Arc::clone(&self.workers),
+            scratch: Mutex::new(Scratch::default()),
+        }
+    }
+}
+
+/// The buffers of one detection.
+#[derive(Debug, Default)]
+struct Scratch {
+    decimated: Gray,
+    threshold: Gray,
+    regions: Option<UnionFind>,
+    pixel_region: Vec<u32>,
 }
 
 impl Detector {
@@ -51,7 +79,12 @@ impl Detector {
             ));
         }
         let table = CodeTable::new(config.max_hamming)?;
-        Ok(Detector { config, table })
+        Ok(Detector {
+            config,
+            table,
+            workers: Arc::new(Workers::new(config.nthreads)),
+            scratch: Mutex::new(Scratch::default()),
+        })
     }
 
     /// The settings.
@@ -106,20 +139,36 @@ impl Detector {
 
     fn detect_view(&self, im: &ImageView<'_>) -> Vec<Detection> {
         let c = &self.config;
-        let decimated;
+        // Another thread detecting with this detector has the buffers: use fresh ones.
+        let (mut guard, mut own);
+        let s: &mut Scratch = match self.scratch.try_lock() {
+            Ok(g) => {
+                guard = g;
+                &mut guard
+            }
+            Err(TryLockError::Poisoned(p)) => {
+                guard = p.into_inner();
+                &mut guard
+            }
+            Err(TryLockError::WouldBlock) => {
+                own = Scratch::default();
+                &mut own
+            }
+        };
         let quad_im = if c.quad_decimate > 1.0 {
-            decimated = decimate(im, c.quad_decimate);
-            match decimated.view() {
+            decimate_into(im, c.quad_decimate, &mut s.decimated);
+            match s.decimated.view() {
                 Ok(v) => v,
                 Err(_) => return Vec::new(), // too small to hold a tag
             }
         } else {
             *im
         };
-        let t = threshold(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch);
-        let mut uf = connected_components(&t);
-        let clusters = gradient_clusters(&t, &mut uf);
-        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, c.quad_decimate);
+        threshold_into(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold);
+        let uf = s.regions.get_or_insert_with(|| UnionFind::new(0));
+        connected_components_into(&s.threshold, uf);
+        let clusters = gradient_clusters_with(&s.threshold, uf, &mut s.pixel_region);
+        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, c.quad_decimate, &self.workers);
         if c.quad_decimate > 1.0 {
             for q in &mut quads {
                 for p in &mut q.p {
@@ -128,16 +177,14 @@ impl Detector {
                 }
             }
         }
-        let mut dets = Vec::new();
-        for mut q in quads {
+        let lut = if c.linear_edges { &*SRGB_TO_LINEAR } else { &IDENTITY };
+        let dets = self.workers.filter_map(&quads, |q| {
+            let mut q = *q;
             if c.refine_edges {
-                refine_edges(im, &mut q, c.quad_decimate, if c.linear_edges { &SRGB_TO_LINEAR } else { &IDENTITY });
+                refine_edges(im, &mut q, c.quad_decimate, lut);
             }
-            let Some(h) = homography(&q) else { continue };
-            if let Some(d) = decode_quad(im, &h, &self.table, c.decode_sharpening) {
-                dets.push(d);
-            }
-        }
+            decode_quad(im, &homography(&q)?, &self.table, c.decode_sharpening)
+        });
         let mut dets = reconcile(dets);
         // C sorts by id; ties keep a deterministic order here (by position).
         dets.sort_by(|a, b| {

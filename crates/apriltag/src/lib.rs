@@ -11,7 +11,10 @@
 //! median corner error from C's 0.5–0.8 px to 0.03 px (`tests/detector_accuracy.rs`);
 //! `linear_edges: false` reproduces C exactly.
 //!
-//! Not yet: `quad_sigma` other than 0 (refused), threads (one is used), and the speed work.
+//! With `nthreads` > 1, quad fitting and decoding run on a thread pool ([`workers`]), with the
+//! same results as one thread.
+//!
+//! Not yet: `quad_sigma` other than 0 (refused).
 
 mod codes;
 
@@ -26,6 +29,7 @@ pub mod image;
 pub mod preprocess;
 pub mod quads;
 pub mod threshold;
+pub mod workers;
 
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};

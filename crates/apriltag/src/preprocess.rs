@@ -7,10 +7,17 @@ use crate::image::ImageView;
 
 /// Decimates by 1.5, 2, 3 or 4 (any other factor is taken as its integer part, at least 1).
 pub fn decimate(im: &ImageView<'_>, factor: f32) -> Gray {
+    let mut out = Gray::filled(0, 0, 0);
+    decimate_into(im, factor, &mut out);
+    out
+}
+
+/// [`decimate`] into `out`, reusing its allocation.
+pub fn decimate_into(im: &ImageView<'_>, factor: f32, out: &mut Gray) {
     let (w, h) = (im.width(), im.height());
     if factor == 1.5 {
         let (sw, sh) = (w / 3 * 2, h / 3 * 2);
-        let mut out = Gray::filled(sw, sh, 0);
+        out.reset(sw, sh, 0);
         for sy in (0..sh).step_by(2) {
             let y = sy / 2 * 3;
             let (r0, r1, r2) = (im.row(y), im.row(y + 1), im.row(y + 2));
@@ -26,15 +33,16 @@ pub fn decimate(im: &ImageView<'_>, factor: f32) -> Gray {
                 out.data[(sy + 1) * sw + sx + 1] = ((4 * i + 2 * f + 2 * hh + e) / 9) as u8;
             }
         }
-        return out;
+        return;
     }
     let n = (factor as usize).max(1);
     let (sw, sh) = (1 + (w - 1) / n, 1 + (h - 1) / n);
-    let mut data = Vec::with_capacity(sw * sh);
+    out.width = sw;
+    out.height = sh;
+    out.data.clear();
     for y in (0..h).step_by(n) {
-        data.extend(im.row(y).iter().step_by(n));
+        out.data.extend(im.row(y).iter().step_by(n));
     }
-    Gray { width: sw, height: sh, data }
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@
 use crate::clusters::Pt;
 use crate::config::QuadThreshold;
 use crate::image::ImageView;
+use crate::workers::Workers;
 
 /// A quad in the coordinates of the image it was fitted on (decimated, C's pixel corners:
 /// the centre of pixel (0, 0) at (0.5, 0.5)).
@@ -118,8 +119,9 @@ fn compute_lfps(pts: &[Pt], im: &ImageView<'_>) -> Vec<LineFitPt> {
 }
 
 /// C's `ptsort`: sorting networks up to 5, then a merge sort that takes from the right half
-/// on ties (so not stable).
-fn ptsort(pts: &mut [(Pt, f32)]) {
+/// on ties (so not stable). `scratch` is as long as `pts`; C allocates at every level instead,
+/// with the same result.
+fn ptsort(pts: &mut [(Pt, f32)], scratch: &mut [(Pt, f32)]) {
     let sz = pts.len();
     let swap = |a: &mut [(Pt, f32)], i: usize, j: usize| {
         if a[i].1 - a[j].1 > 0.0 {
@@ -145,11 +147,14 @@ fn ptsort(pts: &mut [(Pt, f32)]) {
             }
         }
         _ => {
-            let mut tmp = pts.to_vec();
+            // Sort copies of both halves (with `pts` as their scratch), then merge back.
+            let tmp = &mut scratch[..sz];
+            tmp.copy_from_slice(pts);
             let asz = sz / 2;
             let (a, b) = tmp.split_at_mut(asz);
-            ptsort(a);
-            ptsort(b);
+            let (sa, sb) = pts.split_at_mut(asz);
+            ptsort(a, sa);
+            ptsort(b, sb);
             let (mut ai, mut bi, mut out) = (0, 0, 0);
             while ai < a.len() && bi < b.len() {
                 if a[ai].1 - b[bi].1 < 0.0 {
@@ -306,7 +311,8 @@ pub fn fit_quad(cluster: &[Pt], im: &ImageView<'_>, q: &QuadThreshold, min_tag_w
     if dot < 0.0 {
         return None;
     }
-    ptsort(&mut pts);
+    let mut scratch = pts.clone();
+    ptsort(&mut pts, &mut scratch);
     let sorted: Vec<Pt> = pts.iter().map(|p| p.0).collect();
     let lfps = compute_lfps(&sorted, im);
     let idx = segment_maxima(&lfps, q)?;
@@ -350,7 +356,13 @@ pub fn fit_quad(cluster: &[Pt], im: &ImageView<'_>, q: &QuadThreshold, min_tag_w
 }
 
 /// Fits quads to every cluster of a `w × h` image, with C's size limits per cluster.
-pub fn fit_quads(clusters: &[Vec<Pt>], im: &ImageView<'_>, q: &QuadThreshold, quad_decimate: f32) -> Vec<Quad> {
+pub fn fit_quads(
+    clusters: &[Vec<Pt>],
+    im: &ImageView<'_>,
+    q: &QuadThreshold,
+    quad_decimate: f32,
+    workers: &Workers,
+) -> Vec<Quad> {
     // The smallest tag border is 8 cells; C divides it by the decimation (as an int) and keeps
     // at least 3.
     let mut min_tag_width = (8.0 / quad_decimate) as i32;
@@ -359,11 +371,12 @@ pub fn fit_quads(clusters: &[Vec<Pt>], im: &ImageView<'_>, q: &QuadThreshold, qu
     }
     let min_tag_width = min_tag_width.max(3);
     let max_points = 2 * (2 * im.width() + 2 * im.height());
-    clusters
+    let candidates: Vec<&[Pt]> = clusters
         .iter()
         .filter(|c| c.len() >= q.min_cluster_pixels && c.len() <= max_points)
-        .filter_map(|c| fit_quad(c, im, q, min_tag_width))
-        .collect()
+        .map(Vec::as_slice)
+        .collect();
+    workers.filter_map(&candidates, |c| fit_quad(c, im, q, min_tag_width))
 }
 
 #[cfg(test)]
@@ -386,7 +399,7 @@ mod tests {
         let t = threshold(&im, 5, false);
         let mut uf = connected_components(&t);
         let clusters = gradient_clusters(&t, &mut uf);
-        let quads = fit_quads(&clusters, &im, &QuadThreshold::default(), 1.0);
+        let quads = fit_quads(&clusters, &im, &QuadThreshold::default(), 1.0, &Workers::single());
         assert_eq!(quads.len(), 1, "{quads:?}");
         // The boundary runs between pixels 14|15 and 44|45, i.e. at 15 and 45 in C's
         // corner-origin coordinates.

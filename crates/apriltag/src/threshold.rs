@@ -12,31 +12,46 @@ const TILE: usize = 4;
 
 /// Thresholds an image to 0 (dark), 255 (light) and 127 (too flat to tell).
 pub fn threshold(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool) -> Gray {
+    let mut out = Gray::filled(0, 0, 0);
+    threshold_into(im, min_white_black_diff, deglitch, &mut out);
+    out
+}
+
+/// [`threshold`] into `out`, reusing its allocation.
+pub fn threshold_into(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool, out: &mut Gray) {
     let (w, h) = (im.width(), im.height());
     let (tw, th) = (w / TILE, h / TILE);
-    let mut out = Gray::filled(w, h, 127);
+    out.reset(w, h, 127);
     if tw == 0 || th == 0 {
         // Smaller than one tile: nothing can be told apart.
-        return out;
+        return;
     }
     let mut tmax = vec![0u8; tw * th];
     let mut tmin = vec![255u8; tw * th];
+    // Column-wise over the tile's 4 rows first (vectorises), then across each tile's 4 columns.
+    let (mut col_hi, mut col_lo) = (vec![0u8; tw * TILE], vec![255u8; tw * TILE]);
     for ty in 0..th {
+        col_hi.fill(0);
+        col_lo.fill(255);
         for dy in 0..TILE {
-            let row = im.row(ty * TILE + dy);
-            for tx in 0..tw {
-                let px = &row[tx * TILE..tx * TILE + TILE];
-                let i = ty * tw + tx;
-                for &v in px {
-                    tmax[i] = tmax[i].max(v);
-                    tmin[i] = tmin[i].min(v);
-                }
+            let row = &im.row(ty * TILE + dy)[..tw * TILE];
+            for ((&v, hi), lo) in row.iter().zip(col_hi.iter_mut()).zip(col_lo.iter_mut()) {
+                *hi = (*hi).max(v);
+                *lo = (*lo).min(v);
             }
         }
+        let (tmax, tmin) = (&mut tmax[ty * tw..][..tw], &mut tmin[ty * tw..][..tw]);
+        for (hi, c) in tmax.iter_mut().zip(col_hi.chunks_exact(TILE)) {
+            *hi = c[0].max(c[1]).max(c[2].max(c[3]));
+        }
+        for (lo, c) in tmin.iter_mut().zip(col_lo.chunks_exact(TILE)) {
+            *lo = c[0].min(c[1]).min(c[2].min(c[3]));
+        }
     }
-    // Spread over the 3×3 tile neighbourhood so thresholds do not jump between tiles.
-    let mut smax = vec![0u8; tw * th];
-    let mut smin = vec![255u8; tw * th];
+    // Spread over the 3×3 tile neighbourhood so thresholds do not jump between tiles. Each
+    // tile's threshold is the midpoint, or `None` where the contrast is too low to tell.
+    let mut cuts: Vec<Option<u8>> = vec![None; tw * th];
+    let mut edge_cuts: Vec<u8> = vec![0; tw * th];
     for ty in 0..th {
         for tx in 0..tw {
             let (mut hi, mut lo) = (0u8, 255u8);
@@ -46,43 +61,44 @@ pub fn threshold(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool) -
                     lo = lo.min(tmin[ny * tw + nx]);
                 }
             }
-            smax[ty * tw + tx] = hi;
-            smin[ty * tw + tx] = lo;
-        }
-    }
-    let cut = |v: u8, lo: u8, hi: u8| -> u8 {
-        let t = lo as i32 + (hi as i32 - lo as i32) / 2;
-        if i32::from(v) > t { 255 } else { 0 }
-    };
-    for ty in 0..th {
-        for tx in 0..tw {
-            let (lo, hi) = (smin[ty * tw + tx], smax[ty * tw + tx]);
-            if i32::from(hi) - i32::from(lo) < i32::from(min_white_black_diff) {
-                continue; // stays 127
-            }
-            for dy in 0..TILE {
-                let y = ty * TILE + dy;
-                let row = im.row(y);
-                for dx in 0..TILE {
-                    let x = tx * TILE + dx;
-                    out.data[y * w + x] = cut(row[x], lo, hi);
-                }
+            let t = lo + (hi - lo) / 2;
+            edge_cuts[ty * tw + tx] = t;
+            if hi - lo >= min_white_black_diff {
+                cuts[ty * tw + tx] = Some(t);
             }
         }
     }
+    let cut = |v: u8, t: u8| -> u8 { if v > t { 255 } else { 0 } };
+    // Per pixel of a tile row: its tile's threshold, and 0 or 255 where that is unknown (so
+    // `v > t` never fires below 0 and always keeps the 127 applied after).
+    let (mut thr, mut unknown) = (vec![0u8; tw * TILE], vec![false; tw * TILE]);
+    for y in 0..th * TILE {
+        if y % TILE == 0 {
+            for ((t, u), c) in
+                thr.chunks_exact_mut(TILE).zip(unknown.chunks_exact_mut(TILE)).zip(&cuts[(y / TILE) * tw..][..tw])
+            {
+                t.fill(c.unwrap_or(0));
+                u.fill(c.is_none());
+            }
+        }
+        let (row, out_row) = (&im.row(y)[..tw * TILE], &mut out.data[y * w..][..tw * TILE]);
+        for (((o, &v), &t), &u) in out_row.iter_mut().zip(row).zip(&thr).zip(&unknown) {
+            *o = if u { 127 } else { cut(v, t) };
+        }
+    }
+    // Right of and below the last whole tile: the nearest tile, without the contrast test.
     for y in 0..h {
         let x0 = if y >= th * TILE { 0 } else { tw * TILE };
         let ty = (y / TILE).min(th - 1);
         let row = im.row(y);
         for (x, &v) in row.iter().enumerate().skip(x0) {
             let tx = (x / TILE).min(tw - 1);
-            out.data[y * w + x] = cut(v, smin[ty * tw + tx], smax[ty * tw + tx]);
+            out.data[y * w + x] = cut(v, edge_cuts[ty * tw + tx]);
         }
     }
     if deglitch {
-        close_3x3(&mut out);
+        close_3x3(out);
     }
-    out
 }
 
 /// 3×3 max then 3×3 min over the interior, as C does it: the intermediate image's border is

@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
+use jawtrack_apriltag::{Detector, DetectorConfig, ImageView, QuadThreshold};
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack detect`.
@@ -18,9 +18,13 @@ pub(crate) struct DetectArgs {
     /// Bit errors corrected, 0–2.
     #[arg(long, default_value_t = 2)]
     max_hamming: u32,
-    /// Worker threads (the detector uses one for now).
+    /// Worker threads.
     #[arg(long, default_value_t = 1)]
     threads: usize,
+    /// Smallest contrast (grey levels) around a pixel for quad finding; the C library's
+    /// default is 5, which makes noisy frames several times slower.
+    #[arg(long, default_value_t = QuadThreshold::default().min_white_black_diff)]
+    min_white_black_diff: u8,
     /// Refine edges at full resolution.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     refine_edges: bool,
@@ -47,6 +51,7 @@ pub(crate) fn run(a: &DetectArgs) -> Result<()> {
         refine_edges: a.refine_edges,
         linear_edges: a.linear_edges,
         max_hamming: a.max_hamming,
+        quad: QuadThreshold { min_white_black_diff: a.min_white_black_diff, ..QuadThreshold::default() },
         ..DetectorConfig::default()
     })?;
     for path in &a.images {
