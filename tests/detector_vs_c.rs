@@ -92,3 +92,52 @@ fn same_tags_and_corners_as_c() {
     );
     assert!(tags > 500, "too few tags compared: {tags}");
 }
+
+#[test]
+fn two_threads_find_exactly_what_one_does() {
+    let one = Detector::new(DetectorConfig::default()).expect("detector");
+    let two = Detector::new(DetectorConfig { nthreads: 2, ..DetectorConfig::default() }).expect("detector");
+    let mut tags = 0;
+    for path in frames().iter().filter(|p| p.starts_with(jawtrack_tests::fixtures_dir())) {
+        let img = image::open(path).expect("image").to_luma8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let view = ImageView::new(img.as_raw(), w, h, w).expect("view");
+        let a = one.detect(&view).expect("detects");
+        assert_eq!(a, two.detect(&view).expect("detects"), "{}", path.display());
+        tags += a.len();
+    }
+    assert!(tags > 200, "too few tags compared: {tags}");
+}
+
+#[test]
+fn blurred_and_sharpened_quad_images_give_cs_tags_and_corners() {
+    let mut tags = 0;
+    for (decimate, sigma) in [(2.0f32, 0.8f32), (2.0, -0.8), (1.0, 1.2), (1.5, 0.8)] {
+        let ours =
+            Detector::new(DetectorConfig { quad_decimate: decimate, quad_sigma: sigma, ..DetectorConfig::reference() })
+                .expect("detector");
+        let mut c = ReferenceDetector::new(&ReferenceParams {
+            quad_decimate: decimate,
+            quad_sigma: sigma,
+            ..ReferenceParams::default()
+        })
+        .expect("reference");
+        for path in frames().iter().filter(|p| p.starts_with(jawtrack_tests::fixtures_dir())) {
+            let img = image::open(path).expect("image").to_luma8();
+            let (w, h) = (img.width() as usize, img.height() as usize);
+            let mine = ours.detect(&ImageView::new(img.as_raw(), w, h, w).expect("view")).expect("detects");
+            let theirs = c.detect(img.as_raw(), w, h, w).expect("reference detects");
+            let label = format!("{} decimate {decimate} sigma {sigma}", path.display());
+            assert_eq!(mine.len(), theirs.len(), "{label}: {} tags, C {}", mine.len(), theirs.len());
+            for t in &theirs {
+                let close = |d: &&jawtrack_apriltag::Detection| {
+                    d.id == t.id
+                        && d.corners.iter().zip(&t.corners).all(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]) < 1e-3)
+                };
+                assert!(mine.iter().any(|d| close(&d)), "{label}: C's tag {} not matched", t.id);
+                tags += 1;
+            }
+        }
+    }
+    assert!(tags > 500, "too few tags compared: {tags}");
+}

@@ -78,9 +78,13 @@ pub struct DetectorConfig {
     /// Refine each edge at full resolution from the image gradient. Costs little, gains much
     /// corner accuracy, most of all with decimation.
     pub refine_edges: bool,
-    /// Refine edges in linear light, reading the frame as sRGB-encoded (as phone frames are).
-    /// A blurred edge thresholded in encoded values moves toward its dark side by a fraction of
-    /// the blur; in linear light it stays put. `false` reproduces the C library exactly.
+    /// JawTrack's edge fit instead of C's: (1) in linear light, reading the frame as
+    /// sRGB-encoded (as phone frames are) — a blurred edge located in encoded values moves
+    /// toward its dark side by a fraction of the blur, in linear light it stays put; (2) with
+    /// the gradient's plain mean along the normal rather than the mean weighted by its square,
+    /// which pulls toward pixel centres by up to 0.1 px; (3) with the search window re-centred
+    /// on the edge found, so a wide blur (4K) is not cut off on one side. `false` reproduces
+    /// the C library exactly.
     pub linear_edges: bool,
     /// Sharpening of the decoded bit samples: helps small, blurred tags decode.
     pub decode_sharpening: f64,

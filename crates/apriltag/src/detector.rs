@@ -12,7 +12,7 @@ use crate::decode::CodeTable;
 use crate::family::Tag36h11;
 use crate::gray::Gray;
 use crate::image::ImageView;
-use crate::preprocess::decimate_into;
+use crate::preprocess::{blur_or_sharpen, decimate_into};
 use crate::quads::{Quad, fit_quads, intersect_lines};
 use crate::threshold::threshold_into;
 use crate::workers::Workers;
@@ -73,11 +73,6 @@ impl Detector {
     /// Checks the settings and builds the decoding table.
     pub fn new(config: DetectorConfig) -> Result<Self, DetectError> {
         config.validate()?;
-        if config.quad_sigma != 0.0 {
-            return Err(DetectError::BadConfig(
-                "quad_sigma other than 0 is not implemented in this detector yet".into(),
-            ));
-        }
         let table = CodeTable::new(config.max_hamming)?;
         Ok(Detector {
             config,
@@ -155,8 +150,19 @@ impl Detector {
                 &mut own
             }
         };
-        let quad_im = if c.quad_decimate > 1.0 {
+        let blur = c.quad_sigma != 0.0;
+        if c.quad_decimate > 1.0 {
             decimate_into(im, c.quad_decimate, &mut s.decimated);
+        } else if blur {
+            s.decimated.reset(im.width(), im.height(), 0);
+            for (y, row) in s.decimated.data.chunks_exact_mut(im.width()).enumerate() {
+                row.copy_from_slice(im.row(y));
+            }
+        }
+        if blur {
+            blur_or_sharpen(&mut s.decimated, c.quad_sigma);
+        }
+        let quad_im = if c.quad_decimate > 1.0 || blur {
             match s.decimated.view() {
                 Ok(v) => v,
                 Err(_) => return Vec::new(), // too small to hold a tag
@@ -164,6 +170,9 @@ impl Detector {
         } else {
             *im
         };
+        // Undecimated, C blurs the frame itself, so edges are refined and bits read on the
+        // blurred frame too.
+        let im = if c.quad_decimate > 1.0 { im } else { &quad_im };
         threshold_into(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold);
         let uf = s.regions.get_or_insert_with(|| UnionFind::new(0));
         connected_components_into(&s.threshold, uf);
@@ -181,7 +190,7 @@ impl Detector {
         let dets = self.workers.filter_map(&quads, |q| {
             let mut q = *q;
             if c.refine_edges {
-                refine_edges(im, &mut q, c.quad_decimate, lut);
+                refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges);
             }
             decode_quad(im, &homography(&q)?, &self.table, c.decode_sharpening)
         });
@@ -235,8 +244,9 @@ static SRGB_TO_LINEAR: std::sync::LazyLock<[f64; 256]> = std::sync::LazyLock::ne
 
 /// C's `refine_edges`: each edge is re-fitted at full resolution to the points of strongest
 /// gradient found along its normal, and the corners re-intersected. `lut` maps pixel values
-/// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges).
-fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[f64; 256]) {
+/// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges);
+/// `recentre` re-centres the search window on the edge (C does not).
+fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[f64; 256], recentre: bool) {
     let (w, h) = (im.width() as i64, im.height() as i64);
     let px = |x: i64, y: i64| lut[usize::from(im.get(x as usize, y as usize).unwrap_or(0))];
     let mut lines = [[0.0f64; 4]; 4];
@@ -254,43 +264,61 @@ fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[
             let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
             let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
             let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
-            let (mut mn, mut mcount) = (0.0, 0.0);
             let range = (f64::from(quad_decimate) + 1.0) as i64;
-            let steps_per_unit = 4;
-            let step_length = 1.0 / steps_per_unit as f64;
-            let max_steps = 2 * steps_per_unit * range + 1;
-            for step in 0..max_steps {
-                let nn = -(range as f64) + step_length * step as f64;
-                let sample = |off: f64| -> Option<f64> {
-                    let x = x0 + (nn + off) * nx - 0.5;
-                    let y = y0 + (nn + off) * ny - 0.5;
-                    // modf: integer part toward zero, fraction with the sign of the value.
-                    let (xi, yi) = (x.trunc(), y.trunc());
-                    let (fa, fb) = (x - xi, y - yi);
-                    let (xi, yi) = (xi as i64, yi as i64);
-                    if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
-                        return None;
+            // The gradient-weighted mean offset along the normal over a window of ±range px
+            // (in quarter-pixel steps) centred `c` px from the quad's edge.
+            let centroid = |c: f64| -> Option<f64> {
+                let (mut mn, mut mcount) = (0.0, 0.0);
+                let steps_per_unit = 4;
+                let step_length = 1.0 / steps_per_unit as f64;
+                let max_steps = 2 * steps_per_unit * range + 1;
+                for step in 0..max_steps {
+                    let nn = c - range as f64 + step_length * step as f64;
+                    let sample = |off: f64| -> Option<f64> {
+                        let x = x0 + (nn + off) * nx - 0.5;
+                        let y = y0 + (nn + off) * ny - 0.5;
+                        // modf: integer part toward zero, fraction with the sign of the value.
+                        let (xi, yi) = (x.trunc(), y.trunc());
+                        let (fa, fb) = (x - xi, y - yi);
+                        let (xi, yi) = (xi as i64, yi as i64);
+                        if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
+                            return None;
+                        }
+                        Some(
+                            (1.0 - fa) * (1.0 - fb) * px(xi, yi)
+                                + fa * (1.0 - fb) * px(xi + 1, yi)
+                                + (1.0 - fa) * fb * px(xi, yi + 1)
+                                + fa * fb * px(xi + 1, yi + 1),
+                        )
+                    };
+                    let Some(g1) = sample(1.0) else { continue };
+                    let Some(g2) = sample(-1.0) else { continue };
+                    if g1 < g2 {
+                        continue; // the gradient runs backwards here
                     }
-                    Some(
-                        (1.0 - fa) * (1.0 - fb) * px(xi, yi)
-                            + fa * (1.0 - fb) * px(xi + 1, yi)
-                            + (1.0 - fa) * fb * px(xi, yi + 1)
-                            + fa * fb * px(xi + 1, yi + 1),
-                    )
-                };
-                let Some(g1) = sample(1.0) else { continue };
-                let Some(g2) = sample(-1.0) else { continue };
-                if g1 < g2 {
-                    continue; // the gradient runs backwards here
+                    // C squares the gradient, which pulls the mean toward pixel centres by up
+                    // to 0.1 px on edges along the pixel grid; the plain gradient's mean is the
+                    // edge at which the areas balance, exact for a linearly interpolated edge.
+                    let weight = if recentre { g1 - g2 } else { (g2 - g1) * (g2 - g1) };
+                    mn += weight * nn;
+                    mcount += weight;
                 }
-                let weight = (g2 - g1) * (g2 - g1);
-                mn += weight * nn;
-                mcount += weight;
+                (mcount > 0.0).then(|| mn / mcount)
+            };
+            let Some(mut n0) = centroid(0.0) else { continue };
+            if recentre {
+                // A window off-centre on the edge cuts one tail of the gradient and pulls the
+                // mean toward its centre (up to 0.1 px, with the edge's sub-pixel phase):
+                // centre it on the edge found and measure again.
+                for _ in 0..3 {
+                    let Some(next) = centroid(n0) else { break };
+                    let moved = (next - n0).abs();
+                    n0 = next;
+                    if moved < 1e-3 {
+                        break;
+                    }
+                }
             }
-            if mcount == 0.0 {
-                continue;
-            }
-            let n0 = mn / mcount;
             let (bx, by) = (x0 + n0 * nx, y0 + n0 * ny);
             mx += bx;
             my += by;
@@ -756,8 +784,8 @@ mod tests {
         .expect("roi config");
         assert!(too_big.detect(&ImageView::new(&img, w, h, w).expect("view")).is_err());
         assert!(
-            Detector::new(DetectorConfig { quad_sigma: 0.8, ..DetectorConfig::default() }).is_err(),
-            "not implemented yet: refused"
+            Detector::new(DetectorConfig { quad_sigma: 5.0, ..DetectorConfig::default() }).is_err(),
+            "a blur wider than 4 px is refused"
         );
     }
 }

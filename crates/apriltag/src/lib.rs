@@ -6,15 +6,20 @@
 //! and removal of overlapping duplicates. [`Detector`] runs them: on our fixtures and the
 //! real photos it returns exactly the C library's tags and corners (`tests/detector_vs_c.rs`).
 //!
-//! Where it departs from C on purpose: edges are refined in linear light by default
-//! (`linear_edges`), reading phone frames as sRGB — on our rendered frames this takes the
-//! median corner error from C's 0.5–0.8 px to 0.03 px (`tests/detector_accuracy.rs`);
-//! `linear_edges: false` reproduces C exactly.
+//! Where it departs from C on purpose (`DetectorConfig::reference()` undoes both):
+//! - edges are refined JawTrack's way (`linear_edges`): in linear light, reading phone frames
+//!   as sRGB, with unsquared gradient weights and a re-centred window. On our rendered frames
+//!   the median corner error goes from C's 0.5–0.8 px (1080p) and 1.04 px (4K) to 0.02–0.04
+//!   px (`tests/detector_accuracy.rs`); large drawn tags at any angle are within 0.011 px
+//!   (`tests/detector_geometry.rs`).
+//! - `min_white_black_diff` is 20, not 5: noisy frames are 5–7× faster, no tag is lost.
+//!
+//! Smallest tags found (black square, on white paper, upright and at 30°): 17 px at decimate
+//! 1, 27.5 px at decimate 2 — the same as C (`tests/detector_geometry.rs`). Speed, recall,
+//! accuracy and memory against C: `crates/detector-bench/BENCHMARKS.md`.
 //!
 //! With `nthreads` > 1, quad fitting and decoding run on a thread pool ([`workers`]), with the
 //! same results as one thread.
-//!
-//! Not yet: `quad_sigma` other than 0 (refused).
 
 mod codes;
 

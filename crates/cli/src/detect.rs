@@ -12,7 +12,8 @@ pub(crate) struct DetectArgs {
     /// Decimation for quad finding: 1, 1.5, 2, 3 or 4.
     #[arg(long, default_value_t = 2.0)]
     decimate: f32,
-    /// Gaussian blur before quad finding (px); only 0 is implemented so far.
+    /// Gaussian blur σ before quad finding (px, up to 4); negative sharpens. Helps on noisy
+    /// frames, loses the smallest tags.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     sigma: f32,
     /// Bit errors corrected, 0–2.
@@ -28,8 +29,9 @@ pub(crate) struct DetectArgs {
     /// Refine edges at full resolution.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     refine_edges: bool,
-    /// Refine edges in linear light, reading the images as sRGB (as phone frames are);
-    /// false reproduces the C library exactly.
+    /// Refine edges JawTrack's way: in linear light, reading the images as sRGB (as phone
+    /// frames are), with a re-centred, unsquared gradient fit; false refines them as the C
+    /// library does.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     linear_edges: bool,
     /// Run each image this many times and report the median time.
