@@ -26,6 +26,8 @@ pub struct Pt {
 
 /// Marks a pixel that takes no part in clusters: unknown (127) or in a small region.
 const NO_REGION: u32 = u32::MAX;
+/// A pixel whose region has not been looked up yet.
+const UNSET: u32 = u32::MAX - 1;
 
 /// Boundary clusters of a threshold image whose regions are `uf`, in order of first
 /// appearance in the scan.
@@ -39,41 +41,46 @@ pub fn gradient_clusters_with(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32
     if w < 3 || h < 3 {
         return Vec::new();
     }
-    // Each pixel's region, looked up once rather than up to five times in the scan below.
+    // Each pixel's region, looked up once, and only for pixels on a boundary: most pixels
+    // are inside a region or unknown and never need one.
     region.clear();
-    region.extend(t.data.iter().enumerate().map(|(i, &v)| {
-        if v == 127 {
-            return NO_REGION;
-        }
-        let rep = uf.find(i as u32);
-        if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep }
-    }));
-    let region = &region[..];
-    let mut out = Clusters::default();
+    region.resize(w * h, UNSET);
     let d = &t.data;
+    let mut region_of = |i: usize, region: &mut Vec<u32>| -> u32 {
+        if region[i] == UNSET {
+            let rep = uf.find(i as u32);
+            region[i] = if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep };
+        }
+        region[i]
+    };
+    let mut out = Clusters::default();
     for y in 1..h - 1 {
         let mut connected_last = false;
         for x in 1..w - 1 {
             let i0 = y * w + x;
-            let rep0 = region[i0];
+            let v0 = d[i0];
+            let below = i0 + w;
+            // Opposite values sum to 255 (an unknown 127 never does): without an opposite
+            // neighbour to the right or below, no point starts here.
+            let opposite = |i: usize| u16::from(v0) + u16::from(d[i]) == 255;
+            if v0 == 127 || !(opposite(i0 + 1) || opposite(below - 1) || opposite(below) || opposite(below + 1)) {
+                connected_last = false;
+                continue;
+            }
+            let rep0 = region_of(i0, region);
             if rep0 == NO_REGION {
                 connected_last = false;
                 continue;
             }
-            let v0 = d[i0];
-            let below = i0 + w;
-            // Inside a region: nothing to do (the common case, checked in one go).
-            if d[i0 + 1] == v0 && d[below - 1] == v0 && d[below] == v0 && d[below + 1] == v0 {
-                connected_last = false;
-                continue;
-            }
             let mut conn = |i1: usize, dx: i16, dy: i16| -> bool {
-                let v1 = d[i1];
-                let rep1 = region[i1];
-                if u16::from(v0) + u16::from(v1) != 255 || rep1 == NO_REGION {
+                if !opposite(i1) {
                     return false;
                 }
-                let g = i16::from(v1) - i16::from(v0);
+                let rep1 = region_of(i1, region);
+                if rep1 == NO_REGION {
+                    return false;
+                }
+                let g = i16::from(d[i1]) - i16::from(v0);
                 let p = Pt { x: (2 * x as i16 + dx) as u16, y: (2 * y as i16 + dy) as u16, gx: dx * g, gy: dy * g };
                 out.push(rep0, rep1, p);
                 true

@@ -187,12 +187,23 @@ impl Detector {
             }
         }
         let lut = if c.linear_edges { &*SRGB_TO_LINEAR } else { &IDENTITY };
-        let dets = self.workers.filter_map(&quads, |q| {
-            let mut q = *q;
+        let decode = |q: &Quad| decode_quad(im, &homography(q)?, &self.table, c.decode_sharpening);
+        let dets = self.workers.filter_map(&quads, |q0| {
+            let mut q = *q0;
             if c.refine_edges {
                 refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges);
             }
-            decode_quad(im, &homography(&q)?, &self.table, c.decode_sharpening)
+            decode(&q).or_else(|| {
+                // Our fit can be pulled off by a bright edge near a small tag (linear light
+                // weighs bright gradients most); C's fit may still read it, and then we
+                // report what C would: never fewer tags than C.
+                if !(c.refine_edges && c.linear_edges) {
+                    return None;
+                }
+                let mut q = *q0;
+                refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false);
+                decode(&q)
+            })
         });
         let mut dets = reconcile(dets);
         // C sorts by id; ties keep a deterministic order here (by position).
@@ -260,46 +271,66 @@ fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[
         ny /= mag;
         let nsamples = 16.max((mag / 8.0) as i64);
         let (mut mx, mut my, mut mxx, mut mxy, mut myy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut cache: Vec<Option<Option<f64>>> = Vec::new();
         for s in 0..nsamples {
             let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
             let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
             let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
             let range = (f64::from(quad_decimate) + 1.0) as i64;
-            // The gradient-weighted mean offset along the normal over a window of ±range px
-            // (in quarter-pixel steps) centred `c` px from the quad's edge.
-            let centroid = |c: f64| -> Option<f64> {
+            // The image along the normal, sampled once per quarter pixel from −(2·range + 1) to
+            // 2·range + 1 px, as each window needs it (`cache` holds them: None = not yet).
+            let lowest = -2.0 * range as f64 - 1.0;
+            cache.clear();
+            cache.resize((4 * (4 * range + 2) + 1) as usize, None);
+            let mut sample = |pos: f64| -> Option<f64> {
+                // pos is on the quarter-pixel grid above `lowest`: round to its index.
+                let j = ((pos - lowest) * 4.0 + 0.5) as usize;
+                *cache[j].get_or_insert_with(|| {
+                    let x = x0 + pos * nx - 0.5;
+                    let y = y0 + pos * ny - 0.5;
+                    // modf: integer part toward zero (the casts), fraction with the value's sign.
+                    let (xi, yi) = (x as i64, y as i64);
+                    let (fa, fb) = (x - xi as f64, y - yi as f64);
+                    if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
+                        return None;
+                    }
+                    Some(
+                        (1.0 - fa) * (1.0 - fb) * px(xi, yi)
+                            + fa * (1.0 - fb) * px(xi + 1, yi)
+                            + (1.0 - fa) * fb * px(xi, yi + 1)
+                            + fa * fb * px(xi + 1, yi + 1),
+                    )
+                })
+            };
+            // The gradient-weighted mean offset along the normal over the window [c − reach,
+            // c + reach], from quarter-pixel steps. C's window is at c = 0 and takes every step
+            // in it whole; ours may sit anywhere, and each step counts by how much of its
+            // quarter pixel lies inside, so the mean moves smoothly with `c`.
+            let reach = range as f64;
+            let mut centroid = |c: f64| -> Option<f64> {
                 let (mut mn, mut mcount) = (0.0, 0.0);
-                let steps_per_unit = 4;
-                let step_length = 1.0 / steps_per_unit as f64;
-                let max_steps = 2 * steps_per_unit * range + 1;
-                for step in 0..max_steps {
-                    let nn = c - range as f64 + step_length * step as f64;
-                    let sample = |off: f64| -> Option<f64> {
-                        let x = x0 + (nn + off) * nx - 0.5;
-                        let y = y0 + (nn + off) * ny - 0.5;
-                        // modf: integer part toward zero, fraction with the sign of the value.
-                        let (xi, yi) = (x.trunc(), y.trunc());
-                        let (fa, fb) = (x - xi, y - yi);
-                        let (xi, yi) = (xi as i64, yi as i64);
-                        if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
-                            return None;
-                        }
-                        Some(
-                            (1.0 - fa) * (1.0 - fb) * px(xi, yi)
-                                + fa * (1.0 - fb) * px(xi + 1, yi)
-                                + (1.0 - fa) * fb * px(xi, yi + 1)
-                                + fa * fb * px(xi + 1, yi + 1),
-                        )
+                let (first, last) = if recentre {
+                    (((c - reach) * 4.0).round() as i64, ((c + reach) * 4.0).round() as i64)
+                } else {
+                    (-4 * range, 4 * range)
+                };
+                for k in first..=last {
+                    let nn = 0.25 * k as f64;
+                    let inside = if recentre && (k == first || k == last) {
+                        let (a, b) = ((nn - 0.125).max(c - reach), (nn + 0.125).min(c + reach));
+                        ((b - a) * 4.0).clamp(0.0, 1.0)
+                    } else {
+                        1.0
                     };
-                    let Some(g1) = sample(1.0) else { continue };
-                    let Some(g2) = sample(-1.0) else { continue };
+                    let Some(g1) = sample(nn + 1.0) else { continue };
+                    let Some(g2) = sample(nn - 1.0) else { continue };
                     if g1 < g2 {
                         continue; // the gradient runs backwards here
                     }
                     // C squares the gradient, which pulls the mean toward pixel centres by up
                     // to 0.1 px on edges along the pixel grid; the plain gradient's mean is the
                     // edge at which the areas balance, exact for a linearly interpolated edge.
-                    let weight = if recentre { g1 - g2 } else { (g2 - g1) * (g2 - g1) };
+                    let weight = if recentre { inside * (g1 - g2) } else { (g2 - g1) * (g2 - g1) };
                     mn += weight * nn;
                     mcount += weight;
                 }
@@ -309,9 +340,11 @@ fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[
             if recentre {
                 // A window off-centre on the edge cuts one tail of the gradient and pulls the
                 // mean toward its centre (up to 0.1 px, with the edge's sub-pixel phase):
-                // centre it on the edge found and measure again.
+                // centre it (within ±range of the quad's edge) on the edge found and measure
+                // again.
                 for _ in 0..3 {
-                    let Some(next) = centroid(n0) else { break };
+                    let c = n0.clamp(-(range as f64), range as f64);
+                    let Some(next) = centroid(c) else { break };
                     let moved = (next - n0).abs();
                     n0 = next;
                     if moved < 1e-3 {

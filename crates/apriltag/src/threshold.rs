@@ -48,42 +48,60 @@ pub fn threshold_into(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bo
             *lo = c[0].min(c[1]).min(c[2].min(c[3]));
         }
     }
-    // Spread over the 3×3 tile neighbourhood so thresholds do not jump between tiles. Each
-    // tile's threshold is the midpoint, or `None` where the contrast is too low to tell.
-    let mut cuts: Vec<Option<u8>> = vec![None; tw * th];
-    let mut edge_cuts: Vec<u8> = vec![0; tw * th];
-    for ty in 0..th {
-        for tx in 0..tw {
-            let (mut hi, mut lo) = (0u8, 255u8);
-            for ny in ty.saturating_sub(1)..(ty + 2).min(th) {
-                for nx in tx.saturating_sub(1)..(tx + 2).min(tw) {
-                    hi = hi.max(tmax[ny * tw + nx]);
-                    lo = lo.min(tmin[ny * tw + nx]);
+    // Spread over the 3×3 tile neighbourhood so thresholds do not jump between tiles (a
+    // separable max and min: along rows, then down columns). Each tile's threshold is the
+    // midpoint; `known` is 0 where the contrast is too low to tell.
+    let spread = |v: &[u8], f: fn(u8, u8) -> u8| -> Vec<u8> {
+        let mut across = vec![0u8; tw * th];
+        for (src, dst) in v.chunks_exact(tw).zip(across.chunks_exact_mut(tw)) {
+            for tx in 0..tw {
+                let mut m = src[tx];
+                if tx > 0 {
+                    m = f(m, src[tx - 1]);
                 }
-            }
-            let t = lo + (hi - lo) / 2;
-            edge_cuts[ty * tw + tx] = t;
-            if hi - lo >= min_white_black_diff {
-                cuts[ty * tw + tx] = Some(t);
+                if tx + 1 < tw {
+                    m = f(m, src[tx + 1]);
+                }
+                dst[tx] = m;
             }
         }
-    }
+        let mut out = across.clone();
+        for ty in 0..th {
+            for ny in [ty.wrapping_sub(1), ty + 1] {
+                if ny < th {
+                    let (o, n) = (&mut out[ty * tw..][..tw], &across[ny * tw..][..tw]);
+                    for (o, &n) in o.iter_mut().zip(n) {
+                        *o = f(*o, n);
+                    }
+                }
+            }
+        }
+        out
+    };
+    let (hi, lo) = (spread(&tmax, u8::max), spread(&tmin, u8::min));
+    let cuts: Vec<u8> = hi.iter().zip(&lo).map(|(&hi, &lo)| lo + (hi - lo) / 2).collect();
+    let known: Vec<u8> =
+        hi.iter().zip(&lo).map(|(&hi, &lo)| if hi - lo >= min_white_black_diff { 0xff } else { 0 }).collect();
     let cut = |v: u8, t: u8| -> u8 { if v > t { 255 } else { 0 } };
-    // Per pixel of a tile row: its tile's threshold, and 0 or 255 where that is unknown (so
-    // `v > t` never fires below 0 and always keeps the 127 applied after).
-    let (mut thr, mut unknown) = (vec![0u8; tw * TILE], vec![false; tw * TILE]);
+    // Per pixel of a tile row: its tile's threshold and whether it is known, so the pixel loop
+    // is branch-free and vectorises.
+    let (mut thr, mut mask) = (vec![0u8; tw * TILE], vec![0u8; tw * TILE]);
     for y in 0..th * TILE {
         if y % TILE == 0 {
-            for ((t, u), c) in
-                thr.chunks_exact_mut(TILE).zip(unknown.chunks_exact_mut(TILE)).zip(&cuts[(y / TILE) * tw..][..tw])
+            let tiles = (y / TILE) * tw..(y / TILE + 1) * tw;
+            for ((t, m), (&c, &k)) in thr
+                .chunks_exact_mut(TILE)
+                .zip(mask.chunks_exact_mut(TILE))
+                .zip(cuts[tiles.clone()].iter().zip(&known[tiles]))
             {
-                t.fill(c.unwrap_or(0));
-                u.fill(c.is_none());
+                t.fill(c);
+                m.fill(k);
             }
         }
         let (row, out_row) = (&im.row(y)[..tw * TILE], &mut out.data[y * w..][..tw * TILE]);
-        for (((o, &v), &t), &u) in out_row.iter_mut().zip(row).zip(&thr).zip(&unknown) {
-            *o = if u { 127 } else { cut(v, t) };
+        for (((o, &v), &t), &m) in out_row.iter_mut().zip(row).zip(&thr).zip(&mask) {
+            // Known: 0 or 255 by the threshold; unknown: 127.
+            *o = (cut(v, t) & m) | (127 & !m);
         }
     }
     // Right of and below the last whole tile: the nearest tile, without the contrast test.
@@ -93,7 +111,7 @@ pub fn threshold_into(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bo
         let row = im.row(y);
         for (x, &v) in row.iter().enumerate().skip(x0) {
             let tx = (x / TILE).min(tw - 1);
-            out.data[y * w + x] = cut(v, edge_cuts[ty * tw + tx]);
+            out.data[y * w + x] = cut(v, cuts[ty * tw + tx]);
         }
     }
     if deglitch {
