@@ -277,11 +277,15 @@ fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[
             let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
             let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
             let range = (f64::from(quad_decimate) + 1.0) as i64;
-            // The image along the normal, sampled once per quarter pixel from −(2·range + 1) to
-            // 2·range + 1 px, as each window needs it (`cache` holds them: None = not yet).
-            let lowest = -2.0 * range as f64 - 1.0;
+            // The image along the normal, sampled once per quarter pixel from −(range + reach + 1)
+            // to range + reach + 1 px (windows of ±reach centred within ±range), as each window
+            // needs it (`cache` holds them: None = not yet).
+            // Our windows reach at least 3 px: undecimated 4K frames blur edges wider than C's
+            // ±2 px.
+            let reach = if recentre { range.max(3) } else { range };
+            let lowest = -((range + reach) as f64) - 1.0;
             cache.clear();
-            cache.resize((4 * (4 * range + 2) + 1) as usize, None);
+            cache.resize((4 * (2 * (range + reach) + 2) + 1) as usize, None);
             let mut sample = |pos: f64| -> Option<f64> {
                 // pos is on the quarter-pixel grid above `lowest`: round to its index.
                 let j = ((pos - lowest) * 4.0 + 0.5) as usize;
@@ -306,7 +310,7 @@ fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[
             // c + reach], from quarter-pixel steps. C's window is at c = 0 and takes every step
             // in it whole; ours may sit anywhere, and each step counts by how much of its
             // quarter pixel lies inside, so the mean moves smoothly with `c`.
-            let reach = range as f64;
+            let reach = reach as f64;
             let mut centroid = |c: f64| -> Option<f64> {
                 let (mut mn, mut mcount) = (0.0, 0.0);
                 let (first, last) = if recentre {
