@@ -1,14 +1,17 @@
 //! Geometry shared by everything that reasons about where things are: rigid transforms in
-//! millimetres ([`Pose`]) and the pinhole camera with radial distortion ([`CameraIntrinsics`]).
+//! millimetres ([`Pose`]), the pinhole camera with radial distortion ([`CameraIntrinsics`]),
+//! and the pose of a rigid body from its points in an image ([`pnp`]).
 //!
 //! Conventions: camera frame x right, y down, z forward (OpenCV); pixel centres at integer
 //! coordinates, (0, 0) the centre of the top-left pixel. A transform is named for what it maps:
 //! `camera_from_maxilla` maps maxilla-frame points into the camera frame.
 
 mod camera;
+pub mod pnp;
 mod rigid;
 
 pub use camera::CameraIntrinsics;
+pub use pnp::{BodyPose, Observation, PnpError, PnpOptions, solve_pnp};
 pub use rigid::Pose;
 
 /// Errors from building geometry out of untrusted numbers.
