@@ -106,7 +106,7 @@ fn noise_free_points_give_the_exact_pose() {
         }
         let obs = observe(&truth, &cam, &faces, 0.0, &mut rng);
         let got = solve_pnp(&obs, &cam, None, &PnpOptions::default()).expect("solves");
-        let (dt, dr) = got.camera_from_body.distance_to(&truth);
+        let (dr, dt) = got.camera_from_body.distance_to(&truth);
         assert!(dt < 1e-9 && dr < 1e-9, "{} tags: off by {dt:.2e} mm, {dr:.2e} rad", faces.len());
         assert!(got.rms_px < 1e-7, "rms {}", got.rms_px);
         let mut want: Vec<u32> = faces.iter().map(|&f| f as u32).collect();
@@ -134,7 +134,7 @@ fn the_order_of_the_points_does_not_matter() {
             obs.reverse();
         }
         let again = solve_pnp(&obs, &cam, None, &PnpOptions::default()).expect("solves");
-        let (dt, dr) = again.camera_from_body.distance_to(&first.camera_from_body);
+        let (dr, dt) = again.camera_from_body.distance_to(&first.camera_from_body);
         assert!(dt < 1e-9 && dr < 1e-9, "order changed the pose by {dt:.2e} mm, {dr:.2e} rad");
     }
 }
@@ -159,13 +159,13 @@ fn a_single_tag_gives_its_true_pose_and_keeps_a_distinct_mirror() {
             // Only its tag is given to the solver.
             let obs = observe(&truth, &cam, &[2], 0.0, &mut rng);
             let got = solve_pnp(&obs, &cam, None, &PnpOptions::default()).expect("solves");
-            let (dt, dr) = got.camera_from_body.distance_to(&truth);
+            let (dr, dt) = got.camera_from_body.distance_to(&truth);
             assert!(dt < 1e-8 && dr < 1e-8, "tilt {tilt_deg}°, spin {spin}: off by {dt:.2e} mm, {dr:.2e} rad");
             // Where the mirror solution is a minimum of its own, it is kept, distinct and worse.
             if let Some((alt, alt_rms)) = &got.alternative {
                 with_alternative += 1;
                 assert!(*alt_rms >= got.rms_px);
-                assert!(alt.distance_to(&got.camera_from_body).1 > 1e-3, "a distinct pose");
+                assert!(alt.distance_to(&got.camera_from_body).0 > 1e-3, "a distinct pose");
             }
         }
     }
@@ -220,7 +220,7 @@ fn a_prior_pose_is_used_as_a_start() {
     let obs = observe(&truth, &cam, &facing(&truth, 0.2), 0.0, &mut rng);
     let near = truth.compose(&Pose::from_axis_angle(Vector3::new(0.01, -0.02, 0.0), Vector3::new(0.3, 0.0, 0.5)));
     let got = solve_pnp(&obs, &cam, Some(&near), &PnpOptions::default()).expect("solves");
-    let (dt, dr) = got.camera_from_body.distance_to(&truth);
+    let (dr, dt) = got.camera_from_body.distance_to(&truth);
     assert!(dt < 1e-9 && dr < 1e-9);
 }
 

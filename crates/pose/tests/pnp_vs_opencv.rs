@@ -51,15 +51,15 @@ fn agrees_with_opencv_solvepnp() {
         let iterative = pose(&case["opencv"]["iterative"]);
         let sqpnp = pose(&case["opencv"]["sqpnp"]);
         if case["noise_px"].as_f64() == Some(0.0) {
-            let (dt, dr) = ours.camera_from_body.distance_to(&truth);
+            let (dr, dt) = ours.camera_from_body.distance_to(&truth);
             assert!(dt < 1e-9 && dr < 1e-9, "case {i}: {dt:.2e} mm, {dr:.2e} rad from the truth");
             worst_exact = (worst_exact.0.max(dt), worst_exact.1.max(dr));
-            let (ct, cr) = iterative.distance_to(&truth);
+            let (cr, ct) = iterative.distance_to(&truth);
             assert!(ct < 1e-6 && cr < 1e-6, "case {i}: OpenCV itself is off ({ct:.2e} mm, {cr:.2e} rad)");
         } else {
             // OpenCV stops a little short of the minimum: ours must fit at least as well and
             // lie within a micro-radian of it.
-            let (dt, dr) = ours.camera_from_body.distance_to(&iterative);
+            let (dr, dt) = ours.camera_from_body.distance_to(&iterative);
             assert!(dt < 1e-4 && dr < 1e-6, "case {i}: {dt:.2e} mm, {dr:.2e} rad from OpenCV's ITERATIVE");
             let (mine, theirs) = (sum_sq(&obs, &camera, &ours.camera_from_body), sum_sq(&obs, &camera, &iterative));
             assert!(
