@@ -7,7 +7,7 @@
 use crate::DetectError;
 use crate::clusters::gradient_clusters_with;
 use crate::components::{UnionFind, connected_components_into};
-use crate::config::DetectorConfig;
+use crate::config::{DetectorConfig, Roi};
 use crate::decode::CodeTable;
 use crate::family::Tag36h11;
 use crate::gray::Gray;
@@ -87,10 +87,16 @@ impl Detector {
         &self.config
     }
 
-    /// Detects tags, sorted by id. With a region of interest, only tags inside it are found,
-    /// in full-frame coordinates.
+    /// Detects tags, sorted by id. With a region of interest in the settings, only tags inside
+    /// it are found, in full-frame coordinates.
     pub fn detect(&self, frame: &ImageView<'_>) -> Result<Vec<Detection>, DetectError> {
-        let (view, ox, oy) = match self.config.roi {
+        self.detect_in(frame, self.config.roi)
+    }
+
+    /// Detects tags inside `roi` (the whole frame for `None`), whatever the settings say: a
+    /// tracker moves its region with the markers from frame to frame.
+    pub fn detect_in(&self, frame: &ImageView<'_>, roi: Option<Roi>) -> Result<Vec<Detection>, DetectError> {
+        let (view, ox, oy) = match roi {
             None => (*frame, 0.0, 0.0),
             Some(r) => {
                 if r.x + r.width > frame.width() || r.y + r.height > frame.height() {
