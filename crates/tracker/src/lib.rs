@@ -1,21 +1,55 @@
 //! The tracker: one camera frame in, the pose of the mandible relative to the maxilla out.
 //!
-//! Per frame: detect the tags; give each marker body every corner of its tags seen (the
-//! model's body-frame corners against the detected pixels); solve each body's pose
-//! ([`jawtrack_pose::solve_pnp`]), starting from its pose in the previous frame; and compose
-//! `maxilla_from_mandible = camera_from_maxilla⁻¹ · camera_from_mandible`. Detected tag centres
-//! are not used: a detector's centre is the corners' homography at (0, 0), so it adds no
-//! information and would make the covariance overconfident.
+//! Per frame: detect the tags, inside the region where the markers are expected ([`roi`]) once
+//! they are being tracked; give each marker body every corner of its tags seen (the model's
+//! body-frame corners against the detected pixels); solve each body's pose
+//! ([`jawtrack_pose::solve_pnp`]) starting from its pose extrapolated from the previous frames;
+//! and compose `maxilla_from_mandible = camera_from_maxilla⁻¹ · camera_from_mandible`, and with
+//! a [`Registration`] the lower tooth scan in the upper one. Detected tag centres are not used:
+//! a detector's centre is the corners' homography at (0, 0), so it adds no information and
+//! would make the covariance overconfident.
 //!
-//! A body seen through one tag has two planar solutions; the tracker takes the one nearer
-//! its previous pose, and without one flags the body `ambiguous` rather than guess. Quality
-//! flags say what went wrong in a frame; a frame without tags is a result with flags, not an
-//! error, and a pose that is not finite is never returned.
+//! A body seen through one tag has two planar solutions; the tracker takes the one nearer its
+//! recent pose, else the one that keeps the other body's last relative pose, and otherwise
+//! flags the body `ambiguous` rather than guess silently. A tag that appears beside tags
+//! already tracked and fits the pose far worse than they do is dropped for that frame (a
+//! one-frame flicker, e.g. a misread glare patch). Quality flags say what went wrong in a
+//! frame; a frame without tags is a result with flags, not an error, and a pose that is not
+//! finite is never returned.
 
-use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView};
+pub mod record;
+pub mod registration;
+pub mod roi;
+pub mod smoothing;
+
+pub use registration::{IntercuspationCalibration, Registration, RegistrationError, calibrate_intercuspation};
+pub use smoothing::{Smoother, SmootherConfig};
+
+use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{BodyPose, CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
 use nalgebra::{Matrix6, Point2, Point3};
+use roi::Timed;
+use std::time::Instant;
+
+/// How the tracker searches each frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchConfig {
+    /// Search only where the markers are expected once both are tracked.
+    pub roi: bool,
+    /// Search the whole frame at least every this many frames (new tags, a second pair).
+    pub full_frame_every: usize,
+    /// The expected region grows by this fraction of its larger side on each side.
+    pub margin: f64,
+    /// … and by at least this many pixels.
+    pub min_margin_px: f64,
+}
+
+impl Default for SearchConfig {
+    fn default() -> Self {
+        SearchConfig { roi: true, full_frame_every: 30, margin: 0.1, min_margin_px: 32.0 }
+    }
+}
 
 /// Tracker settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,13 +58,30 @@ pub struct TrackerConfig {
     pub detector: DetectorConfig,
     /// The pose solver's.
     pub pnp: PnpOptions,
+    /// Where to search.
+    pub search: SearchConfig,
     /// A body whose RMS reprojection error exceeds this (px) is flagged.
     pub max_rms_px: f64,
+    /// A tag new to a tracked body is dropped when its RMS error (px) exceeds both this and
+    /// three times that of the body's other tags.
+    pub flicker_px: f64,
+    /// A body's earlier pose settles a single tag's ambiguity only if seen within this (s).
+    pub prior_max_age_s: f64,
+    /// Smooth `maxilla_from_mandible` (off by default: raw poses are the measurement).
+    pub smoother: Option<SmootherConfig>,
 }
 
 impl Default for TrackerConfig {
     fn default() -> Self {
-        TrackerConfig { detector: DetectorConfig::default(), pnp: PnpOptions::default(), max_rms_px: 1.0 }
+        TrackerConfig {
+            detector: DetectorConfig::default(),
+            pnp: PnpOptions::default(),
+            search: SearchConfig::default(),
+            max_rms_px: 2.0,
+            flicker_px: 2.0,
+            prior_max_age_s: 0.5,
+            smoother: None,
+        }
     }
 }
 
@@ -43,11 +94,11 @@ pub enum Flag {
     Lost(BodyKind),
     /// A body is seen through a single tag: its pose rests on four points.
     SingleTag(BodyKind),
-    /// A body's single-tag pose has a mirror solution and no previous pose to choose by.
+    /// A body's single-tag pose has a mirror solution and nothing to choose by.
     Ambiguous(BodyKind),
     /// A body's reprojection error is above `max_rms_px`.
     HighReprojectionError(BodyKind),
-    /// A body's tags disagreed and some were dropped.
+    /// Some of a body's tags disagreed with the rest and were dropped.
     RejectedTags(BodyKind),
 }
 
@@ -72,6 +123,8 @@ pub struct BodyResult {
     pub camera_from_body: Pose,
     /// Tags used, ascending.
     pub tags: Vec<u32>,
+    /// Tags seen but dropped (inconsistent with the others, or a one-frame flicker).
+    pub rejected_tags: Vec<u32>,
     /// RMS reprojection error (px).
     pub rms_px: f64,
     /// Covariance of (rotation vector [rad], translation [mm]) of a left perturbation in the
@@ -79,19 +132,47 @@ pub struct BodyResult {
     pub covariance: Matrix6<f64>,
 }
 
+/// Time spent on a frame's stages (s).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Timings {
+    /// Tag detection (both searches when a region search missed a body).
+    pub detection_s: f64,
+    /// Both bodies' PnP, ambiguity and flicker checks, composition.
+    pub pose_s: f64,
+}
+
 /// What the tracker made of one frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameResult {
+    /// The frame's time (s), as given.
+    pub t: f64,
     /// The upper jaw's marker, if solved.
     pub maxilla: Option<BodyResult>,
     /// The lower jaw's marker, if solved.
     pub mandible: Option<BodyResult>,
-    /// The mandible marker in the maxilla marker's frame, when both are solved.
+    /// The mandible marker in the maxilla marker's frame, when both are solved (smoothed when
+    /// the tracker has a smoother).
     pub maxilla_from_mandible: Option<Pose>,
+    /// The lower tooth scan in the upper one, when both are solved and a registration is set.
+    pub maxilla_scan_from_mandible_scan: Option<Pose>,
     /// Quality flags.
     pub flags: Vec<Flag>,
     /// The marker's tags detected (other tag36h11 ids are ignored).
     pub detections: Vec<Detection>,
+    /// The region searched, or `None` for the whole frame.
+    pub searched: Option<Roi>,
+    /// Time per stage.
+    pub timings: Timings,
+}
+
+impl FrameResult {
+    /// The result for a body.
+    pub fn body(&self, kind: BodyKind) -> Option<&BodyResult> {
+        match kind {
+            BodyKind::Maxilla => self.maxilla.as_ref(),
+            BodyKind::Mandible => self.mandible.as_ref(),
+        }
+    }
 }
 
 /// Why a frame could not be tracked at all.
@@ -103,6 +184,39 @@ pub enum TrackError {
     /// The intrinsics cannot describe a camera.
     #[error("camera intrinsics: {0}")]
     BadIntrinsics(String),
+    /// A setting out of range.
+    #[error("tracker setting: {0}")]
+    BadConfig(String),
+}
+
+/// What the tracker remembers of one body.
+#[derive(Debug, Clone, Default)]
+struct BodyState {
+    /// The last two times and poses it was solved, newest last.
+    history: Vec<Timed>,
+    /// The tags used the last time it was solved in the frame before.
+    tags: Vec<u32>,
+}
+
+impl BodyState {
+    fn last(&self) -> Option<&Timed> {
+        self.history.last()
+    }
+
+    fn remember(&mut self, t: f64, pose: Pose, tags: &[u32]) {
+        self.history.push((t, pose));
+        if self.history.len() > 2 {
+            self.history.remove(0);
+        }
+        self.tags = tags.to_vec();
+    }
+
+    /// The pose expected at `t`.
+    fn predict(&self, t: f64) -> Option<Pose> {
+        let last = self.last()?;
+        let previous = (self.history.len() == 2).then(|| &self.history[0]);
+        Some(roi::extrapolate(previous, last, t))
+    }
 }
 
 /// Tracks the two marker bodies through a sequence of frames.
@@ -111,14 +225,62 @@ pub struct Tracker {
     detector: Detector,
     marker: Marker,
     config: TrackerConfig,
-    /// Each body's pose in the previous frame where it was solved.
-    previous: [Option<Pose>; 2],
+    registration: Option<Registration>,
+    bodies: [BodyState; 2],
+    /// The last `maxilla_from_mandible` solved, to settle a lone tag by the other body.
+    last_relative: Option<Timed>,
+    smoother: Option<Smoother>,
+    /// Frames since the whole frame was last searched.
+    since_full: usize,
+    /// Each body's tag corners in its frame, for the expected region.
+    corners: [Vec<Point3<f64>>; 2],
+}
+
+fn slot(kind: BodyKind) -> usize {
+    match kind {
+        BodyKind::Maxilla => 0,
+        BodyKind::Mandible => 1,
+    }
 }
 
 impl Tracker {
     /// A tracker for `marker` (nominal or calibrated).
     pub fn new(marker: Marker, config: TrackerConfig) -> Result<Self, TrackError> {
-        Ok(Tracker { detector: Detector::new(config.detector)?, marker, config, previous: [None, None] })
+        let c = &config;
+        let positive =
+            [("max_rms_px", c.max_rms_px), ("flicker_px", c.flicker_px), ("prior_max_age_s", c.prior_max_age_s)];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(TrackError::BadConfig(format!("{name} must be a positive number, got {v}")));
+            }
+        }
+        let s = &c.search;
+        if !(s.margin.is_finite() && s.margin >= 0.0 && s.min_margin_px.is_finite() && s.min_margin_px >= 0.0) {
+            return Err(TrackError::BadConfig(format!(
+                "search margin must be non-negative (margin {}, min_margin_px {})",
+                s.margin, s.min_margin_px
+            )));
+        }
+        if s.full_frame_every == 0 {
+            return Err(TrackError::BadConfig("full_frame_every must be at least 1".into()));
+        }
+        let corners = BodyKind::ALL.map(|kind| {
+            marker
+                .body(kind)
+                .map(|b| b.tags.iter().flat_map(|t| t.corners.iter().map(|c| Point3::from(*c))).collect())
+                .unwrap_or_default()
+        });
+        Ok(Tracker {
+            detector: Detector::new(config.detector)?,
+            marker,
+            smoother: config.smoother.map(Smoother::new),
+            config,
+            registration: None,
+            bodies: Default::default(),
+            last_relative: None,
+            since_full: 0,
+            corners,
+        })
     }
 
     /// The marker tracked.
@@ -126,49 +288,171 @@ impl Tracker {
         &self.marker
     }
 
-    /// Forgets the previous poses (a cut in the footage).
+    /// The settings.
+    pub fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
+    /// Sets (or clears) the registration to the tooth scans.
+    pub fn set_registration(&mut self, registration: Option<Registration>) {
+        self.registration = registration;
+    }
+
+    /// The registration to the tooth scans, if set.
+    pub fn registration(&self) -> Option<&Registration> {
+        self.registration.as_ref()
+    }
+
+    /// The maximal-intercuspation calibration step: from `maxilla_from_mandible` measured
+    /// while the patient bites, corrects the mandible's registration (starting from identity
+    /// when none is set) and keeps the corrected one.
+    pub fn calibrate_intercuspation(
+        &mut self,
+        maxilla_from_mandible: &[Pose],
+    ) -> Result<IntercuspationCalibration, RegistrationError> {
+        let current = self.registration.unwrap_or_else(Registration::identity);
+        let cal = calibrate_intercuspation(&current, maxilla_from_mandible)?;
+        self.registration = Some(cal.registration);
+        Ok(cal)
+    }
+
+    /// Forgets the bodies' motion (a cut in the footage).
     pub fn reset(&mut self) {
-        self.previous = [None, None];
+        self.bodies = Default::default();
+        self.last_relative = None;
+        self.since_full = 0;
+        if let Some(s) = &mut self.smoother {
+            s.reset();
+        }
     }
 
-    /// Tracks one frame seen with `camera`.
-    pub fn track(&mut self, frame: &ImageView<'_>, camera: &CameraIntrinsics) -> Result<FrameResult, TrackError> {
+    /// Tracks one frame taken at `t` (s) with `camera` (the intrinsics may change per frame).
+    pub fn track(
+        &mut self,
+        frame: &ImageView<'_>,
+        camera: &CameraIntrinsics,
+        t: f64,
+    ) -> Result<FrameResult, TrackError> {
         camera.validate().map_err(|e| TrackError::BadIntrinsics(e.to_string()))?;
-        let detections: Vec<Detection> =
-            self.detector.detect(frame)?.into_iter().filter(|d| self.marker.find_tag(d.id).is_some()).collect();
-        Ok(self.solve(detections, camera))
+        if !t.is_finite() {
+            return Err(TrackError::BadConfig(format!("frame time must be finite, got {t}")));
+        }
+        let start = Instant::now();
+        let expected = self.expected_region(frame, camera, t);
+        let mut searched = expected;
+        let mut detections = self.detect(frame, expected)?;
+        // A body tracked last frame and missing from its expected region: search everywhere.
+        let missing = BodyKind::ALL.iter().any(|&k| !detections.iter().any(|d| self.body_of(d.id) == Some(k)));
+        if expected.is_some() && missing {
+            detections = self.detect(frame, None)?;
+            searched = None;
+        }
+        self.since_full = if searched.is_none() { 0 } else { self.since_full + 1 };
+        let detection_s = start.elapsed().as_secs_f64();
+        let mut result = self.solve(detections, camera, t);
+        result.searched = searched;
+        result.timings.detection_s = detection_s;
+        Ok(result)
     }
 
-    /// Solves both bodies from detections already made (e.g. by a detector elsewhere).
-    pub fn solve(&mut self, detections: Vec<Detection>, camera: &CameraIntrinsics) -> FrameResult {
+    fn detect(&self, frame: &ImageView<'_>, roi: Option<Roi>) -> Result<Vec<Detection>, TrackError> {
+        let mut d = self.detector.detect_in(frame, roi)?;
+        d.retain(|d| self.marker.find_tag(d.id).is_some());
+        Ok(d)
+    }
+
+    fn body_of(&self, id: u32) -> Option<BodyKind> {
+        self.marker.find_tag(id).map(|(k, _)| k)
+    }
+
+    /// Where both markers are expected, when both are tracked and a full search is not due.
+    fn expected_region(&self, frame: &ImageView<'_>, camera: &CameraIntrinsics, t: f64) -> Option<Roi> {
+        let s = &self.config.search;
+        if !s.roi || self.since_full + 1 >= s.full_frame_every {
+            return None;
+        }
+        let recent = |b: &BodyState| b.last().is_some_and(|l| t - l.0 <= self.config.prior_max_age_s);
+        if !self.bodies.iter().all(|b| recent(b) && !b.tags.is_empty()) {
+            return None;
+        }
+        let poses = [self.bodies[0].predict(t)?, self.bodies[1].predict(t)?];
+        let groups = [(&poses[0], self.corners[0].as_slice()), (&poses[1], self.corners[1].as_slice())];
+        roi::region(&groups, camera, frame.width(), frame.height(), s.margin, s.min_margin_px)
+    }
+
+    /// Solves both bodies from detections already made (e.g. by a detector elsewhere) in a
+    /// frame taken at `t` (s).
+    pub fn solve(&mut self, detections: Vec<Detection>, camera: &CameraIntrinsics, t: f64) -> FrameResult {
+        let start = Instant::now();
         let mut flags = Vec::new();
         if detections.is_empty() {
             flags.push(Flag::NoTags);
         }
-        let mut bodies: [Option<BodyResult>; 2] = [None, None];
-        for (slot, kind) in BodyKind::ALL.into_iter().enumerate() {
+        let mut solved: [Option<(BodyPose, Vec<u32>)>; 2] = [None, None];
+        for kind in BodyKind::ALL {
             let observations = self.observations(kind, &detections);
-            let prior = self.previous[slot];
-            match solve_pnp(&observations, camera, prior.as_ref(), &self.config.pnp) {
-                Ok(pose) => {
-                    if let Some(result) = self.accept(kind, pose, prior.as_ref(), &mut flags) {
-                        self.previous[slot] = Some(result.camera_from_body);
-                        bodies[slot] = Some(result);
-                    } else {
-                        flags.push(Flag::Lost(kind));
-                    }
+            let state = &self.bodies[slot(kind)];
+            let prior = state.predict(t);
+            let Ok(pose) = solve_pnp(&observations, camera, prior.as_ref(), &self.config.pnp) else { continue };
+            solved[slot(kind)] = Some(self.drop_flicker(kind, pose, observations, camera, prior.as_ref()));
+        }
+        let mut bodies: [Option<BodyResult>; 2] = [None, None];
+        // Settle each lone tag by its own recent pose first, then by the other body.
+        for kind in BodyKind::ALL {
+            let Some((pose, rejected)) = solved[slot(kind)].clone() else { continue };
+            let own = self.bodies[slot(kind)]
+                .last()
+                .filter(|l| t - l.0 <= self.config.prior_max_age_s)
+                .and_then(|_| self.bodies[slot(kind)].predict(t));
+            let other = match (kind, &solved[1 - slot(kind)], self.last_relative) {
+                (_, Some((o, _)), Some((_, rel))) if o.alternative.is_none() => Some(match kind {
+                    BodyKind::Maxilla => o.camera_from_body * rel.inverse(),
+                    BodyKind::Mandible => o.camera_from_body * rel,
+                }),
+                _ => None,
+            };
+            bodies[slot(kind)] = self.accept(kind, pose, rejected, own.or(other).as_ref(), &mut flags);
+        }
+        for kind in BodyKind::ALL {
+            match &bodies[slot(kind)] {
+                Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, &b.tags),
+                None => {
+                    flags.push(Flag::Lost(kind));
+                    self.bodies[slot(kind)].tags.clear();
                 }
-                Err(_) => flags.push(Flag::Lost(kind)),
             }
         }
         let [maxilla, mandible] = bodies;
-        let maxilla_from_mandible = match (&maxilla, &mandible) {
-            (Some(a), Some(b)) => {
-                Some(a.camera_from_body.inverse().compose(&b.camera_from_body)).filter(Pose::is_finite)
-            }
+        let raw = match (&maxilla, &mandible) {
+            (Some(a), Some(b)) => Some(a.camera_from_body.inverse() * b.camera_from_body).filter(Pose::is_finite),
             _ => None,
         };
-        FrameResult { maxilla, mandible, maxilla_from_mandible, flags, detections }
+        if let Some(r) = raw {
+            self.last_relative = Some((t, r));
+        }
+        let maxilla_from_mandible = match (raw, &mut self.smoother) {
+            (Some(r), Some(s)) => Some(s.filter(t, &r)).filter(Pose::is_finite),
+            (None, Some(s)) => {
+                s.reset();
+                None
+            }
+            (r, None) => r,
+        };
+        let maxilla_scan_from_mandible_scan = match (&self.registration, &maxilla_from_mandible) {
+            (Some(reg), Some(m)) => Some(reg.maxilla_scan_from_mandible_scan(m)).filter(Pose::is_finite),
+            _ => None,
+        };
+        FrameResult {
+            t,
+            maxilla,
+            mandible,
+            maxilla_from_mandible,
+            maxilla_scan_from_mandible_scan,
+            flags,
+            detections,
+            searched: None,
+            timings: Timings { detection_s: 0.0, pose_s: start.elapsed().as_secs_f64() },
+        }
     }
 
     /// Every corner of `kind`'s tags among the detections.
@@ -190,13 +474,50 @@ impl Tracker {
         out
     }
 
-    /// Settles a single tag's mirror ambiguity, flags what is worth knowing, and refuses a
-    /// pose that is not finite.
+    /// Drops a tag that just appeared beside tags tracked in the frame before and fits far
+    /// worse than they do, and solves again without it. Returns the pose and every tag dropped.
+    fn drop_flicker(
+        &self,
+        kind: BodyKind,
+        pose: BodyPose,
+        mut observations: Vec<Observation>,
+        camera: &CameraIntrinsics,
+        prior: Option<&Pose>,
+    ) -> (BodyPose, Vec<u32>) {
+        let mut rejected = pose.rejected_tags.clone();
+        let before = &self.bodies[slot(kind)].tags;
+        let (new, kept): (Vec<u32>, Vec<u32>) = pose.tags.iter().partition(|id| !before.contains(id));
+        if new.is_empty() || kept.is_empty() {
+            return (pose, rejected);
+        }
+        let error = |ids: &[u32]| tag_rms(&observations, ids, &pose.camera_from_body, camera);
+        let settled = error(&kept);
+        let flickers: Vec<u32> =
+            new.into_iter().filter(|&id| error(&[id]) > self.config.flicker_px.max(3.0 * settled)).collect();
+        if flickers.is_empty() {
+            return (pose, rejected);
+        }
+        observations.retain(|o| !flickers.contains(&o.tag));
+        match solve_pnp(&observations, camera, prior, &self.config.pnp) {
+            Ok(again) => {
+                rejected.extend(again.rejected_tags.iter().copied());
+                rejected.extend(flickers);
+                rejected.sort_unstable();
+                rejected.dedup();
+                (again, rejected)
+            }
+            Err(_) => (pose, rejected),
+        }
+    }
+
+    /// Settles a single tag's mirror ambiguity by `expected`, flags what is worth knowing, and
+    /// refuses a pose that is not finite.
     fn accept(
         &self,
         kind: BodyKind,
         pose: BodyPose,
-        prior: Option<&Pose>,
+        rejected_tags: Vec<u32>,
+        expected: Option<&Pose>,
         flags: &mut Vec<Flag>,
     ) -> Option<BodyResult> {
         let mut chosen = pose.camera_from_body;
@@ -205,7 +526,7 @@ impl Tracker {
             flags.push(Flag::SingleTag(kind));
         }
         if let Some((alternative, alt_rms)) = pose.alternative {
-            match prior {
+            match expected {
                 Some(p) => {
                     let angle = |q: &Pose| q.rotation().angle_to(&p.rotation());
                     if angle(&alternative) < angle(&chosen) {
@@ -216,18 +537,32 @@ impl Tracker {
                 None => flags.push(Flag::Ambiguous(kind)),
             }
         }
-        if !pose.rejected_tags.is_empty() {
+        if !rejected_tags.is_empty() {
             flags.push(Flag::RejectedTags(kind));
         }
         if rms > self.config.max_rms_px {
             flags.push(Flag::HighReprojectionError(kind));
         }
-        let finite = chosen.is_finite() && rms.is_finite();
+        let finite = chosen.is_finite() && rms.is_finite() && pose.covariance.iter().all(|v| !v.is_nan());
         finite.then_some(BodyResult {
             camera_from_body: chosen,
             tags: pose.tags,
+            rejected_tags,
             rms_px: rms,
             covariance: pose.covariance,
         })
     }
+}
+
+/// The RMS reprojection error (px) of the observations of tags `ids` under `camera_from_body`.
+fn tag_rms(observations: &[Observation], ids: &[u32], camera_from_body: &Pose, camera: &CameraIntrinsics) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for o in observations.iter().filter(|o| ids.contains(&o.tag)) {
+        let e = camera
+            .project(&camera_from_body.transform_point(&o.body))
+            .map_or(f64::INFINITY, |p| (p - o.pixel).norm_squared());
+        sum += e;
+        n += 1;
+    }
+    if n == 0 { 0.0 } else { (sum / n as f64).sqrt() }
 }

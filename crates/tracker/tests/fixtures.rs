@@ -31,8 +31,9 @@ fn run(oracle: bool) -> Vec<SetErrors> {
         for f in &gt.frames {
             let img = image::open(set.join(&f.file)).expect("png").to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
-            let r =
-                tracker.track(&ImageView::new(img.as_raw(), w, h, w).expect("view"), &gt.intrinsics).expect("tracks");
+            let r = tracker
+                .track(&ImageView::new(img.as_raw(), w, h, w).expect("view"), &gt.intrinsics, f.t)
+                .expect("tracks");
             if let Some(m) = r.maxilla_from_mandible {
                 assert!(m.is_finite());
                 let (dr, dt) = m.distance_to(&f.maxilla_from_mandible);
@@ -86,11 +87,11 @@ fn a_frame_without_tags_is_a_result_with_flags_and_bad_intrinsics_an_error() {
     let blank = vec![128u8; 640 * 480];
     let view = ImageView::new(&blank, 640, 480, 640).expect("view");
     let camera = jawtrack_pose::CameraIntrinsics::pinhole(800.0, 800.0, 319.5, 239.5);
-    let r = tracker.track(&view, &camera).expect("a result");
+    let r = tracker.track(&view, &camera, 0.0).expect("a result");
     assert!(r.maxilla.is_none() && r.mandible.is_none() && r.maxilla_from_mandible.is_none());
     let names: Vec<String> = r.flags.iter().map(Flag::name).collect();
     assert_eq!(names, vec!["no_tags", "maxilla:lost", "mandible:lost"]);
     let bad = jawtrack_pose::CameraIntrinsics { fx: f64::NAN, ..camera };
-    let e = tracker.track(&view, &bad).expect_err("NaN focal length");
+    let e = tracker.track(&view, &bad, 0.0).expect_err("NaN focal length");
     assert!(e.to_string().contains("fx"), "{e}");
 }

@@ -1,0 +1,94 @@
+//! Where to look next: each marker's pose extrapolated to the coming frame at constant
+//! velocity, and the image region its tags will cover.
+
+use jawtrack_apriltag::Roi;
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use nalgebra::{Point3, UnitQuaternion};
+
+/// A pose seen at a time (s).
+pub type Timed = (f64, Pose);
+
+/// `last` moved on to time `t` with the velocity it had since `previous`: the body's origin
+/// at constant linear velocity, its orientation at constant angular velocity. `last` itself
+/// when the times do not allow it.
+pub fn extrapolate(previous: Option<&Timed>, last: &Timed, t: f64) -> Pose {
+    let Some((t0, p0)) = previous else { return last.1 };
+    let (t1, p1) = last;
+    let span = t1 - t0;
+    let ahead = t - t1;
+    if !(span > 0.0 && ahead >= 0.0 && span.is_finite() && ahead.is_finite()) {
+        return *p1;
+    }
+    let k = ahead / span;
+    let turn = p1.rotation() * p0.rotation().inverse();
+    let rotation = UnitQuaternion::from_scaled_axis(turn.scaled_axis() * k) * p1.rotation();
+    let translation = p1.translation() + (p1.translation() - p0.translation()) * k;
+    Pose::from_parts(rotation, translation)
+}
+
+/// The box around `points` (body frame) seen through `camera_from_body`, grown by `margin`
+/// (a fraction of its larger side) and at least `min_margin_px` on each side, clipped to the
+/// frame. `None` when a point is behind the camera or the box misses the frame.
+pub fn region(
+    groups: &[(&Pose, &[Point3<f64>])],
+    camera: &CameraIntrinsics,
+    width: usize,
+    height: usize,
+    margin: f64,
+    min_margin_px: f64,
+) -> Option<Roi> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for (camera_from_body, points) in groups {
+        for p in points.iter() {
+            let px = camera.project(&camera_from_body.transform_point(p))?;
+            lo = [lo[0].min(px.x), lo[1].min(px.y)];
+            hi = [hi[0].max(px.x), hi[1].max(px.y)];
+        }
+    }
+    if !(lo[0].is_finite() && hi[0].is_finite() && lo[1].is_finite() && hi[1].is_finite()) {
+        return None;
+    }
+    let grow = (margin * (hi[0] - lo[0]).max(hi[1] - lo[1])).max(min_margin_px);
+    let x0 = (lo[0] - grow).floor().max(0.0);
+    let y0 = (lo[1] - grow).floor().max(0.0);
+    let x1 = (hi[0] + grow).ceil().min(width as f64 - 1.0);
+    let y1 = (hi[1] + grow).ceil().min(height as f64 - 1.0);
+    if x1 <= x0 || y1 <= y0 {
+        return None;
+    }
+    Some(Roi { x: x0 as usize, y: y0 as usize, width: (x1 - x0) as usize + 1, height: (y1 - y0) as usize + 1 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn constant_velocity_is_continued() {
+        let p = |t: f64| Pose::from_axis_angle(Vector3::new(0.0, 0.3 * t, 0.1 * t), Vector3::new(5.0 * t, 0.0, 100.0));
+        let got = extrapolate(Some(&(0.5, p(0.5))), &(1.0, p(1.0)), 2.0);
+        let (angle, dist) = got.distance_to(&p(2.0));
+        assert!(angle < 1e-12 && dist < 1e-12, "{angle} rad {dist} mm");
+        // Without a history, or with time standing still, the last pose is kept.
+        assert_eq!(extrapolate(None, &(1.0, p(1.0)), 2.0), p(1.0));
+        assert_eq!(extrapolate(Some(&(1.0, p(0.0))), &(1.0, p(1.0)), 2.0), p(1.0));
+    }
+
+    #[test]
+    fn region_covers_the_projected_points_with_a_margin() {
+        let camera = CameraIntrinsics::pinhole(1000.0, 1000.0, 959.5, 539.5);
+        let pose = Pose::from_axis_angle(Vector3::zeros(), Vector3::new(0.0, 0.0, 100.0));
+        let pts = [Point3::new(-10.0, -5.0, 0.0), Point3::new(10.0, 5.0, 0.0)];
+        let r = region(&[(&pose, &pts)], &camera, 1920, 1080, 0.25, 10.0).expect("in view");
+        // Points at x 859.5..1059.5, y 489.5..589.5; grown by 50 px.
+        assert_eq!((r.x, r.y, r.width, r.height), (809, 439, 302, 202));
+        // Clipped at the frame's edge.
+        let left = Pose::from_axis_angle(Vector3::zeros(), Vector3::new(-95.0, 0.0, 100.0));
+        let r = region(&[(&left, &pts)], &camera, 1920, 1080, 0.25, 10.0).expect("partly in view");
+        assert_eq!(r.x, 0);
+        // Behind the camera: no region.
+        let behind = Pose::from_axis_angle(Vector3::zeros(), Vector3::new(0.0, 0.0, -100.0));
+        assert!(region(&[(&behind, &pts)], &camera, 1920, 1080, 0.25, 10.0).is_none());
+    }
+}

@@ -1,0 +1,185 @@
+//! The tracker through time: searching where the markers are expected on a rendered hinge
+//! sequence, dropping a tag that flickers in, settling a lone tag's mirror ambiguity, and the
+//! registration to the tooth scans.
+
+use jawtrack_apriltag::{Detection, ImageView};
+use jawtrack_marker::{BodyKind, Marker};
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_synth::{Realism, SceneKind, SceneOptions, SynthConfig, Synthesizer};
+use jawtrack_tracker::{Flag, Registration, SearchConfig, Tracker, TrackerConfig};
+use nalgebra::{Point3, UnitQuaternion, Vector3};
+
+#[test]
+fn steady_tracking_searches_only_the_expected_region() {
+    let config = SynthConfig {
+        realism: Realism::clean(),
+        options: SceneOptions { cycles: 1, ..SceneOptions::default() },
+        max_frames: Some(10),
+        ..SynthConfig::new(SceneKind::Hinge)
+    };
+    let synth = Synthesizer::new(config).expect("scene");
+    let camera = synth.header().intrinsics;
+    let tracker_config = TrackerConfig {
+        search: SearchConfig { full_frame_every: 4, ..SearchConfig::default() },
+        ..TrackerConfig::default()
+    };
+    let mut tracker = Tracker::new(Marker::default(), tracker_config).expect("tracker");
+    let mut searched = Vec::new();
+    for i in 0..synth.len() {
+        let f = synth.render(i).expect("frame");
+        let (w, h) = (f.width as usize, f.height as usize);
+        let view = ImageView::new(&f.luma, w, h, w).expect("view");
+        let r = tracker.track(&view, &camera, f.truth.t).expect("tracks");
+        let m = r.maxilla_from_mandible.expect("both bodies");
+        let (angle, dist) = m.distance_to(&f.truth.maxilla_from_mandible);
+        assert!(dist < 0.05 && angle.to_degrees() < 0.1, "frame {i}: {dist:.3} mm {:.3}°", angle.to_degrees());
+        // Every tag found in the whole frame is found in the region too.
+        let all = tracker_full_frame_ids(&view, &camera);
+        let ids: Vec<u32> = r.detections.iter().map(|d| d.id).collect();
+        assert_eq!(ids, all, "frame {i}");
+        searched.push(r.searched.map(|s| (s.width * s.height) as f64 / (w * h) as f64));
+    }
+    // The first frame and every 4th after are searched whole; the rest in under half the frame.
+    for (i, s) in searched.iter().enumerate() {
+        if i % 4 == 0 {
+            assert_eq!(*s, None, "frame {i} should be a full search");
+        } else {
+            let share = s.unwrap_or_else(|| panic!("frame {i} searched the whole frame"));
+            assert!(share < 0.5, "frame {i}: region is {:.0} % of the frame", share * 100.0);
+        }
+    }
+}
+
+fn tracker_full_frame_ids(view: &ImageView<'_>, camera: &CameraIntrinsics) -> Vec<u32> {
+    let config =
+        TrackerConfig { search: SearchConfig { roi: false, ..SearchConfig::default() }, ..TrackerConfig::default() };
+    let mut t = Tracker::new(Marker::default(), config).expect("tracker");
+    let r = t.track(view, camera, 0.0).expect("tracks");
+    r.detections.iter().map(|d| d.id).collect()
+}
+
+/// A camera looking at both markers from 100 mm, their camera-facing vertex toward it.
+fn scene() -> (CameraIntrinsics, Pose, Pose) {
+    let camera = CameraIntrinsics::pinhole(1500.0, 1500.0, 959.5, 539.5);
+    let facing = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::PI)
+        * UnitQuaternion::from_scaled_axis(Vector3::new(0.25, 0.15, 0.0));
+    let maxilla = Pose::from_parts(facing, Vector3::new(2.0, -22.0, 100.0));
+    let mandible = Pose::from_parts(
+        facing * UnitQuaternion::from_scaled_axis(Vector3::new(0.2, 0.0, 0.0)),
+        Vector3::new(1.0, 22.0, 104.0),
+    );
+    (camera, maxilla, mandible)
+}
+
+/// Noise-free detections of `ids` seen through `camera_from_body`.
+fn detections(marker: &Marker, ids: &[u32], camera_from_body: &Pose, camera: &CameraIntrinsics) -> Vec<Detection> {
+    ids.iter()
+        .map(|&id| {
+            let (_, tag) = marker.find_tag(id).expect("marker tag");
+            let corners = tag.corners.map(|c| {
+                let p = camera.project(&camera_from_body.transform_point(&Point3::from(c))).expect("in front");
+                [p.x, p.y]
+            });
+            let center =
+                [corners.iter().map(|c| c[0]).sum::<f64>() / 4.0, corners.iter().map(|c| c[1]).sum::<f64>() / 4.0];
+            Detection { id, hamming: 0, decision_margin: 100.0, center, corners, homography: [0.0; 9] }
+        })
+        .collect()
+}
+
+#[test]
+fn a_tag_that_flickers_in_with_a_large_error_is_dropped() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    let both = |max_ids: &[u32], man_ids: &[u32]| {
+        let mut d = detections(&marker, max_ids, &maxilla, &camera);
+        d.extend(detections(&marker, man_ids, &mandible, &camera));
+        d
+    };
+    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 14]), &camera, 0.0);
+    assert!(r.flags.is_empty(), "{:?}", r.flags);
+    // Tag 3 appears, misread 4 px off: dropped, and the pose stays exact.
+    let mut d = both(&[0, 1, 2, 3], &[12, 13, 14]);
+    for c in &mut d.iter_mut().find(|d| d.id == 3).expect("tag 3").corners {
+        c[0] += 4.0;
+    }
+    let r = tracker.solve(d, &camera, 1.0 / 30.0);
+    let body = r.maxilla.as_ref().expect("maxilla");
+    assert_eq!(body.tags, vec![0, 1, 2]);
+    assert_eq!(body.rejected_tags, vec![3]);
+    assert!(r.flags.contains(&Flag::RejectedTags(BodyKind::Maxilla)));
+    let (angle, dist) = body.camera_from_body.distance_to(&maxilla);
+    assert!(angle < 1e-9 && dist < 1e-9);
+    // Seen correctly, the same newcomer is kept.
+    let r = tracker.solve(both(&[0, 1, 2, 3], &[12, 13, 14]), &camera, 2.0 / 30.0);
+    assert_eq!(r.maxilla.as_ref().expect("maxilla").tags, vec![0, 1, 2, 3]);
+    assert!(r.flags.is_empty(), "{:?}", r.flags);
+}
+
+#[test]
+fn a_lone_tag_is_settled_by_history_or_the_other_body_and_flagged_otherwise() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    // A tag whose pose alone has a mirror solution.
+    let probe = |id: u32| {
+        let mut t = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+        let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+        d.extend(detections(&marker, &[id], &mandible, &camera));
+        t.solve(d, &camera, 0.0).flags.contains(&Flag::Ambiguous(BodyKind::Mandible))
+    };
+    let lone = (12..24).find(|&id| probe(id)).expect("some single tag is ambiguous");
+    let close = |p: &Pose, q: &Pose| p.distance_to(q).0.to_degrees() < 0.01;
+
+    // Settled by the other body: both were seen together once, long ago.
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+    d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
+    tracker.solve(d, &camera, 0.0);
+    let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+    d.extend(detections(&marker, &[lone], &mandible, &camera));
+    let r = tracker.solve(d, &camera, 10.0);
+    assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
+    assert!(r.flags.contains(&Flag::SingleTag(BodyKind::Mandible)));
+    assert!(close(&r.mandible.expect("mandible").camera_from_body, &mandible));
+
+    // Settled by its own recent pose, the other body out of view.
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    tracker.solve(detections(&marker, &[12, 13, 14], &mandible, &camera), &camera, 0.0);
+    let r = tracker.solve(detections(&marker, &[lone], &mandible, &camera), &camera, 1.0 / 30.0);
+    assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
+    assert!(close(&r.mandible.expect("mandible").camera_from_body, &mandible));
+}
+
+#[test]
+fn registration_maps_the_jaw_into_the_scans() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    let registration = Registration {
+        maxilla_scan_from_maxilla_marker: Pose::from_axis_angle(
+            Vector3::new(0.0, 0.1, 0.0),
+            Vector3::new(0.0, 22.0, 38.0),
+        ),
+        mandible_scan_from_mandible_marker: Pose::from_axis_angle(
+            Vector3::new(0.0, 0.1, 0.0),
+            Vector3::new(0.0, -22.0, 38.0),
+        ),
+        ..Registration::identity()
+    };
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    tracker.set_registration(Some(registration));
+    let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+    d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
+    let r = tracker.solve(d.clone(), &camera, 0.0);
+    let want = registration.maxilla_scan_from_mandible_scan(&(maxilla.inverse() * mandible));
+    let got = r.maxilla_scan_from_mandible_scan.expect("registered");
+    let (angle, dist) = got.distance_to(&want);
+    assert!(angle < 1e-9 && dist < 1e-9);
+    // The intercuspation step makes this bite the scanned intercuspal pose (identity here).
+    let bite = r.maxilla_from_mandible.expect("both");
+    let cal = tracker.calibrate_intercuspation(&[bite]).expect("calibrates");
+    assert!(cal.translation_mm > 1.0, "the registration above is not the bite: {cal:?}");
+    let r = tracker.solve(d, &camera, 1.0 / 30.0);
+    let (angle, dist) = r.maxilla_scan_from_mandible_scan.expect("registered").distance_to(&Pose::identity());
+    assert!(angle < 1e-9 && dist < 1e-9, "{angle} rad {dist} mm");
+}
