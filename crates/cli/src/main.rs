@@ -14,6 +14,7 @@ macro_rules! say {
 
 mod demo;
 mod detect;
+mod track;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
@@ -48,6 +49,9 @@ enum Command {
     Synth(SynthArgs),
     /// Detect tag36h11 tags in images; one JSON line per image.
     Detect(detect::DetectArgs),
+    /// Track recorded frames: both marker poses and the mandible in the maxilla, one JSON line
+    /// per frame.
+    Track(track::TrackArgs),
 }
 
 #[derive(Args)]
@@ -147,6 +151,7 @@ fn main() {
         Command::Harness(a) => harness(&a),
         Command::Synth(a) => synth(&a),
         Command::Detect(a) => detect::run(&a),
+        Command::Track(a) => track::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

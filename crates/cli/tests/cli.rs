@@ -132,3 +132,135 @@ fn detect_prints_one_json_line_per_image() {
     refused(&jawtrack(&["detect", "--decimate", "2.5", frame]), "quad_decimate");
     refused(&jawtrack(&["detect", "/nonexistent.png"]), "/nonexistent.png");
 }
+
+#[test]
+fn track_writes_one_line_per_frame_with_the_jaw_pose() {
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/static-1080p");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("poses.jsonl");
+    let out = out.to_str().expect("utf-8 path");
+    let o = jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", out, set]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("tracked 6 frames"), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out).expect("poses written");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(Path::new(set).join("ground_truth.json")).expect("truth"))
+            .expect("json");
+    let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).expect("json line")).collect();
+    assert_eq!(lines.len(), 6);
+    for (i, (line, f)) in lines.iter().zip(truth["frames"].as_array().expect("frames")).enumerate() {
+        assert_eq!(line["frame"], i);
+        assert!(line["maxilla"]["cov"].as_array().is_some_and(|c| c.len() == 36));
+        // The nominal marker (print errors unknown): the mandible in the maxilla within 1 mm.
+        let got: Vec<f64> = serde_json::from_value(line["maxilla_from_mandible"].clone()).expect("4x4 matrix");
+        let want: Vec<f64> = serde_json::from_value(f["maxilla_from_mandible"].clone()).expect("truth matrix");
+        let d = ((got[3] - want[3]).powi(2) + (got[7] - want[7]).powi(2) + (got[11] - want[11]).powi(2)).sqrt();
+        assert!(d < 1.0, "frame {i}: {d:.3} mm from the truth");
+        assert_eq!(&got[12..], &[0.0, 0.0, 0.0, 1.0]);
+    }
+    refused(&jawtrack(&["track", "--intrinsics", "1500,1500,959.5", "--out", out, set]), "intrinsics");
+    refused(
+        &jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", out, "/nonexistent"]),
+        "/nonexistent",
+    );
+    refused(&jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--fps", "0", "--out", out, set]), "--fps");
+    let empty = tempfile::tempdir().expect("temp dir");
+    refused(
+        &jawtrack(&[
+            "track",
+            "--intrinsics",
+            "1500,1500,959.5,539.5",
+            "--out",
+            out,
+            empty.path().to_str().expect("utf-8"),
+        ]),
+        "holds no PNG or JPEG",
+    );
+}
+
+#[test]
+fn track_with_a_registration_writes_the_scans_pose_and_names_a_bad_field() {
+    let frame = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p/frame_0000.png");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("poses.jsonl");
+    let out = out.to_str().expect("utf-8 path");
+    let reg = dir.path().join("reg.json");
+    // The upper scan 38 mm behind the maxilla marker, the lower one likewise.
+    let shift = |y: f64| format!("[1,0,0,0, 0,1,0,{y}, 0,0,1,38, 0,0,0,1]");
+    let text = format!(
+        r#"{{"version":1,"units":"mm","maxilla_scan_from_maxilla_marker":{},"mandible_scan_from_mandible_marker":{}}}"#,
+        shift(22.0),
+        shift(-22.0)
+    );
+    std::fs::write(&reg, text).expect("write");
+    let reg = reg.to_str().expect("utf-8 path");
+    let o = jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--registration", reg, "--out", out, frame]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line: serde_json::Value =
+        serde_json::from_str(std::fs::read_to_string(out).expect("poses").trim()).expect("json");
+    let m: Vec<f64> = serde_json::from_value(line["maxilla_from_mandible"].clone()).expect("jaw pose");
+    let s: Vec<f64> = serde_json::from_value(line["maxilla_scan_from_mandible_scan"].clone()).expect("scan pose");
+    // Pure shifts on either side: the scans' pose is the markers' with the same rotation.
+    for i in [0, 1, 2, 4, 5, 6, 8, 9, 10] {
+        assert!((m[i] - s[i]).abs() < 1e-12, "rotation entry {i}");
+    }
+    std::fs::write(
+        dir.path().join("bad.json"),
+        r#"{"version":1,"units":"mm","maxilla_scan_from_maxilla_marker":[1,2]}"#,
+    )
+    .expect("write");
+    let bad = dir.path().join("bad.json");
+    refused(
+        &jawtrack(&[
+            "track",
+            "--intrinsics",
+            "1500,1500,959.5,539.5",
+            "--registration",
+            bad.to_str().expect("utf-8"),
+            "--out",
+            out,
+            frame,
+        ]),
+        "maxilla_scan_from_maxilla_marker",
+    );
+}
+
+#[test]
+fn track_reads_a_video_through_ffmpeg_as_it_reads_the_frames() {
+    let have = |tool: &str| Command::new(tool).arg("-version").output().is_ok_and(|o| o.status.success());
+    if !(have("ffmpeg") && have("ffprobe")) {
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), b"SKIPPED: ffmpeg/ffprobe not installed\n");
+        return;
+    }
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let video = dir.path().join("hinge.mkv");
+    // FFV1 is lossless: the decoded luma equals the PNGs.
+    let made = Command::new("ffmpeg")
+        .args(["-v", "error", "-framerate", "30", "-i", &format!("{set}/frame_%04d.png")])
+        .args(["-c:v", "ffv1", "-pix_fmt", "gray"])
+        .arg(&video)
+        .output()
+        .expect("ffmpeg runs");
+    assert!(made.status.success(), "{}", stderr(&made));
+    let from_video = dir.path().join("v.jsonl");
+    let from_images = dir.path().join("i.jsonl");
+    let args = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--out"];
+    let o = jawtrack(
+        &[&args[..], &[from_video.to_str().expect("utf-8"), "--video", video.to_str().expect("utf-8")]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = jawtrack(&[&args[..], &[from_images.to_str().expect("utf-8"), set]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let poses = |p: &Path| -> Vec<serde_json::Value> {
+        std::fs::read_to_string(p)
+            .expect("poses")
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("json")["maxilla_from_mandible"].clone())
+            .collect()
+    };
+    let (v, i) = (poses(&from_video), poses(&from_images));
+    assert_eq!(v.len(), 5);
+    assert_eq!(v, i, "the video's frames track exactly as the PNGs");
+    refused(&jawtrack(&[&args[..], &["x.jsonl", "--video", "/nonexistent.mp4"]].concat()), "/nonexistent.mp4");
+}
