@@ -316,6 +316,12 @@ impl Tracker {
         Ok(cal)
     }
 
+    /// Where `kind` is expected at `t` (s), extrapolated from the frames before: the pose its
+    /// PnP starts from.
+    pub fn predicted(&self, kind: BodyKind, t: f64) -> Option<Pose> {
+        self.bodies[slot(kind)].predict(t)
+    }
+
     /// Forgets the bodies' motion (a cut in the footage).
     pub fn reset(&mut self) {
         self.bodies = Default::default();
@@ -341,9 +347,13 @@ impl Tracker {
         let expected = self.expected_region(frame, camera, t);
         let mut searched = expected;
         let mut detections = self.detect(frame, expected)?;
-        // A body tracked last frame and missing from its expected region: search everywhere.
+        // A body missing from its expected region, or a tag at the region's edge (the
+        // prediction was off, and the edge fit there lacks its pixels): search everywhere.
         let missing = BodyKind::ALL.iter().any(|&k| !detections.iter().any(|d| self.body_of(d.id) == Some(k)));
-        if expected.is_some() && missing {
+        let at_edge = expected.is_some_and(|r| {
+            detections.iter().any(|d| near_inner_edge(&d.corners, &r, frame, self.config.search.min_margin_px / 2.0))
+        });
+        if expected.is_some() && (missing || at_edge) {
             detections = self.detect(frame, None)?;
             searched = None;
         }
@@ -391,8 +401,7 @@ impl Tracker {
         let mut solved: [Option<(BodyPose, Vec<u32>)>; 2] = [None, None];
         for kind in BodyKind::ALL {
             let observations = self.observations(kind, &detections);
-            let state = &self.bodies[slot(kind)];
-            let prior = state.predict(t);
+            let prior = self.predicted(kind, t);
             let Ok(pose) = solve_pnp(&observations, camera, prior.as_ref(), &self.config.pnp) else { continue };
             solved[slot(kind)] = Some(self.drop_flicker(kind, pose, observations, camera, prior.as_ref()));
         }
@@ -455,8 +464,9 @@ impl Tracker {
         }
     }
 
-    /// Every corner of `kind`'s tags among the detections.
-    fn observations(&self, kind: BodyKind, detections: &[Detection]) -> Vec<Observation> {
+    /// Every corner of `kind`'s tags among the detections: the correspondences its PnP
+    /// solves (for benchmarks and diagnostics).
+    pub fn observations(&self, kind: BodyKind, detections: &[Detection]) -> Vec<Observation> {
         let mut out = Vec::new();
         for d in detections {
             let Some((body, tag)) = self.marker.find_tag(d.id) else { continue };
@@ -552,6 +562,18 @@ impl Tracker {
             covariance: pose.covariance,
         })
     }
+}
+
+/// Whether a corner lies within `distance` (px) of an edge of `roi` that is not the frame's.
+fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageView<'_>, distance: f64) -> bool {
+    let (x0, y0) = (roi.x as f64, roi.y as f64);
+    let (x1, y1) = ((roi.x + roi.width) as f64 - 1.0, (roi.y + roi.height) as f64 - 1.0);
+    corners.iter().any(|c| {
+        (roi.x > 0 && c[0] - x0 < distance)
+            || (roi.y > 0 && c[1] - y0 < distance)
+            || (roi.x + roi.width < frame.width() && x1 - c[0] < distance)
+            || (roi.y + roi.height < frame.height() && y1 - c[1] < distance)
+    })
 }
 
 /// The RMS reprojection error (px) of the observations of tags `ids` under `camera_from_body`.
