@@ -12,6 +12,7 @@ macro_rules! say {
     }};
 }
 
+mod bench;
 mod demo;
 mod detect;
 mod track;
@@ -52,6 +53,8 @@ enum Command {
     /// Track recorded frames: both marker poses and the mandible in the maxilla, one JSON line
     /// per frame.
     Track(track::TrackArgs),
+    /// Benchmarks: `bench pipeline` times the tracking pipeline and PnP beside OpenCV.
+    Bench(bench::BenchArgs),
 }
 
 #[derive(Args)]
@@ -152,6 +155,7 @@ fn main() {
         Command::Synth(a) => synth(&a),
         Command::Detect(a) => detect::run(&a),
         Command::Track(a) => track::run(&a),
+        Command::Bench(a) => bench::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -260,4 +264,16 @@ pub(crate) fn render_with_progress(config: SynthConfig, out: &Path) -> Result<ja
     })?;
     bar.finish_and_clear();
     Ok(summary)
+}
+
+/// A progress bar over `len` items, labelled `what`.
+pub(crate) fn progress_bar(what: &str, len: usize) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len}, {elapsed} elapsed, ~{eta} left")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_owned());
+    bar
 }

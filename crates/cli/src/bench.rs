@@ -1,0 +1,273 @@
+//! `jawtrack bench pipeline`: time per frame of the whole tracking pipeline and of its stages
+//! (tag detection, pose), at 1080p and 4K, searching every frame whole and tracking in the
+//! steady state (the region where the markers are expected), one detector thread; and the PnP
+//! time per body, ours beside OpenCV's solvePnP (SQPnP, ITERATIVE) on the same
+//! correspondences when Python with OpenCV is installed.
+//!
+//! Frames are a hinge opening rendered with the default realism (noise, blur, sRGB), 30
+//! frames/s, so consecutive frames move as a real recording does. Each pass over the frames
+//! starts a fresh tracker; every frame's time is the median over `--repeat` passes, and the
+//! table gives the median over frames. Machines here are noisy: read ratios and medians.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+use jawtrack_apriltag::{DetectorConfig, ImageView};
+use jawtrack_marker::{BodyKind, Marker};
+use jawtrack_pose::{CameraIntrinsics, Observation, Pose, solve_pnp};
+use jawtrack_synth::{Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer};
+use jawtrack_tracker::{SearchConfig, Tracker, TrackerConfig};
+use std::io::{BufRead, BufReader, Write};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+/// Arguments of `jawtrack bench`.
+#[derive(Args)]
+pub(crate) struct BenchArgs {
+    #[command(subcommand)]
+    which: BenchKind,
+}
+
+#[derive(Subcommand)]
+enum BenchKind {
+    /// Time per frame of detection, pose and the whole pipeline; PnP per body beside OpenCV.
+    Pipeline(PipelineArgs),
+}
+
+#[derive(Args)]
+struct PipelineArgs {
+    /// Resolutions to run (comma-separated): 1080p, 4k.
+    #[arg(long, value_delimiter = ',', default_value = "1080p,4k")]
+    resolutions: Vec<Resolution>,
+    /// Frames rendered per resolution (consecutive, 30 frames/s).
+    #[arg(long, default_value_t = 20)]
+    frames: usize,
+    /// Passes over the frames; each frame's median counts.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Calls per body for the PnP timing.
+    #[arg(long, default_value_t = 200)]
+    pnp_repeat: usize,
+    /// The Python that runs OpenCV (skipped with a note when it cannot import cv2).
+    #[arg(long, default_value = "python3")]
+    python: String,
+    /// Also write the table (Markdown) here.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+pub(crate) fn run(a: &BenchArgs) -> Result<()> {
+    match &a.which {
+        BenchKind::Pipeline(p) => pipeline(p),
+    }
+}
+
+/// Median of a list (NaN when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// One body's PnP problem as the tracker met it.
+struct PnpCase {
+    observations: Vec<Observation>,
+    prior: Option<Pose>,
+}
+
+fn pipeline(a: &PipelineArgs) -> Result<()> {
+    if a.frames < 2 || a.repeat == 0 || a.pnp_repeat == 0 {
+        bail!("--frames must be at least 2, --repeat and --pnp-repeat at least 1");
+    }
+    let mut table = String::new();
+    let mut line = |s: String| {
+        say!("{s}");
+        table.push_str(&s);
+        table.push('\n');
+    };
+    line(format!(
+        "jawtrack bench pipeline: hinge opening, default realism, {} frames per resolution, median of {} passes, \
+         1 detector thread",
+        a.frames, a.repeat
+    ));
+    line(String::new());
+    line("| resolution | search | frames | detection ms | pose ms | whole ms | frames/s | target |".into());
+    line("|---|---|---|---|---|---|---|---|".into());
+    let mut cases: Vec<PnpCase> = Vec::new();
+    let mut camera_for_cases = None;
+    for &resolution in &a.resolutions {
+        let synth = Synthesizer::new(SynthConfig {
+            resolution,
+            realism: Realism::default(),
+            options: SceneOptions { cycles: 1, ..SceneOptions::default() },
+            max_frames: Some(a.frames),
+            ..SynthConfig::new(SceneKind::Hinge)
+        })?;
+        let camera = synth.header().intrinsics;
+        let bar = crate::progress_bar(&format!("rendering {}", resolution_name(resolution)), synth.len());
+        let mut frames = Vec::with_capacity(synth.len());
+        for i in 0..synth.len() {
+            frames.push(synth.render(i)?);
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        for roi in [false, true] {
+            let config = TrackerConfig {
+                detector: DetectorConfig { nthreads: 1, ..DetectorConfig::default() },
+                search: SearchConfig { roi, ..SearchConfig::default() },
+                ..TrackerConfig::default()
+            };
+            // times[frame] = (detection, pose) per pass
+            let mut times: Vec<Vec<(f64, f64)>> = vec![Vec::new(); frames.len()];
+            let mut steady = vec![true; frames.len()];
+            for pass in 0..=a.repeat {
+                let mut tracker = Tracker::new(Marker::default(), config)?;
+                for (i, f) in frames.iter().enumerate() {
+                    let (w, h) = (f.width as usize, f.height as usize);
+                    let view = ImageView::new(&f.luma, w, h, w)?;
+                    let priors = BodyKind::ALL.map(|k| tracker.predicted(k, f.truth.t));
+                    let r = tracker.track(&view, &camera, f.truth.t)?;
+                    // Pass 0 warms the caches and collects the PnP problems.
+                    if pass == 0 {
+                        if roi && resolution == Resolution::P1080 {
+                            for (k, prior) in BodyKind::ALL.into_iter().zip(priors) {
+                                let observations = tracker.observations(k, &r.detections);
+                                if observations.len() >= 4 {
+                                    cases.push(PnpCase { observations, prior });
+                                }
+                            }
+                            camera_for_cases = Some(camera);
+                        }
+                        continue;
+                    }
+                    steady[i] &= !roi || r.searched.is_some();
+                    times[i].push((r.timings.detection_s, r.timings.pose_s));
+                }
+            }
+            let used: Vec<&Vec<(f64, f64)>> = times.iter().zip(&steady).filter(|(_, s)| **s).map(|(t, _)| t).collect();
+            let per_frame = |pick: &dyn Fn(&(f64, f64)) -> f64| -> f64 {
+                median(used.iter().map(|t| median(t.iter().map(pick).collect())).collect()) * 1e3
+            };
+            let (det, pose, whole) = (per_frame(&|t| t.0), per_frame(&|t| t.1), per_frame(&|t| t.0 + t.1));
+            let target = match (resolution, roi) {
+                (Resolution::P1080, true) => format!("≤ 8 ms: {}", if whole <= 8.0 { "met" } else { "not met" }),
+                (Resolution::P4k, true) => format!("≤ 20 ms: {}", if whole <= 20.0 { "met" } else { "not met" }),
+                _ => "—".into(),
+            };
+            line(format!(
+                "| {} | {} | {} | {det:.2} | {pose:.3} | {whole:.2} | {:.0} | {target} |",
+                resolution_name(resolution),
+                if roi { "tracked region (steady state)" } else { "whole frame" },
+                used.len(),
+                1e3 / whole,
+            ));
+        }
+    }
+    if let Some(camera) = camera_for_cases {
+        line(String::new());
+        pnp_table(&cases, &camera, a, &mut line)?;
+    }
+    if let Some(out) = &a.out {
+        std::fs::write(out, &table).with_context(|| format!("writing {}", out.display()))?;
+    }
+    Ok(())
+}
+
+fn resolution_name(r: Resolution) -> &'static str {
+    match r {
+        Resolution::P1080 => "1080p",
+        Resolution::P4k => "4K",
+    }
+}
+
+/// PnP per body: ours from the tracker's starting pose and cold, OpenCV's on the same points.
+fn pnp_table(
+    cases: &[PnpCase],
+    camera: &CameraIntrinsics,
+    a: &PipelineArgs,
+    line: &mut dyn FnMut(String),
+) -> Result<()> {
+    let options = jawtrack_pose::PnpOptions::default();
+    let time = |prior: bool| -> Result<f64> {
+        let mut per_case = Vec::new();
+        for c in cases {
+            let p = if prior { c.prior.as_ref() } else { None };
+            let mut t = Vec::with_capacity(a.pnp_repeat);
+            for _ in 0..a.pnp_repeat {
+                let start = Instant::now();
+                let r = solve_pnp(&c.observations, camera, p, &options);
+                t.push(start.elapsed().as_secs_f64());
+                std::hint::black_box(r)?;
+            }
+            per_case.push(median(t));
+        }
+        Ok(median(per_case) * 1e6)
+    };
+    let tracking = time(true)?;
+    let cold = time(false)?;
+    let points = median(cases.iter().map(|c| c.observations.len() as f64).collect());
+    line(format!(
+        "PnP per body, {} bodies from the 1080p tracked run ({points:.0} points median), median of {} calls each:",
+        cases.len(),
+        a.pnp_repeat
+    ));
+    line(String::new());
+    line("| solver | µs per body | × ours (tracking) |".into());
+    line("|---|---|---|".into());
+    line(format!("| ours, from the predicted pose (tracking) | {tracking:.1} | 1.0 |"));
+    line(format!("| ours, cold (IPPE starts on every tag) | {cold:.1} | {:.2} |", cold / tracking));
+    match opencv_times(cases, camera, a) {
+        Ok((sqpnp, iterative)) => {
+            line(format!("| OpenCV SQPnP | {sqpnp:.1} | {:.2} |", sqpnp / tracking));
+            line(format!("| OpenCV ITERATIVE | {iterative:.1} | {:.2} |", iterative / tracking));
+        }
+        Err(e) => line(format!("| OpenCV | skipped: {e:#} | — |")),
+    }
+    line(String::new());
+    line(format!("target: PnP ≤ 50 µs per body: {}", if tracking <= 50.0 { "met" } else { "not met" }));
+    Ok(())
+}
+
+/// Median µs per body of OpenCV's SQPnP and ITERATIVE, run by Python on the same cases.
+fn opencv_times(cases: &[PnpCase], camera: &CameraIntrinsics, a: &PipelineArgs) -> Result<(f64, f64)> {
+    let has_cv2 = Command::new(&a.python).args(["-c", "import cv2"]).output().is_ok_and(|o| o.status.success());
+    if !has_cv2 {
+        bail!("{} cannot import cv2 (pip install opencv-python-headless)", a.python);
+    }
+    let mut child = Command::new(&a.python)
+        .args(["-c", include_str!("opencv_pnp.py")])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("starting Python")?;
+    let mut input = child.stdin.take().context("Python's stdin")?;
+    let head = serde_json::json!({"camera": camera, "repeat": a.pnp_repeat});
+    let body: Vec<String> = cases
+        .iter()
+        .map(|c| {
+            let b: Vec<[f64; 3]> = c.observations.iter().map(|o| [o.body.x, o.body.y, o.body.z]).collect();
+            let p: Vec<[f64; 2]> = c.observations.iter().map(|o| [o.pixel.x, o.pixel.y]).collect();
+            serde_json::json!({"body": b, "pixel": p}).to_string()
+        })
+        .collect();
+    // Feed from a thread so that neither side blocks on a full pipe.
+    let writer = std::thread::spawn(move || -> std::io::Result<()> {
+        writeln!(input, "{head}")?;
+        for b in body {
+            writeln!(input, "{b}")?;
+        }
+        Ok(())
+    });
+    let stdout = child.stdout.take().context("Python's stdout")?;
+    let (mut sqpnp, mut iterative) = (Vec::new(), Vec::new());
+    for l in BufReader::new(stdout).lines() {
+        let v: serde_json::Value = serde_json::from_str(&l?).context("OpenCV helper's output")?;
+        sqpnp.push(v["sqpnp"]["us"].as_f64().context("sqpnp time")?);
+        iterative.push(v["iterative"]["us"].as_f64().context("iterative time")?);
+    }
+    writer.join().map_err(|_| anyhow::anyhow!("feeding Python failed"))??;
+    let status = child.wait()?;
+    if !status.success() || sqpnp.len() != cases.len() {
+        bail!("the OpenCV helper failed ({status}, {} of {} bodies)", sqpnp.len(), cases.len());
+    }
+    Ok((median(sqpnp), median(iterative)))
+}
