@@ -1,7 +1,7 @@
 //! `jawtrack demo`: the main job on built-in defaults. It renders a short hinge session with
 //! the synthetic rig, detects the tags in every frame and compares them with the ground truth,
-//! then tracks the jaw (with the nominal marker file and with the marker as printed) and
-//! reports the mandible-in-maxilla error and the motion in plain words.
+//! then tracks the jaw (with the nominal marker file and with the marker as printed), reports
+//! the mandible-in-maxilla error and the motion in plain words, and plots the incisor's path.
 
 use crate::render_with_progress;
 use anyhow::{Context, Result};
@@ -12,7 +12,11 @@ use jawtrack_tracker::record::frame_record;
 use jawtrack_tracker::{Tracker, TrackerConfig};
 use std::io::Write as _;
 
+use crate::plot::{self, Series, Style};
+use jawtrack_pose::Pose;
+use jawtrack_synth::scenes::Rig;
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SceneSummary, SynthConfig};
+use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `jawtrack demo`.
@@ -49,7 +53,8 @@ pub(crate) fn run(a: &DemoArgs) -> Result<()> {
 
 /// Tracks the rendered session with the nominal marker file (what a user has before
 /// calibration) and with the marker as printed (what calibration recovers), writes the poses,
-/// and compares the mandible in the maxilla with the ground truth.
+/// compares the mandible in the maxilla with the ground truth, tells the lower incisor's
+/// motion in plain words, and plots its path.
 fn track_and_compare(dir: &Path) -> Result<()> {
     let path = dir.join("ground_truth.json");
     let truth: GroundTruth = serde_json::from_str(&std::fs::read_to_string(&path)?)?;
@@ -58,23 +63,26 @@ fn track_and_compare(dir: &Path) -> Result<()> {
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
         ..TrackerConfig::default()
     };
+    let incisor = Incisor::of_rig(&Rig::default());
+    let truth_path: Vec<Sample> =
+        truth.frames.iter().map(|f| (f.t, incisor.in_head(&f.maxilla_from_mandible))).collect();
+    let mut tracked_paths = Vec::new();
     for (label, marker) in [("nominal marker file", Marker::default()), ("marker as printed", printed)] {
         let mut tracker = Tracker::new(marker, config)?;
         let poses = dir.join(if label.starts_with("nominal") { "poses.jsonl" } else { "poses_printed_marker.jsonl" });
         let mut out = std::io::BufWriter::new(std::fs::File::create(&poses)?);
-        let (mut dt, mut dr, mut ms, mut opening) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut dt, mut dr, mut ms, mut path) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (i, f) in truth.frames.iter().enumerate() {
             let img = image::open(dir.join(&f.file))?.to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
-            let t = std::time::Instant::now();
             let r = tracker.track(&ImageView::new(img.as_raw(), w, h, w)?, &truth.intrinsics, f.t)?;
-            ms.push(t.elapsed().as_secs_f64() * 1e3);
+            ms.push((r.timings.detection_s + r.timings.pose_s) * 1e3);
             writeln!(out, "{}", frame_record(i, Some(&f.file), &r))?;
             if let Some(m) = r.maxilla_from_mandible {
                 let (angle, dist) = m.distance_to(&f.maxilla_from_mandible);
                 dt.push(dist);
                 dr.push(angle.to_degrees());
-                opening.push(m.translation().norm());
+                path.push((f.t, incisor.in_head(&m)));
             }
         }
         out.flush()?;
@@ -84,7 +92,7 @@ fn track_and_compare(dir: &Path) -> Result<()> {
         let pick =
             |v: &[f64], q: f64| v.get(((v.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
         say!(
-            "tracking, {label}: jaw pose in {} of {} frames; mandible-in-maxilla error median {:.3} mm / {:.3}°, worst {:.3} mm / {:.3}°; {:.0} ms per frame; poses in {}",
+            "tracking, {label}: jaw pose in {} of {} frames; mandible-in-maxilla error median {:.3} mm / {:.3}°, worst {:.3} mm / {:.3}°; {:.1} ms per frame; poses in {}",
             dt.len(),
             truth.frames.len(),
             pick(&dt, 0.5),
@@ -94,31 +102,115 @@ fn track_and_compare(dir: &Path) -> Result<()> {
             pick(&ms, 0.5),
             poses.display()
         );
-        if label.starts_with("nominal") {
-            let (lo, hi) = opening.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
-            say!(
-                "  the mandible marker moved between {lo:.1} and {hi:.1} mm from the maxilla marker: the jaw opened and closed {} times",
-                count_openings(&opening)
-            );
-        }
+        tracked_paths.push((label, path));
     }
-    say!("The gap between the two lines is what calibrating the marker (`jawtrack calibrate`, planned) removes.");
+    let openings =
+        |p: &[Sample]| -> Vec<(f64, f64)> { p.iter().map(|(t, x)| (*t, (x - incisor.closed).norm())).collect() };
+    let (tracked, real) = (openings(&tracked_paths[0].1), openings(&truth_path));
+    let peak = |v: &[(f64, f64)]| v.iter().map(|p| p.1).fold(0.0, f64::max);
+    say!(
+        "The jaw: the lower incisor opened {} times, widest {:.1} mm from its closed position (truth {:.1} mm), and moved back by up to {:.1} mm as it swung about the condyles.",
+        count_openings(&tracked.iter().map(|p| p.1).collect::<Vec<_>>()),
+        peak(&tracked),
+        peak(&real),
+        tracked_paths[0].1.iter().map(|(_, x)| x.z - incisor.closed.z).fold(0.0, f64::max),
+    );
+    let written = plot_incisor(dir, &incisor, &truth_path, &tracked_paths)?;
+    say!(
+        "Plots of the incisor's path: {}",
+        written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    );
+    say!("The gap between the two tracking lines is what calibrating the marker (planned) removes.");
     Ok(())
 }
 
-/// Openings in a sequence of marker separations: rises above the midpoint of its range.
-fn count_openings(sep: &[f64]) -> usize {
-    let (lo, hi) = sep.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-    let mid = 0.5 * (lo + hi);
-    let mut above = false;
-    let mut n = 0;
-    for &v in sep {
-        if v > mid && !above {
-            n += 1;
+/// The lower incisor's position (head frame, mm) at a time (s).
+type Sample = (f64, Point3<f64>);
+
+/// The lower incisal point, carried by the mandible marker, seen in the head frame.
+struct Incisor {
+    /// In the mandible marker's frame.
+    on_mandible: Point3<f64>,
+    head_from_maxilla: Pose,
+    /// Where it sits with the jaw closed (head frame).
+    closed: Point3<f64>,
+}
+
+impl Incisor {
+    fn of_rig(rig: &Rig) -> Self {
+        let closed = Point3::from(rig.lower_incisal_point);
+        Incisor {
+            on_mandible: rig.head_from_mandible_rest.inverse().transform_point(&closed),
+            head_from_maxilla: rig.head_from_maxilla,
+            closed,
         }
-        above = v > mid;
     }
-    n
+
+    fn in_head(&self, maxilla_from_mandible: &Pose) -> Point3<f64> {
+        (self.head_from_maxilla * *maxilla_from_mandible).transform_point(&self.on_mandible)
+    }
+}
+
+/// Writes the incisor's opening over time and its sagittal path (SVG); returns the files.
+fn plot_incisor(
+    dir: &Path,
+    incisor: &Incisor,
+    truth: &[Sample],
+    tracked: &[(&str, Vec<Sample>)],
+) -> Result<Vec<PathBuf>> {
+    let colors = ["#d62728", "#1f77b4"];
+    let series = |f: &dyn Fn(&Sample) -> (f64, f64)| {
+        let mut v =
+            vec![Series { name: "truth", color: "#222", style: Style::Line, points: truth.iter().map(f).collect() }];
+        for ((label, path), color) in tracked.iter().zip(colors) {
+            v.push(Series { name: label, color, style: Style::Dots, points: path.iter().map(f).collect() });
+        }
+        v
+    };
+    // Head frame: y down, z posterior; plots show up and anterior as positive.
+    let opening = plot::chart(
+        "Lower incisor: distance from its closed position",
+        "time (s)",
+        "opening (mm)",
+        &series(&|(t, x)| (*t, (x - incisor.closed).norm())),
+        false,
+    );
+    let sagittal = plot::chart(
+        "Lower incisor path, sagittal plane (patient facing right)",
+        "anterior (mm)",
+        "up (mm)",
+        &series(&|(_, x)| (incisor.closed.z - x.z, incisor.closed.y - x.y)),
+        true,
+    );
+    let mut written = Vec::new();
+    for (name, doc) in [("incisor_opening.svg", opening), ("incisor_sagittal.svg", sagittal)] {
+        let p = dir.join(name);
+        svg::save(&p, &doc).with_context(|| format!("writing {}", p.display()))?;
+        written.push(p);
+    }
+    Ok(written)
+}
+
+/// Openings in a sequence of incisor openings (mm): rises of at least 3 mm from the lowest
+/// point since the last opening, each counted once it falls back by 3 mm or the data ends.
+fn count_openings(opening: &[f64]) -> usize {
+    const STEP_MM: f64 = 3.0;
+    let (mut n, mut low, mut high, mut open) = (0, f64::INFINITY, f64::NEG_INFINITY, false);
+    for &v in opening {
+        if open {
+            high = high.max(v);
+            if v < high - STEP_MM {
+                (open, low) = (false, v);
+                n += 1;
+            }
+        } else {
+            low = low.min(v);
+            if v > low + STEP_MM {
+                (open, high) = (true, v);
+            }
+        }
+    }
+    n + usize::from(open)
 }
 
 /// Runs the detector on the rendered session and compares with the ground truth.
@@ -173,4 +265,18 @@ pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary
     );
     say!("  mandible marker travel relative to the maxilla: up to {:.1} mm", s.max_mandible_travel_mm);
     say!("  ground truth: {}", out.join("ground_truth.json").display());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::count_openings;
+
+    #[test]
+    fn openings_are_counted_however_small_the_first() {
+        let cycle = |peak: f64| [0.0, peak / 2.0, peak, peak / 2.0, 0.0];
+        let v: Vec<f64> = [10.0, 20.0, 30.0, 40.0].iter().flat_map(|&p| cycle(p)).collect();
+        assert_eq!(count_openings(&v), 4);
+        assert_eq!(count_openings(&[0.0, 1.0, 0.5, 1.5, 0.2]), 0, "tremor is not an opening");
+        assert_eq!(count_openings(&[0.0, 5.0, 10.0]), 1, "still open at the end");
+    }
 }

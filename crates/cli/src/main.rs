@@ -15,6 +15,7 @@ macro_rules! say {
 mod bench;
 mod demo;
 mod detect;
+mod plot;
 mod track;
 
 use anyhow::{Context, Result, bail};

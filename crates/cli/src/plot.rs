@@ -1,0 +1,178 @@
+//! Small SVG line charts for the CLI's reports (trajectories against their truth): axes with
+//! round-number ticks, one polyline or set of dots per series, a legend.
+
+use svg::Document;
+use svg::node::element::{Circle, Line, Polyline, Rectangle, Text};
+
+/// How a series is drawn.
+#[derive(Clone, Copy)]
+pub(crate) enum Style {
+    /// A line through the points.
+    Line,
+    /// A dot at each point.
+    Dots,
+}
+
+/// One series of a chart.
+pub(crate) struct Series<'a> {
+    pub name: &'a str,
+    pub color: &'a str,
+    pub style: Style,
+    pub points: Vec<(f64, f64)>,
+}
+
+const W: f64 = 640.0;
+const H: f64 = 400.0;
+const LEFT: f64 = 70.0;
+const RIGHT: f64 = 20.0;
+const TOP: f64 = 40.0;
+const BOTTOM: f64 = 50.0;
+
+/// Ticks at 1, 2 or 5 × 10ⁿ covering [lo, hi].
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let span = (hi - lo).max(1e-9);
+    let raw = span / 6.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| span / s <= 8.0).unwrap_or(10.0 * mag);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last).map(|i| i as f64 * step).collect()
+}
+
+fn label(s: &str, x: f64, y: f64, anchor: &str) -> Text {
+    Text::new(s)
+        .set("x", x)
+        .set("y", y)
+        .set("font-family", "sans-serif")
+        .set("font-size", 12)
+        .set("text-anchor", anchor)
+}
+
+/// A chart of `series` with its title and axis labels; the y axis keeps the x axis's scale
+/// when `equal_axes` (paths in a plane).
+pub(crate) fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], equal_axes: bool) -> Document {
+    let all = series.iter().flat_map(|s| s.points.iter().copied()).filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y0, mut y1) = all
+        .fold((f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY), |(a, b, c, d), (x, y)| {
+            (a.min(x), b.max(x), c.min(y), d.max(y))
+        });
+    if !x0.is_finite() {
+        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+    }
+    let pad = |lo: f64, hi: f64| {
+        let p = ((hi - lo) * 0.05).max(1e-3);
+        (lo - p, hi + p)
+    };
+    (x0, x1) = pad(x0, x1);
+    (y0, y1) = pad(y0, y1);
+    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+    if equal_axes {
+        // Widen the narrower range so one mm is as long on both axes.
+        let scale = ((x1 - x0) / pw).max((y1 - y0) / ph);
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        (x0, x1) = (cx - scale * pw / 2.0, cx + scale * pw / 2.0);
+        (y0, y1) = (cy - scale * ph / 2.0, cy + scale * ph / 2.0);
+    }
+    let sx = move |x: f64| LEFT + (x - x0) / (x1 - x0) * pw;
+    let sy = move |y: f64| TOP + (y1 - y) / (y1 - y0) * ph;
+    let mut doc = Document::new()
+        .set("viewBox", (0, 0, W, H))
+        .set("width", W)
+        .set("height", H)
+        .add(Rectangle::new().set("width", W).set("height", H).set("fill", "white"))
+        .add(label(title, W / 2.0, 22.0, "middle").set("font-size", 15))
+        .add(label(x_label, LEFT + pw / 2.0, H - 12.0, "middle"))
+        .add(
+            label(y_label, 16.0, TOP + ph / 2.0, "middle")
+                .set("transform", format!("rotate(-90 16 {})", TOP + ph / 2.0)),
+        );
+    for t in ticks(x0, x1) {
+        doc = doc
+            .add(Line::new().set("x1", sx(t)).set("x2", sx(t)).set("y1", TOP).set("y2", TOP + ph).set("stroke", "#ddd"))
+            .add(label(&format!("{t}"), sx(t), TOP + ph + 16.0, "middle"));
+    }
+    for t in ticks(y0, y1) {
+        doc = doc
+            .add(
+                Line::new()
+                    .set("x1", LEFT)
+                    .set("x2", LEFT + pw)
+                    .set("y1", sy(t))
+                    .set("y2", sy(t))
+                    .set("stroke", "#ddd"),
+            )
+            .add(label(&format!("{t}"), LEFT - 6.0, sy(t) + 4.0, "end"));
+    }
+    doc = doc.add(
+        Rectangle::new()
+            .set("x", LEFT)
+            .set("y", TOP)
+            .set("width", pw)
+            .set("height", ph)
+            .set("fill", "none")
+            .set("stroke", "#444"),
+    );
+    for (i, s) in series.iter().enumerate() {
+        let pts: Vec<(f64, f64)> =
+            s.points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).map(|&(x, y)| (sx(x), sy(y))).collect();
+        match s.style {
+            Style::Line => {
+                let list: Vec<String> = pts.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
+                doc = doc.add(
+                    Polyline::new()
+                        .set("points", list.join(" "))
+                        .set("fill", "none")
+                        .set("stroke", s.color)
+                        .set("stroke-width", 2),
+                );
+            }
+            Style::Dots => {
+                for (x, y) in &pts {
+                    doc = doc.add(Circle::new().set("cx", *x).set("cy", *y).set("r", 3).set("fill", s.color));
+                }
+            }
+        }
+        let ly = TOP + 14.0 + 16.0 * i as f64;
+        doc = doc
+            .add(
+                Rectangle::new()
+                    .set("x", LEFT + 10.0)
+                    .set("y", ly - 9.0)
+                    .set("width", 10)
+                    .set("height", 10)
+                    .set("fill", s.color),
+            )
+            .add(label(s.name, LEFT + 26.0, ly, "start"));
+    }
+    doc
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round_and_cover_the_range() {
+        assert_eq!(ticks(0.0, 10.0), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
+        let t = ticks(-0.37, 0.81);
+        assert_eq!(t.first().copied(), Some(-0.2));
+        assert!(t.iter().all(|v| (-0.37..=0.81).contains(v)));
+    }
+
+    #[test]
+    fn a_chart_draws_each_series_and_its_legend() {
+        let s = [
+            Series { name: "truth", color: "#000", style: Style::Line, points: vec![(0.0, 0.0), (1.0, 2.0)] },
+            Series {
+                name: "tracked",
+                color: "#c00",
+                style: Style::Dots,
+                points: vec![(0.0, 0.1), (1.0, 1.9), (2.0, f64::NAN)],
+            },
+        ];
+        let text = chart("t", "x", "y", &s, false).to_string();
+        assert_eq!(text.matches("<polyline").count(), 1);
+        assert_eq!(text.matches("<circle").count(), 2, "the NaN point is left out");
+        assert!(text.contains("truth") && text.contains("tracked"), "legend");
+    }
+}
