@@ -409,8 +409,9 @@ fn tag_rms(points: &[Point], pose: &Isometry3<f64>, focal: &Vector2<f64>) -> Vec
     out.into_iter().map(|(t, s, n)| (t, (s / n as f64).sqrt())).collect()
 }
 
-/// A tag the others disagree with: with three tags or more and a fit worse than the noise,
-/// the two tags the joint fit misses most are each held out in turn and the pose refitted to
+/// A tag the others disagree with: with three tags or more, a fit worse than the noise and a
+/// tag that fits 1.5× worse than the others, the two tags the joint fit misses most are each
+/// held out in turn and the pose refitted to
 /// the rest; the one whose own error under that pose is larger is dropped if it exceeds both
 /// `outlier_px` and three times the rest's RMS error (a relative test, so that the print
 /// errors of a nominal marker, a few px for every tag alike, drop nothing). With two tags
@@ -427,6 +428,12 @@ fn inconsistent_tag(
     }
     let mut suspects = per_tag.to_vec();
     suspects.sort_by(|a, b| b.1.total_cmp(&a.1));
+    // Nothing to drop unless some tag already stands out in the joint fit: held out, a tag
+    // misses by more than it does in the fit, but not by twice the rest when it fits like them.
+    let others = suspects[1..].iter().map(|t| t.1 * t.1).sum::<f64>() / (suspects.len() - 1) as f64;
+    if suspects[0].1 <= 1.5 * others.sqrt() {
+        return None;
+    }
     let mut worst: Option<(u32, f64)> = None;
     for &(tag, _) in suspects.iter().take(2) {
         let (held, rest): (Vec<Point>, Vec<Point>) = points.iter().partition(|p| p.tag == tag);
@@ -502,7 +509,7 @@ fn refine(
             let candidate = perturb(&pose, &step);
             let c = cost(points, &candidate, focal, options);
             if c < current {
-                let converged = current - c <= 1e-7 * current;
+                let converged = current - c <= 1e-6 * current;
                 pose = candidate;
                 current = c;
                 lambda = (lambda / 10.0).max(1e-12);
