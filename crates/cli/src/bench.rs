@@ -45,7 +45,7 @@ struct PipelineArgs {
     /// Passes over the frames; each frame's median counts.
     #[arg(long, default_value_t = 3)]
     repeat: usize,
-    /// Calls per body for the PnP timing.
+    /// Calls per body when timing our PnP (OpenCV's median is over 5 calls, in Python).
     #[arg(long, default_value_t = 200)]
     pnp_repeat: usize,
     /// The Python that runs OpenCV (skipped with a note when it cannot import cv2).
@@ -206,7 +206,7 @@ fn pnp_table(
     let cold = time(false)?;
     let points = median(cases.iter().map(|c| c.observations.len() as f64).collect());
     line(format!(
-        "PnP per body, {} bodies from the 1080p tracked run ({points:.0} points median), median of {} calls each:",
+        "PnP per body, {} bodies from the 1080p tracked run ({points:.0} points median); ours the median of {} calls, OpenCV's of 5 (timed inside Python):",
         cases.len(),
         a.pnp_repeat
     ));
@@ -227,47 +227,43 @@ fn pnp_table(
     Ok(())
 }
 
-/// Median µs per body of OpenCV's SQPnP and ITERATIVE, run by Python on the same cases.
+/// Median µs per body of OpenCV's SQPnP and ITERATIVE, run by Python on the same cases
+/// through the tracker bench's script (one protocol for every OpenCV comparison; each time is
+/// the median of its calls inside Python).
 fn opencv_times(cases: &[PnpCase], camera: &CameraIntrinsics, a: &PipelineArgs) -> Result<(f64, f64)> {
     let has_cv2 = Command::new(&a.python).args(["-c", "import cv2"]).output().is_ok_and(|o| o.status.success());
     if !has_cv2 {
         bail!("{} cannot import cv2 (pip install opencv-python-headless)", a.python);
     }
     let mut child = Command::new(&a.python)
-        .args(["-c", include_str!("opencv_pnp.py")])
+        .args(["-c", include_str!("../../tracker-bench/python/solve_pnp.py")])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .spawn()
         .context("starting Python")?;
     let mut input = child.stdin.take().context("Python's stdin")?;
-    let head = serde_json::json!({"camera": camera, "repeat": a.pnp_repeat});
-    let body: Vec<String> = cases
+    let bodies: Vec<serde_json::Value> = cases
         .iter()
         .map(|c| {
-            let b: Vec<[f64; 3]> = c.observations.iter().map(|o| [o.body.x, o.body.y, o.body.z]).collect();
-            let p: Vec<[f64; 2]> = c.observations.iter().map(|o| [o.pixel.x, o.pixel.y]).collect();
-            serde_json::json!({"body": b, "pixel": p}).to_string()
+            let object: Vec<[f64; 3]> = c.observations.iter().map(|o| [o.body.x, o.body.y, o.body.z]).collect();
+            let image: Vec<[f64; 2]> = c.observations.iter().map(|o| [o.pixel.x, o.pixel.y]).collect();
+            serde_json::json!({"object": object, "image": image})
         })
         .collect();
-    // Feed from a thread so that neither side blocks on a full pipe.
-    let writer = std::thread::spawn(move || -> std::io::Result<()> {
-        writeln!(input, "{head}")?;
-        for b in body {
-            writeln!(input, "{b}")?;
-        }
-        Ok(())
-    });
-    let stdout = child.stdout.take().context("Python's stdout")?;
-    let (mut sqpnp, mut iterative) = (Vec::new(), Vec::new());
-    for l in BufReader::new(stdout).lines() {
-        let v: serde_json::Value = serde_json::from_str(&l?).context("OpenCV helper's output")?;
-        sqpnp.push(v["sqpnp"]["us"].as_f64().context("sqpnp time")?);
-        iterative.push(v["iterative"]["us"].as_f64().context("iterative time")?);
-    }
-    writer.join().map_err(|_| anyhow::anyhow!("feeding Python failed"))??;
+    let k = camera;
+    let request = serde_json::json!({"camera": [k.fx, k.fy, k.cx, k.cy, k.k1, k.k2], "bodies": bodies});
+    writeln!(input, "{request}").context("feeding Python")?;
+    drop(input);
+    let mut lines = BufReader::new(child.stdout.take().context("Python's stdout")?).lines();
+    let _hello = lines.next().context("no answer from the OpenCV helper")??;
+    let reply: serde_json::Value =
+        serde_json::from_str(&lines.next().context("no poses from the OpenCV helper")??).context("its answer")?;
     let status = child.wait()?;
+    let poses = reply["poses"].as_array().context("its answer has no poses")?;
+    let times = |key: &str| -> Vec<f64> { poses.iter().filter_map(|p| p[key].as_f64()).collect() };
+    let (sqpnp, iterative) = (times("sqpnp_us"), times("iterative_us"));
     if !status.success() || sqpnp.len() != cases.len() {
-        bail!("the OpenCV helper failed ({status}, {} of {} bodies)", sqpnp.len(), cases.len());
+        bail!("the OpenCV helper failed ({status}, {} of {} bodies solved)", sqpnp.len(), cases.len());
     }
     Ok((median(sqpnp), median(iterative)))
 }

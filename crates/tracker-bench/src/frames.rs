@@ -1,0 +1,110 @@
+//! The rendered frames of each scene, cached under `target/tracker-bench/<scene>-<seed>/` and
+//! re-rendered only when the cached ground truth does not describe the frames asked for.
+
+use anyhow::{Context, Result};
+use jawtrack_marker::Marker;
+use jawtrack_synth::scenes::{FrameSpec, scene_frames};
+use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What to render: one scene at 1080p, default realism, the nominal marker.
+#[derive(Debug, Clone, Copy)]
+pub struct Request {
+    /// The scene.
+    pub scene: SceneKind,
+    /// Seed of everything random.
+    pub seed: u64,
+    /// Frames per camera view (static).
+    pub frames_per_view: usize,
+    /// Cycles per opening or glide (hinge, excursion, chew).
+    pub cycles: usize,
+    /// Frame rate of the dynamic scenes (frames/s).
+    pub fps: f64,
+    /// Keep at most this many frames.
+    pub max_frames: Option<usize>,
+}
+
+impl Request {
+    fn config(&self) -> SynthConfig {
+        SynthConfig {
+            seed: self.seed,
+            resolution: Resolution::P1080,
+            realism: Realism::default(),
+            options: SceneOptions { frames_per_view: self.frames_per_view, cycles: self.cycles, fps: self.fps },
+            marker: Marker::default(),
+            max_frames: self.max_frames,
+            ..SynthConfig::new(self.scene)
+        }
+    }
+
+    /// The frames the renderer will make, as it lists them.
+    fn specs(&self) -> Vec<FrameSpec> {
+        let c = self.config();
+        let mut specs = scene_frames(c.scene, &c.options, c.seed);
+        if let Some(n) = c.max_frames {
+            specs.truncate(n);
+        }
+        specs
+    }
+}
+
+/// A scene's frames on disk and their truth.
+pub struct Scene {
+    /// Folder of the frames and `ground_truth.json`.
+    pub dir: PathBuf,
+    /// The truth, limited to the frames asked for.
+    pub truth: GroundTruth,
+    /// Whether they were rendered in this run (else read from the cache).
+    pub rendered: bool,
+}
+
+/// The cached truth if it holds the frames asked for (as its first frames), with the same
+/// settings, and every image is present.
+fn cached(dir: &Path, req: &Request) -> Option<GroundTruth> {
+    let text = std::fs::read_to_string(dir.join("ground_truth.json")).ok()?;
+    let mut truth: GroundTruth = serde_json::from_str(&text).ok()?;
+    let config = req.config();
+    let specs = req.specs();
+    let same = truth.scene == config.scene.name()
+        && truth.seed == config.seed
+        && truth.realism == config.realism
+        && truth.image_size == [1920, 1080]
+        && truth.intrinsics == config.resolution.default_intrinsics()
+        && truth.frames.len() >= specs.len()
+        && truth.frames.iter().zip(&specs).all(|(f, s)| f.spec == *s);
+    if !same {
+        return None;
+    }
+    truth.frames.truncate(specs.len());
+    truth.frames.iter().all(|f| dir.join(&f.file).is_file()).then_some(truth)
+}
+
+/// The scene's frames from `cache_root`, rendering them first when the cache lacks them.
+/// Rendering reports progress on stderr.
+pub fn scene(cache_root: &Path, req: &Request) -> Result<Scene> {
+    let name = req.scene.name();
+    let dir = cache_root.join(format!("{name}-{}", req.seed));
+    if let Some(truth) = cached(&dir, req) {
+        return Ok(Scene { dir, truth, rendered: false });
+    }
+    let total = req.specs().len();
+    eprintln!("{name}: rendering {total} frames into {} (seconds each; cached for next time)…", dir.display());
+    // A stale truth must not outlive an interrupted render: the renderer writes it last.
+    let stale = dir.join("ground_truth.json");
+    if stale.exists() {
+        std::fs::remove_file(&stale).with_context(|| format!("removing {}", stale.display()))?;
+    }
+    let start = Instant::now();
+    let step = (total / 10).max(1);
+    jawtrack_synth::write_scene(req.config(), &dir, |done, total| {
+        if done % step == 0 && done < total {
+            eprintln!("{name}:   {done}/{total} rendered, {:.0} s", start.elapsed().as_secs_f64());
+        }
+    })
+    .with_context(|| format!("rendering {name} into {}", dir.display()))?;
+    let truth =
+        cached(&dir, req).with_context(|| format!("{}: the rendered frames do not read back", dir.display()))?;
+    eprintln!("{name}: rendered {total} frames in {:.0} s", start.elapsed().as_secs_f64());
+    Ok(Scene { dir, truth, rendered: true })
+}
