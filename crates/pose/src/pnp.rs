@@ -451,22 +451,33 @@ fn inconsistent_tag(
 /// d(residual)/d(left perturbation (ω, v)) of one point (2×6, px per rad / mm).
 fn jacobian(p: &Point, pose: &Isometry3<f64>, focal: &Vector2<f64>) -> Option<SMatrix<f64, 2, 6>> {
     let c = pose * p.body;
+    let dproj = projection_jacobian(&c, focal)?;
+    Some(pose_jacobian(&c, &dproj))
+}
+
+/// d(pixel residual)/d(camera-frame point) of the normalised projection scaled by the focal
+/// lengths (2×3, px per mm); `None` behind the camera. (Shared with bundle adjustment.)
+pub fn projection_jacobian(c: &Point3<f64>, focal: &Vector2<f64>) -> Option<Matrix2x3<f64>> {
     if c.z <= 1e-9 {
         return None;
     }
     let iz = 1.0 / c.z;
-    let dproj =
-        Matrix2x3::new(focal.x * iz, 0.0, -focal.x * c.x * iz * iz, 0.0, focal.y * iz, -focal.y * c.y * iz * iz);
+    Some(Matrix2x3::new(focal.x * iz, 0.0, -focal.x * c.x * iz * iz, 0.0, focal.y * iz, -focal.y * c.y * iz * iz))
+}
+
+/// d(pixel residual)/d(left perturbation (ω, v)) of a camera-frame point `c`, given its
+/// projection Jacobian (2×6, px per rad / mm).
+pub fn pose_jacobian(c: &Point3<f64>, dproj: &Matrix2x3<f64>) -> SMatrix<f64, 2, 6> {
     // d c / d ω = −[c]×, d c / d v = I.
     let skew = Matrix3::new(0.0, c.z, -c.y, -c.z, 0.0, c.x, c.y, -c.x, 0.0);
     let mut j = SMatrix::<f64, 2, 6>::zeros();
     j.fixed_view_mut::<2, 3>(0, 0).copy_from(&(dproj * skew));
-    j.fixed_view_mut::<2, 3>(0, 3).copy_from(&dproj);
-    Some(j)
+    j.fixed_view_mut::<2, 3>(0, 3).copy_from(dproj);
+    j
 }
 
-/// Applies a left perturbation (ω, v): p ↦ exp(ω)·(pose·p) + v.
-fn perturb(pose: &Isometry3<f64>, d: &Vector6<f64>) -> Isometry3<f64> {
+/// Applies a left perturbation (ω [rad], v [mm]) in the `to` frame: p ↦ exp(ω)·(pose·p) + v.
+pub fn perturb(pose: &Isometry3<f64>, d: &Vector6<f64>) -> Isometry3<f64> {
     let r = UnitQuaternion::from_scaled_axis(Vector3::new(d[0], d[1], d[2]));
     let t = r * pose.translation.vector + Vector3::new(d[3], d[4], d[5]);
     Isometry3::from_parts(Translation3::from(t), r * pose.rotation)
