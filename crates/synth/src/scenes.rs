@@ -29,11 +29,16 @@ pub enum SceneKind {
     Excursion,
     /// Fast chewing cycles with a long exposure (motion blur), hand-held.
     Chew,
+    /// A marker-calibration recording: the jaw at rest seen from every side the camera can
+    /// reach (azimuth −75…75°, elevation −45…45°, 110 mm), so each tag is seen from several
+    /// angles.
+    Calibration,
 }
 
 impl SceneKind {
     /// All scenes.
-    pub const ALL: [SceneKind; 4] = [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion, SceneKind::Chew];
+    pub const ALL: [SceneKind; 5] =
+        [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion, SceneKind::Chew, SceneKind::Calibration];
 
     /// The scene's name on the command line.
     pub fn name(self) -> &'static str {
@@ -42,6 +47,7 @@ impl SceneKind {
             SceneKind::Hinge => "hinge",
             SceneKind::Excursion => "excursion",
             SceneKind::Chew => "chew",
+            SceneKind::Calibration => "calibration",
         }
     }
 }
@@ -52,7 +58,7 @@ impl std::str::FromStr for SceneKind {
         SceneKind::ALL
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| format!("unknown scene '{s}' (choose static, hinge, excursion or chew)"))
+            .ok_or_else(|| format!("unknown scene '{s}' (choose static, hinge, excursion, chew or calibration)"))
     }
 }
 
@@ -379,6 +385,25 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             let n = (opts.cycles as f64 * 0.8 / dt).round() as usize;
             frames.extend((0..n).map(|k| FrameSpec { t: k as f64 * dt, view, motion }));
         }
+        SceneKind::Calibration => {
+            let mut t = 0.0;
+            for elevation in [-45.0, 0.0, 45.0] {
+                for azimuth in [-75.0, -45.0, -15.0, 15.0, 45.0, 75.0] {
+                    let view = View {
+                        distance_mm: 110.0,
+                        azimuth_deg: azimuth,
+                        elevation_deg: elevation,
+                        target: [0.0, 0.0, -38.0],
+                        hand_seed: None,
+                    };
+                    for _ in 0..opts.frames_per_view {
+                        frames.push(FrameSpec { t, view, motion: JawMotion::Rest });
+                        t += dt;
+                    }
+                    t += 1.0;
+                }
+            }
+        }
     }
     frames
 }
@@ -443,5 +468,6 @@ mod tests {
         assert_eq!(scene_frames(SceneKind::Hinge, &o, 1).len(), 4 * 2 * 60);
         assert_eq!(scene_frames(SceneKind::Excursion, &o, 1).len(), 3 * 2 * 60);
         assert_eq!(scene_frames(SceneKind::Chew, &o, 1).len(), 48);
+        assert_eq!(scene_frames(SceneKind::Calibration, &o, 1).len(), 3 * 6 * 2);
     }
 }
