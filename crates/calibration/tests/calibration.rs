@@ -1,0 +1,184 @@
+//! Calibration on views of a printed marker with known print errors: the calibrated marker
+//! must match the printed one (up to the turn of the whole body that views cannot tell), gross
+//! assembly errors must be found and named, and unseen tags kept nominal.
+
+use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
+use jawtrack_marker::{BodyKind, Marker, PrintError};
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use nalgebra::{Matrix3, Point3, Vector3};
+
+/// A small deterministic generator.
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (u, v) = (self.next().max(1e-300), self.next());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+fn camera() -> CameraIntrinsics {
+    CameraIntrinsics { fx: 1500.0, fy: 1500.0, cx: 959.5, cy: 539.5, k1: 0.05, k2: -0.02 }
+}
+
+/// Print errors of 0.2 mm RMS and 0.5° on every tag.
+fn printed(rng: &mut Lcg) -> Marker {
+    let nominal = Marker::default();
+    let errors: Vec<(u32, PrintError)> = nominal
+        .tags()
+        .map(|(_, t)| {
+            let e = PrintError {
+                shift_x: 0.2 * rng.normal(),
+                shift_y: 0.2 * rng.normal(),
+                rotation: 0.5f64.to_radians() * rng.normal(),
+            };
+            (t.id, e)
+        })
+        .collect();
+    nominal.with_print_errors(&errors).expect("valid errors")
+}
+
+/// `n` views of both bodies turned every way at ~100 mm, their facing tags' corners with
+/// `noise_px` of noise.
+fn views(marker: &Marker, n: usize, noise_px: f64, rng: &mut Lcg) -> (Vec<CalibrationFrame>, Vec<[Pose; 2]>) {
+    let cam = camera();
+    let mut frames = Vec::new();
+    let mut poses = Vec::new();
+    for _ in 0..n {
+        let pose_of = |rng: &mut Lcg, x: f64| {
+            let axis = Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
+            let angle = std::f64::consts::PI * rng.next();
+            Pose::from_axis_angle(axis * angle, Vector3::new(x + 4.0 * rng.normal(), 3.0 * rng.normal(), 100.0))
+        };
+        let pair = [pose_of(rng, -25.0), pose_of(rng, 25.0)];
+        let mut tags = Vec::new();
+        for (b, body) in marker.bodies.iter().enumerate() {
+            for tag in &body.tags {
+                let c = pair[b].transform_point(&Point3::from(tag.center));
+                let n = pair[b].transform_vector(&tag.face_normal());
+                // Seen when facing the camera by more than ~20°.
+                if n.dot(&c.coords.normalize()) > -0.35 {
+                    continue;
+                }
+                let corners = tag.corners.map(|p| {
+                    let px = cam.project(&pair[b].transform_point(&Point3::from(p))).expect("in front");
+                    [px.x + noise_px * rng.normal(), px.y + noise_px * rng.normal()]
+                });
+                tags.push(SeenTag { id: tag.id, corners });
+            }
+        }
+        frames.push(CalibrationFrame { camera: cam, tags });
+        poses.push(pair);
+    }
+    (frames, poses)
+}
+
+/// RMS distance (mm) between a body's tag corners in two markers after the best rigid
+/// alignment (Kabsch): how different the shapes are, whatever the body frame.
+fn shape_difference(a: &Marker, b: &Marker, kind: BodyKind) -> f64 {
+    let pts = |m: &Marker| -> Vec<Vector3<f64>> {
+        let mut tags = m.body(kind).expect("body").tags.clone();
+        tags.sort_by_key(|t| t.id);
+        tags.iter().flat_map(|t| t.corners).collect()
+    };
+    let (p, q) = (pts(a), pts(b));
+    let (cp, cq) = (p.iter().sum::<Vector3<f64>>() / p.len() as f64, q.iter().sum::<Vector3<f64>>() / q.len() as f64);
+    let mut h = Matrix3::zeros();
+    for (x, y) in p.iter().zip(&q) {
+        h += (x - cp) * (y - cq).transpose();
+    }
+    let svd = h.svd(true, true);
+    let (u, vt) = (svd.u.expect("u"), svd.v_t.expect("v"));
+    let mut d = Matrix3::identity();
+    d[(2, 2)] = (vt.transpose() * u.transpose()).determinant().signum();
+    let r = vt.transpose() * d * u.transpose();
+    let sum: f64 = p.iter().zip(&q).map(|(x, y)| (r * (x - cp) + cq - y).norm_squared()).sum();
+    (sum / p.len() as f64).sqrt()
+}
+
+#[test]
+fn calibration_recovers_the_printed_shape() {
+    let mut rng = Lcg(11);
+    let truth = printed(&mut rng);
+    let (frames, _) = views(&truth, 60, 0.2, &mut rng);
+    let cal = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates");
+    for kind in BodyKind::ALL {
+        let before = shape_difference(&Marker::default(), &truth, kind);
+        let after = shape_difference(&cal.marker, &truth, kind);
+        let report = cal.bodies.iter().find(|b| b.body == kind).expect("report");
+        eprintln!(
+            "{kind}: shape off by {before:.4} mm nominal, {after:.4} mm calibrated; RMS {:.3} → {:.3} px over {} views",
+            report.rms_before_px, report.rms_after_px, report.views
+        );
+        assert!(before > 0.1, "the print errors are there: {before}");
+        assert!(after < 0.02, "{kind}: calibrated shape {after:.4} mm off");
+        assert!(report.rms_after_px < 0.3 && report.rms_before_px > 1.0);
+        assert!(report.findings.is_empty(), "{:?}", report.findings);
+        assert_eq!(report.tags.len(), 12);
+    }
+    cal.marker.validate().expect("a valid marker file");
+}
+
+#[test]
+fn gross_assembly_errors_are_found_named_and_corrected() {
+    let mut rng = Lcg(5);
+    let mut truth = printed(&mut rng);
+    // Tag 5 glued a quarter turn clockwise (seen from outside), tags 14 and 17 swapped.
+    let body = &mut truth.bodies[0];
+    let t5 = body.tags.iter_mut().find(|t| t.id == 5).expect("tag 5");
+    t5.corners = [t5.corners[3], t5.corners[0], t5.corners[1], t5.corners[2]];
+    let man = &mut truth.bodies[1];
+    let (a, b) =
+        (man.tags.iter().position(|t| t.id == 14).expect("14"), man.tags.iter().position(|t| t.id == 17).expect("17"));
+    let (id_a, id_b) = (man.tags[a].id, man.tags[b].id);
+    man.tags[a].id = id_b;
+    man.tags[b].id = id_a;
+    let (frames, _) = views(&truth, 60, 0.2, &mut rng);
+    let cal = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates");
+    let findings: Vec<Finding> = cal.bodies.iter().flat_map(|b| b.findings.clone()).collect();
+    let words: Vec<String> = findings.iter().map(Finding::to_string).collect();
+    eprintln!("{words:#?}");
+    assert!(findings.contains(&Finding::Turned { id: 5, quarter_turns: 3 }), "{words:?}");
+    assert!(words.iter().any(|w| w.starts_with("tag 5 is glued a quarter turn clockwise from upright")), "{words:?}");
+    let on = |id: u32, face: usize| {
+        findings.iter().any(|f| matches!(*f, Finding::OnFace { id: i, face: g, .. } if i == id && g == face))
+    };
+    assert!(on(14, 5) && on(17, 2), "{words:?}");
+    assert_eq!(findings.len(), 3, "{words:?}");
+    for kind in BodyKind::ALL {
+        let after = shape_difference(&cal.marker, &truth, kind);
+        assert!(after < 0.02, "{kind}: calibrated shape {after:.4} mm off");
+    }
+}
+
+#[test]
+fn a_tag_never_seen_is_named_and_kept_nominal() {
+    let mut rng = Lcg(3);
+    let truth = printed(&mut rng);
+    let (mut frames, _) = views(&truth, 40, 0.2, &mut rng);
+    for f in &mut frames {
+        f.tags.retain(|t| t.id != 9);
+    }
+    let cal = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates");
+    let max = cal.bodies.iter().find(|b| b.body == BodyKind::Maxilla).expect("maxilla");
+    assert!(max.findings.contains(&Finding::Uncalibrated { id: 9, views: 0 }), "{:?}", max.findings);
+    let nominal = Marker::default();
+    let (_, kept) = cal.marker.find_tag(9).expect("tag 9");
+    let (_, model) = nominal.find_tag(9).expect("tag 9");
+    assert_eq!(kept.corners, model.corners, "an unseen tag is never invented");
+    assert!(max.tags.iter().all(|t| t.id != 9));
+}
+
+#[test]
+fn no_usable_view_is_an_error() {
+    let one_tag = CalibrationFrame { camera: camera(), tags: vec![SeenTag { id: 0, corners: [[0.0; 2]; 4] }] };
+    let e = calibrate(&Marker::default(), &[one_tag], &CalibrationOptions::default()).expect_err("nothing to use");
+    assert!(e.to_string().contains("two tags"), "{e}");
+    let bad = CalibrationFrame { camera: CameraIntrinsics { fx: -1.0, ..camera() }, tags: vec![] };
+    let e = calibrate(&Marker::default(), &[bad], &CalibrationOptions::default()).expect_err("bad camera");
+    assert!(e.to_string().contains("frame 0"), "{e}");
+}
