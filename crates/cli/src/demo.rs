@@ -120,7 +120,9 @@ fn track_and_compare(dir: &Path) -> Result<()> {
         "Plots of the incisor's path: {}",
         written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     );
-    say!("The gap between the two tracking lines is what calibrating the marker (planned) removes.");
+    say!(
+        "The gap between the two tracking lines is what calibrating the marker removes (`jawtrack calibrate-marker`, README)."
+    );
     Ok(())
 }
 

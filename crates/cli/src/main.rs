@@ -13,8 +13,10 @@ macro_rules! say {
 }
 
 mod bench;
+mod calibrate;
 mod demo;
 mod detect;
+mod frames;
 mod plot;
 mod track;
 
@@ -56,6 +58,9 @@ enum Command {
     Track(track::TrackArgs),
     /// Benchmarks: `bench pipeline` times the tracking pipeline and PnP beside OpenCV.
     Bench(bench::BenchArgs),
+    /// Calibrate the marker from frames of it turned in front of the camera: finds tags glued
+    /// turned or on the wrong face, refines every tag's place, writes a marker file.
+    CalibrateMarker(calibrate::CalibrateArgs),
 }
 
 #[derive(Args)]
@@ -157,6 +162,7 @@ fn main() {
         Command::Detect(a) => detect::run(&a),
         Command::Track(a) => track::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::CalibrateMarker(a) => calibrate::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,0 +1,100 @@
+//! `jawtrack calibrate-marker`: the marker's true tag placements from a short recording of it
+//! turned in front of the camera (`jawtrack_calibration`), written as a marker file of the
+//! nominal schema, with the assembly errors found, per-tag corrections, and the reprojection
+//! error before and after.
+
+use crate::frames::open_frames;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
+use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
+use jawtrack_marker::Marker;
+use jawtrack_pose::CameraIntrinsics;
+use std::path::PathBuf;
+
+/// Arguments of `jawtrack calibrate-marker`.
+#[derive(Args)]
+pub(crate) struct CalibrateArgs {
+    /// The marker file to start from (default: the nominal 12.7 mm marker).
+    #[arg(long)]
+    marker: Option<PathBuf>,
+    /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2].
+    #[arg(long)]
+    intrinsics: CameraIntrinsics,
+    /// Where to write the calibrated marker file.
+    #[arg(long)]
+    out: PathBuf,
+    /// Views a tag needs to be calibrated (with another tag of its body in each).
+    #[arg(long, default_value_t = 3)]
+    min_views: usize,
+    /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    linear_edges: bool,
+    /// A video to read instead of images (needs ffmpeg and ffprobe on the PATH).
+    #[arg(long, conflicts_with = "frames")]
+    video: Option<PathBuf>,
+    /// Frames: image files (PNG, JPEG) or folders of them, the marker turned to show every face.
+    #[arg(required_unless_present = "video")]
+    frames: Vec<PathBuf>,
+}
+
+pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
+    a.intrinsics.validate().context("--intrinsics")?;
+    if a.min_views == 0 {
+        bail!("--min-views must be at least 1");
+    }
+    let marker = match &a.marker {
+        Some(p) => Marker::load(p).with_context(|| format!("marker file {}", p.display()))?,
+        None => Marker::default(),
+    };
+    let mut source = open_frames(a.video.as_deref(), &a.frames, None)?;
+    let detector = Detector::new(DetectorConfig { linear_edges: a.linear_edges, ..DetectorConfig::default() })?;
+    let bar = crate::track::progress_bar(source.len());
+    let mut frames = Vec::new();
+    while let Some(frame) = source.next_frame()? {
+        let view =
+            ImageView::new(&frame.luma, frame.width, frame.height, frame.width).with_context(|| frame.name.clone())?;
+        let tags = detector
+            .detect(&view)?
+            .into_iter()
+            .filter(|d| marker.find_tag(d.id).is_some())
+            .map(|d| SeenTag { id: d.id, corners: d.corners })
+            .collect();
+        frames.push(CalibrationFrame { camera: a.intrinsics, tags });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let options = CalibrationOptions { min_views: a.min_views, ..CalibrationOptions::default() };
+    let cal = calibrate(&marker, &frames, &options)?;
+    cal.marker.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    for b in &cal.bodies {
+        say!(
+            "{}: {} views; reprojection error {:.3} px with the marker given, {:.3} px calibrated",
+            b.body,
+            b.views,
+            b.rms_before_px,
+            b.rms_after_px
+        );
+        for f in b.findings.iter().filter(|f| !matches!(f, Finding::Uncalibrated { .. })) {
+            say!("  assembly: {f}");
+        }
+        say!("  tag  views  shift x mm  shift y mm  turn °   px before  px after");
+        for t in &b.tags {
+            say!(
+                "  {:3}  {:5}  {:10.3}  {:10.3}  {:6.2}   {:9.3}  {:8.3}",
+                t.id,
+                t.views,
+                t.placement.shift_x,
+                t.placement.shift_y,
+                t.placement.rotation.to_degrees(),
+                t.rms_before_px,
+                t.rms_after_px
+            );
+        }
+        for f in b.findings.iter().filter(|f| matches!(f, Finding::Uncalibrated { .. })) {
+            eprintln!("warning: {f} (turn the marker to show that face from a few angles)");
+        }
+    }
+    say!("wrote {}", a.out.display());
+    Ok(())
+}
