@@ -56,6 +56,9 @@ pub struct CalibrationOptions {
     pub rotation_prior_deg: f64,
     /// Levenberg–Marquardt iterations at most.
     pub max_iterations: usize,
+    /// Corner residual (px) beyond which the adjustment's loss grows linearly (Huber): a
+    /// corner blurred or seen edge-on weighs less than one seen well.
+    pub huber_px: f64,
     /// Another placement is taken when the nominal one misses by more than this (px RMS) …
     pub gross_min_px: f64,
     /// … and the other fits at least this many times better.
@@ -70,6 +73,7 @@ impl Default for CalibrationOptions {
             shift_prior_mm: 0.5,
             rotation_prior_deg: 2.0,
             max_iterations: 100,
+            huber_px: 1.0,
             gross_min_px: 5.0,
             gross_ratio: 4.0,
         }
@@ -330,6 +334,26 @@ fn tag_sse(view: &View, seen: &Seen, model: &TagModel, pose: &Isometry3<f64>, or
         .sum()
 }
 
+/// The Huber loss of one corner, scaled as a square (e² inside `k`, 2k·e − k² beyond), and
+/// its weight in the normal equations.
+fn huber(e2: f64, k: f64) -> (f64, f64) {
+    let e = e2.sqrt();
+    if e <= k { (e2, 1.0) } else { (2.0 * k * e - k * k, k / e) }
+}
+
+/// The Huber cost of one seen tag's corners under `pose`.
+fn tag_cost(view: &View, seen: &Seen, model: &TagModel, pose: &Isometry3<f64>, k: f64) -> f64 {
+    (0..4)
+        .map(|i| {
+            let c = pose * model.corner(i);
+            if c.z <= 1e-9 {
+                return 1e12;
+            }
+            huber(((c.coords.xy() / c.z - seen.rays[i]).component_mul(&view.focal)).norm_squared(), k).0
+        })
+        .sum()
+}
+
 fn calibrate_body(
     tags: &[Tag],
     kind: BodyKind,
@@ -484,8 +508,9 @@ fn assembly_check(tags: &[Tag], views: &[View], options: &CalibrationOptions) ->
     (fixed, findings)
 }
 
-/// Levenberg–Marquardt over every view's pose and the `free` tags' placements, with a weak
-/// prior pulling the placements toward zero (see the module docs).
+/// Levenberg–Marquardt over every view's pose and the `free` tags' placements, with a Huber
+/// loss (reweighted each iteration) and a weak prior pulling the placements toward zero (see
+/// the module docs).
 fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: &CalibrationOptions) {
     let nv = views.len();
     let n = 6 * nv + 3 * free.len();
@@ -498,7 +523,7 @@ fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: 
     let cost = |views: &[View], models: &[TagModel]| -> f64 {
         let data: f64 = views
             .iter()
-            .map(|v| v.seen.iter().map(|s| tag_sse(v, s, &models[s.tag], &v.pose, [0, 1, 2, 3])).sum::<f64>())
+            .map(|v| v.seen.iter().map(|s| tag_cost(v, s, &models[s.tag], &v.pose, options.huber_px)).sum::<f64>())
             .sum();
         let reg: f64 = free.iter().map(|&t| models[t].e.component_mul(&prior).norm_squared()).sum();
         data + reg
@@ -517,7 +542,9 @@ fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: 
                     let c = v.pose * model.corner(i);
                     let Some(dproj) = projection_jacobian(&c, &v.focal) else { continue };
                     let r = (c.coords.xy() / c.z - s.rays[i]).component_mul(&v.focal);
-                    let jp = pose_jacobian(&c, &dproj);
+                    let w = huber(r.norm_squared(), options.huber_px).1;
+                    let jp = pose_jacobian(&c, &dproj) * w.sqrt();
+                    let r = r * w.sqrt();
                     let p0 = 6 * vi;
                     {
                         let mut b = h.view_mut((p0, p0), (6, 6));
@@ -528,7 +555,7 @@ fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: 
                         b += jp.transpose() * r;
                     }
                     if let Some(k) = ts {
-                        let jt: Matrix2x3<f64> = dproj * rot.matrix() * model.corner_jacobian(i);
+                        let jt: Matrix2x3<f64> = dproj * rot.matrix() * model.corner_jacobian(i) * w.sqrt();
                         let t0 = 6 * nv + 3 * k;
                         {
                             let mut b = h.view_mut((t0, t0), (3, 3));
