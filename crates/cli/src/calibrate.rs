@@ -3,11 +3,11 @@
 //! nominal schema, with the assembly errors found, per-tag corrections, and the reprojection
 //! error before and after.
 
-use crate::frames::open_frames;
+use crate::frames::{FrameSource, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
-use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
+use jawtrack_calibration::{Calibration, CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use std::path::PathBuf;
@@ -47,8 +47,24 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
         Some(p) => Marker::load(p).with_context(|| format!("marker file {}", p.display()))?,
         None => Marker::default(),
     };
-    let mut source = open_frames(a.video.as_deref(), &a.frames, None)?;
-    let detector = Detector::new(DetectorConfig { linear_edges: a.linear_edges, ..DetectorConfig::default() })?;
+    let source = open_frames(a.video.as_deref(), &a.frames, None)?;
+    let frames = detect_views(source, &marker, &a.intrinsics, a.linear_edges)?;
+    let options = CalibrationOptions { min_views: a.min_views, ..CalibrationOptions::default() };
+    let cal = calibrate(&marker, &frames, &options)?;
+    cal.marker.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    print_report(&cal);
+    say!("wrote {}", a.out.display());
+    Ok(())
+}
+
+/// Detects the marker's tags in every frame, with a progress bar.
+pub(crate) fn detect_views(
+    mut source: Box<dyn FrameSource>,
+    marker: &Marker,
+    camera: &CameraIntrinsics,
+    linear_edges: bool,
+) -> Result<Vec<CalibrationFrame>> {
+    let detector = Detector::new(DetectorConfig { linear_edges, ..DetectorConfig::default() })?;
     let bar = crate::track::progress_bar(source.len());
     let mut frames = Vec::new();
     while let Some(frame) = source.next_frame()? {
@@ -60,13 +76,15 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
             .filter(|d| marker.find_tag(d.id).is_some())
             .map(|d| SeenTag { id: d.id, corners: d.corners })
             .collect();
-        frames.push(CalibrationFrame { camera: a.intrinsics, tags });
+        frames.push(CalibrationFrame { camera: *camera, tags });
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let options = CalibrationOptions { min_views: a.min_views, ..CalibrationOptions::default() };
-    let cal = calibrate(&marker, &frames, &options)?;
-    cal.marker.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    Ok(frames)
+}
+
+/// Prints what the calibration found and each tag's correction; warns about tags left nominal.
+pub(crate) fn print_report(cal: &Calibration) {
     for b in &cal.bodies {
         say!(
             "{}: {} views; reprojection error {:.3} px with the marker given, {:.3} px calibrated",
@@ -95,6 +113,4 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
             eprintln!("warning: {f} (turn the marker to show that face from a few angles)");
         }
     }
-    say!("wrote {}", a.out.display());
-    Ok(())
 }
