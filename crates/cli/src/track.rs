@@ -110,6 +110,13 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     eprintln!("tracked {index} frames: {}; poses in {}", summary.describe(), a.out.display());
+    for (id, seen, dropped) in tracker.mismatched_tags(5) {
+        eprintln!(
+            "warning: tag {id} disagreed with the marker file in {dropped} of the {seen} frames it was seen in and was \
+             left out: is it glued turned or on another face, or is the marker file another print's? \
+             `jawtrack calibrate-marker` finds and corrects such errors"
+        );
+    }
     Ok(())
 }
 

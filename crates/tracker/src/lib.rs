@@ -234,6 +234,8 @@ pub struct Tracker {
     since_full: usize,
     /// Each body's tag corners in its frame, for the expected region.
     corners: [Vec<Point3<f64>>; 2],
+    /// Per tag id: frames it was detected in with its body solved, and frames it was dropped.
+    tag_counts: std::collections::BTreeMap<u32, (usize, usize)>,
 }
 
 fn slot(kind: BodyKind) -> usize {
@@ -280,6 +282,7 @@ impl Tracker {
             last_relative: None,
             since_full: 0,
             corners,
+            tag_counts: Default::default(),
         })
     }
 
@@ -320,6 +323,17 @@ impl Tracker {
     /// PnP starts from.
     pub fn predicted(&self, kind: BodyKind, t: f64) -> Option<Pose> {
         self.bodies[slot(kind)].predict(t)
+    }
+
+    /// Tags whose corners disagreed with the marker file in most frames they were seen in (at
+    /// least `min_frames` of them): a tag glued turned or on another face, or a marker file
+    /// that is not this print's. Each as (id, frames seen, frames dropped).
+    pub fn mismatched_tags(&self, min_frames: usize) -> Vec<(u32, usize, usize)> {
+        self.tag_counts
+            .iter()
+            .filter(|(_, (seen, dropped))| *dropped >= min_frames.max(1) && 2 * dropped >= *seen)
+            .map(|(&id, &(seen, dropped))| (id, seen, dropped))
+            .collect()
     }
 
     /// Forgets the bodies' motion (a cut in the footage).
@@ -429,6 +443,16 @@ impl Tracker {
                     flags.push(Flag::Lost(kind));
                     self.bodies[slot(kind)].tags.clear();
                 }
+            }
+        }
+        for b in bodies.iter().flatten() {
+            for &id in &b.tags {
+                self.tag_counts.entry(id).or_default().0 += 1;
+            }
+            for &id in &b.rejected_tags {
+                let c = self.tag_counts.entry(id).or_default();
+                c.0 += 1;
+                c.1 += 1;
             }
         }
         let [maxilla, mandible] = bodies;

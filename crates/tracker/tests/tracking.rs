@@ -183,3 +183,21 @@ fn registration_maps_the_jaw_into_the_scans() {
     let (angle, dist) = r.maxilla_scan_from_mandible_scan.expect("registered").distance_to(&Pose::identity());
     assert!(angle < 1e-9 && dist < 1e-9, "{angle} rad {dist} mm");
 }
+
+#[test]
+fn a_tag_that_never_fits_the_marker_file_is_reported() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    for i in 0..8 {
+        let mut d = detections(&marker, &[0, 1, 2, 3], &maxilla, &camera);
+        d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
+        // Tag 3 glued a quarter turn off: its corners pair with the wrong model corners.
+        let t3 = d.iter_mut().find(|d| d.id == 3).expect("tag 3");
+        t3.corners = [t3.corners[1], t3.corners[2], t3.corners[3], t3.corners[0]];
+        let r = tracker.solve(d, &camera, i as f64 / 30.0);
+        assert_eq!(r.maxilla.expect("maxilla").rejected_tags, vec![3], "frame {i}");
+    }
+    assert_eq!(tracker.mismatched_tags(5), vec![(3, 8, 8)]);
+    assert!(tracker.mismatched_tags(9).is_empty(), "too few frames to say");
+}
