@@ -14,7 +14,6 @@ use jawtrack_tracker::{Tracker, TrackerConfig};
 use std::io::Write as _;
 
 use crate::plot::{self, Series, Style};
-use jawtrack_pose::Pose;
 use jawtrack_synth::scenes::Rig;
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SceneSummary, SynthConfig};
 use nalgebra::Point3;
@@ -110,9 +109,10 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
         ..TrackerConfig::default()
     };
-    let incisor = Incisor::of_rig(&Rig::default());
+    let rig = Rig::default();
+    let closed = Point3::from(rig.lower_incisal_point);
     let truth_path: Vec<Sample> =
-        truth.frames.iter().map(|f| (f.t, incisor.in_head(&f.maxilla_from_mandible))).collect();
+        truth.frames.iter().map(|f| (f.t, rig.lower_incisor(&f.maxilla_from_mandible))).collect();
     let mut tracked_paths = Vec::new();
     let markers = [
         ("nominal marker file", Marker::default(), "poses.jsonl"),
@@ -134,7 +134,7 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
                 let (angle, dist) = m.distance_to(&f.maxilla_from_mandible);
                 dt.push(dist);
                 dr.push(angle.to_degrees());
-                path.push((f.t, incisor.in_head(&m)));
+                path.push((f.t, rig.lower_incisor(&m)));
             }
         }
         out.flush()?;
@@ -156,8 +156,7 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
         );
         tracked_paths.push((label, path));
     }
-    let openings =
-        |p: &[Sample]| -> Vec<(f64, f64)> { p.iter().map(|(t, x)| (*t, (x - incisor.closed).norm())).collect() };
+    let openings = |p: &[Sample]| -> Vec<(f64, f64)> { p.iter().map(|(t, x)| (*t, (x - closed).norm())).collect() };
     let (tracked, real) = (openings(&tracked_paths[0].1), openings(&truth_path));
     let peak = |v: &[(f64, f64)]| v.iter().map(|p| p.1).fold(0.0, f64::max);
     say!(
@@ -165,9 +164,9 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
         count_openings(&tracked.iter().map(|p| p.1).collect::<Vec<_>>()),
         peak(&tracked),
         peak(&real),
-        tracked_paths[0].1.iter().map(|(_, x)| x.z - incisor.closed.z).fold(0.0, f64::max),
+        tracked_paths[0].1.iter().map(|(_, x)| x.z - closed.z).fold(0.0, f64::max),
     );
-    let written = plot_incisor(dir, &incisor, &truth_path, &tracked_paths)?;
+    let written = plot_incisor(dir, &closed, &truth_path, &tracked_paths)?;
     say!(
         "Plots of the incisor's path: {}",
         written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
@@ -181,34 +180,10 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
 /// The lower incisor's position (head frame, mm) at a time (s).
 type Sample = (f64, Point3<f64>);
 
-/// The lower incisal point, carried by the mandible marker, seen in the head frame.
-struct Incisor {
-    /// In the mandible marker's frame.
-    on_mandible: Point3<f64>,
-    head_from_maxilla: Pose,
-    /// Where it sits with the jaw closed (head frame).
-    closed: Point3<f64>,
-}
-
-impl Incisor {
-    fn of_rig(rig: &Rig) -> Self {
-        let closed = Point3::from(rig.lower_incisal_point);
-        Incisor {
-            on_mandible: rig.head_from_mandible_rest.inverse().transform_point(&closed),
-            head_from_maxilla: rig.head_from_maxilla,
-            closed,
-        }
-    }
-
-    fn in_head(&self, maxilla_from_mandible: &Pose) -> Point3<f64> {
-        (self.head_from_maxilla * *maxilla_from_mandible).transform_point(&self.on_mandible)
-    }
-}
-
 /// Writes the incisor's opening over time and its sagittal path (SVG); returns the files.
 fn plot_incisor(
     dir: &Path,
-    incisor: &Incisor,
+    closed: &Point3<f64>,
     truth: &[Sample],
     tracked: &[(&str, Vec<Sample>)],
 ) -> Result<Vec<PathBuf>> {
@@ -226,14 +201,14 @@ fn plot_incisor(
         "Lower incisor: distance from its closed position",
         "time (s)",
         "opening (mm)",
-        &series(&|(t, x)| (*t, (x - incisor.closed).norm())),
+        &series(&|(t, x)| (*t, (x - *closed).norm())),
         false,
     );
     let sagittal = plot::chart(
         "Lower incisor path, sagittal plane (patient facing right)",
         "anterior (mm)",
         "up (mm)",
-        &series(&|(_, x)| (incisor.closed.z - x.z, incisor.closed.y - x.y)),
+        &series(&|(_, x)| (closed.z - x.z, closed.y - x.y)),
         true,
     );
     let mut written = Vec::new();

@@ -23,7 +23,8 @@ use std::f64::consts::{PI, TAU};
 pub enum SceneKind {
     /// Jaw at rest; camera at 80/100/120 mm, azimuth 0/30/60°, on a tripod and hand-held.
     Static,
-    /// Hinge opening about the condylar axis to 10/20/30/40 mm at the incisors, several cycles.
+    /// Hinge opening about the condylar axis to 10/20/30/40 mm at the incisors, in rounds of
+    /// the four openings.
     Hinge,
     /// Left, right and protrusive glides of 4–6 mm.
     Excursion,
@@ -213,6 +214,15 @@ impl Rig {
         }
     }
 
+    /// Where the lower incisal point is (head frame) when the mandible marker sits at
+    /// `maxilla_from_mandible` in the maxilla marker's frame: how a tracked pose reads as the
+    /// incisor's motion.
+    pub fn lower_incisor(&self, maxilla_from_mandible: &Pose) -> Point3<f64> {
+        let on_mandible =
+            self.head_from_mandible_rest.inverse().transform_point(&Point3::from(self.lower_incisal_point));
+        (self.head_from_maxilla * *maxilla_from_mandible).transform_point(&on_mandible)
+    }
+
     /// Maxilla and mandible marker poses in the head frame at time `t`.
     pub fn markers(&self, motion: &JawMotion, t: f64) -> (Pose, Pose) {
         (self.head_from_maxilla, self.jaw(motion, t) * self.head_from_mandible_rest)
@@ -346,8 +356,10 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             };
             let period = 2.0;
             let mut start = 0.0;
-            for opening in [10.0, 20.0, 30.0, 40.0] {
-                for _ in 0..opts.cycles {
+            // Rounds of the four openings, so that the first rounds of a long session are a
+            // shorter session (a cached render serves both).
+            for _ in 0..opts.cycles {
+                for opening in [10.0, 20.0, 30.0, 40.0] {
                     let motion = JawMotion::Hinge { opening_mm: opening, start_s: start, period_s: period };
                     frames.extend(one_cycle(start, period, dt, view, motion));
                     start += period;
@@ -422,6 +434,10 @@ mod tests {
         assert!((moved.norm() - 30.0).abs() < 1e-9);
         assert!(moved.y > 20.0, "opens downward: {moved:?}");
         assert!(rig.jaw(&motion, 0.0).distance_to(&Pose::identity()).1 < 1e-12);
+        // Read back from the markers' relative pose, as a tracker would see it.
+        let (maxilla, mandible) = rig.markers(&motion, 1.0);
+        let seen = rig.lower_incisor(&(maxilla.inverse() * mandible));
+        assert!((seen - peak.transform_point(&p)).norm() < 1e-9);
     }
 
     #[test]
