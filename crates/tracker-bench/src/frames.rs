@@ -1,12 +1,12 @@
-//! The rendered frames of each scene, cached under `target/tracker-bench/<scene>-<seed>/` and
-//! re-rendered only when the cached ground truth does not describe the frames asked for.
+//! The rendered frames of each scene, cached under `<cache>/<scene>-<seed>/` and re-rendered
+//! only when the cached ground truth does not describe the frames asked for (a longer cached
+//! session whose first frames are the ones asked for serves).
 
 use anyhow::{Context, Result};
 use jawtrack_marker::Marker;
 use jawtrack_synth::scenes::{FrameSpec, scene_frames};
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// What to render: one scene at 1080p, default realism, the nominal marker.
 #[derive(Debug, Clone, Copy)]
@@ -80,31 +80,23 @@ fn cached(dir: &Path, req: &Request) -> Option<GroundTruth> {
     truth.frames.iter().all(|f| dir.join(&f.file).is_file()).then_some(truth)
 }
 
-/// The scene's frames from `cache_root`, rendering them first when the cache lacks them.
-/// Rendering reports progress on stderr.
-pub fn scene(cache_root: &Path, req: &Request) -> Result<Scene> {
+/// The scene's frames from `cache_root`, rendering them first when the cache lacks them;
+/// `progress(done, total)` is called as frames are rendered (not at all when cached).
+pub fn scene(cache_root: &Path, req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene> {
     let name = req.scene.name();
     let dir = cache_root.join(format!("{name}-{}", req.seed));
     if let Some(truth) = cached(&dir, req) {
         return Ok(Scene { dir, truth, rendered: false });
     }
-    let total = req.specs().len();
-    eprintln!("{name}: rendering {total} frames into {} (seconds each; cached for next time)…", dir.display());
     // A stale truth must not outlive an interrupted render: the renderer writes it last.
     let stale = dir.join("ground_truth.json");
     if stale.exists() {
         std::fs::remove_file(&stale).with_context(|| format!("removing {}", stale.display()))?;
     }
-    let start = Instant::now();
-    let step = (total / 10).max(1);
-    jawtrack_synth::write_scene(req.config(), &dir, |done, total| {
-        if done % step == 0 && done < total {
-            eprintln!("{name}:   {done}/{total} rendered, {:.0} s", start.elapsed().as_secs_f64());
-        }
-    })
-    .with_context(|| format!("rendering {name} into {}", dir.display()))?;
+    progress(0, req.specs().len());
+    jawtrack_synth::write_scene(req.config(), &dir, progress)
+        .with_context(|| format!("rendering {name} into {}", dir.display()))?;
     let truth =
         cached(&dir, req).with_context(|| format!("{}: the rendered frames do not read back", dir.display()))?;
-    eprintln!("{name}: rendered {total} frames in {:.0} s", start.elapsed().as_secs_f64());
     Ok(Scene { dir, truth, rendered: true })
 }

@@ -12,8 +12,6 @@
 //! body's PnP, ours against OpenCV's on the same correspondences. OpenCV runs in Python
 //! (`python/solve_pnp.py`); without it the reference columns are skipped, and said so.
 
-mod frames;
-mod opencv;
 mod report;
 
 use anyhow::{Context, Result, bail};
@@ -24,8 +22,9 @@ use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
 use jawtrack_synth::SceneKind;
 use jawtrack_tracker::{Flag, Tracker, TrackerConfig};
+use jawtrack_tracker_bench::opencv::{self, BodyCase, OpenCv};
+use jawtrack_tracker_bench::{frames, reference::correspondences};
 use nalgebra::{Point2, Point3};
-use opencv::{BodyCase, OpenCv};
 use report::{FrameOutcome, PnpTiming, PoseError, RunInfo, SceneOutcome};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -85,23 +84,6 @@ type Markers = [Marker; 2];
 fn pose_error(estimate: &Pose, truth: &Pose) -> PoseError {
     let (angle, distance) = estimate.distance_to(truth);
     PoseError { mm: distance, deg: angle.to_degrees() }
-}
-
-/// Every corner of `kind`'s tags among the C library's detections, against the marker file's
-/// corners (same order: the library's).
-fn correspondences(marker: &Marker, kind: BodyKind, detections: &[ReferenceDetection]) -> BodyCase {
-    let mut case = BodyCase::default();
-    for d in detections {
-        let Some((body, tag)) = marker.find_tag(d.id) else { continue };
-        if body != kind {
-            continue;
-        }
-        for (corner, pixel) in tag.corners.iter().zip(&d.corners) {
-            case.object.push([corner.x, corner.y, corner.z]);
-            case.image.push(*pixel);
-        }
-    }
-    case
 }
 
 /// Median time (µs) of our `solve_pnp` on a body's correspondences, cold (no prior), and
@@ -198,7 +180,19 @@ fn run_scene(
     timings: &mut Vec<PnpTiming>,
 ) -> Result<SceneOutcome> {
     let name = req.scene.name();
-    let scene = frames::scene(cache, req)?;
+    let render_start = Instant::now();
+    let mut announced = false;
+    let scene = frames::scene(cache, req, &mut |done, total| {
+        if !announced {
+            eprintln!(
+                "{name}: rendering {total} frames into {} (seconds each; cached for next time)…",
+                cache.display()
+            );
+            announced = true;
+        } else if done % (total / 10).max(1) == 0 || done == total {
+            eprintln!("{name}:   {done}/{total} rendered, {:.0} s", render_start.elapsed().as_secs_f64());
+        }
+    })?;
     let truth = &scene.truth;
     let start = Instant::now();
     let printed = Marker::from_json(&truth.true_marker.to_string())

@@ -1,0 +1,770 @@
+//! The benchtop experiments of the 2020 thesis, rendered with exact ground truth: a static
+//! grid (camera azimuth 0/30/60° × distance 80/100/120 mm, on a tripod and hand-held), an
+//! articulator-style hinge (rounds of 10/20/30/40 mm openings) and excursions (left, right,
+//! protrusive glides).
+//!
+//! The marker is first calibrated from a separate calibration recording of the same printed
+//! marker (never from the frames it is judged on). Every frame then goes through our tracker
+//! and, when OpenCV is installed, through the reference stack (AprilTag C + OpenCV SQPnP),
+//! each with three marker files: the nominal one, the calibrated one and the marker as
+//! printed (the limit calibration can reach). The tables are pure functions of the run: per
+//! static view the mean and SD of the error along the head's axes; per opening and per glide
+//! a regression of the tracked incisor path on the true one (r², standard error); flips.
+//!
+//! Errors are of `maxilla_from_mandible` and are expressed along the head's axes (X the
+//! patient's left, Y down, Z posterior). Orientation errors are the error rotation's
+//! components about those axes. The thesis gave Z-Y-Z Euler angle differences, but at rest
+//! the two markers are parallel, where Z-Y-Z angles are singular (β = 0 leaves α and γ
+//! undefined). To first order, the components equal the Euler-angle errors about the same axes.
+
+use crate::frames::{self, Request};
+use crate::opencv::OpenCv;
+use crate::reference;
+use anyhow::{Context, Result, bail};
+use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
+use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
+use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, SeenTag, calibrate};
+use jawtrack_marker::Marker;
+use jawtrack_pose::Pose;
+use jawtrack_synth::SceneKind;
+use jawtrack_synth::scenes::{JawMotion, Rig, View};
+use jawtrack_tracker::{Registration, Tracker, TrackerConfig, calibrate_intercuspation};
+use nalgebra::Vector3;
+use std::path::PathBuf;
+
+/// An orientation error above this is a flip (°).
+pub const FLIP_DEG: f64 = 1.0;
+
+/// The bite step uses the calibration recording's level views within this of the front (°).
+const BITE_AZIMUTH_DEG: f64 = 45.0;
+
+/// Frame rate of the still scenes (static, calibration): it only spaces their frames in time.
+const STILL_FPS: f64 = 30.0;
+
+/// Which pipeline made an estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stack {
+    /// Our detector and tracker.
+    Ours,
+    /// AprilTag C 3.4.5, then OpenCV's SQPnP per body.
+    Reference,
+}
+
+/// Which marker file the pipeline was given.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkerFile {
+    /// The ideal dodecahedron: what a user has before calibrating.
+    Nominal,
+    /// Calibrated from the calibration recording.
+    Calibrated,
+    /// Calibrated, then the maximal-intercuspation step of the clinical workflow: the jaw is
+    /// closed in the calibration recording, and the mean of the stack's own poses in its
+    /// frontal views is mapped onto the scanned bite (the true rest pose). Removes the constant offset a
+    /// calibration cannot see: where the tags sit, as a whole, on the solid.
+    CalibratedBite,
+    /// The marker as printed (the renderer's truth): what a perfect calibration would give.
+    Printed,
+}
+
+impl MarkerFile {
+    /// All four, in the order of the columns.
+    pub const ALL: [MarkerFile; 4] =
+        [MarkerFile::Nominal, MarkerFile::Calibrated, MarkerFile::CalibratedBite, MarkerFile::Printed];
+
+    /// Its name in tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            MarkerFile::Nominal => "nominal marker",
+            MarkerFile::Calibrated => "calibrated marker",
+            MarkerFile::CalibratedBite => "calibrated marker + bite step",
+            MarkerFile::Printed => "marker as printed",
+        }
+    }
+
+    /// Its name in file names and CSV.
+    pub fn slug(self) -> &'static str {
+        match self {
+            MarkerFile::Nominal => "nominal",
+            MarkerFile::Calibrated => "calibrated",
+            MarkerFile::CalibratedBite => "calibrated_bite",
+            MarkerFile::Printed => "printed",
+        }
+    }
+}
+
+/// One pipeline with one marker file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Column {
+    /// The pipeline.
+    pub stack: Stack,
+    /// The marker file.
+    pub marker: MarkerFile,
+}
+
+impl Column {
+    /// "ours, calibrated marker".
+    pub fn name(&self) -> String {
+        let stack = match self.stack {
+            Stack::Ours => "ours",
+            Stack::Reference => "reference",
+        };
+        format!("{stack}, {}", self.marker.name())
+    }
+
+    /// "ours_calibrated": for file names and CSV.
+    pub fn slug(&self) -> String {
+        let stack = match self.stack {
+            Stack::Ours => "ours",
+            Stack::Reference => "reference",
+        };
+        format!("{stack}_{}", self.marker.slug())
+    }
+}
+
+/// What to render and run.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Seed of everything random (print errors, noise, tremor).
+    pub seed: u64,
+    /// Frames per view of the calibration recording (18 views).
+    pub calibration_frames_per_view: usize,
+    /// Frames per static view (18 views: 3 angles × 3 distances × tripod, hand).
+    pub frames_per_view: usize,
+    /// Rounds of the four hinge openings (the thesis: 30).
+    pub hinge_cycles: usize,
+    /// Glides per direction.
+    pub excursion_cycles: usize,
+    /// Frame rate of the hinge and excursions (frames/s).
+    pub fps: f64,
+    /// At most this many frames per judged scene (a smoke run).
+    pub max_frames: Option<usize>,
+    /// Where rendered frames are cached.
+    pub cache: PathBuf,
+    /// Pythons to try for OpenCV, in order.
+    pub python: Vec<String>,
+}
+
+impl Options {
+    /// Refuses options that cannot make a run.
+    pub fn validate(&self) -> Result<()> {
+        if self.calibration_frames_per_view == 0 || self.frames_per_view == 0 {
+            bail!("frames per view must be at least 1");
+        }
+        if self.hinge_cycles == 0 || self.excursion_cycles == 0 {
+            bail!("cycles must be at least 1");
+        }
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            bail!("the frame rate must be a positive number of frames/s, got {}", self.fps);
+        }
+        if self.max_frames == Some(0) {
+            bail!("at most 0 frames per scene leaves nothing to measure");
+        }
+        Ok(())
+    }
+
+    fn request(&self, scene: SceneKind) -> Request {
+        let (frames_per_view, cycles, fps, max_frames) = match scene {
+            SceneKind::Calibration => (self.calibration_frames_per_view, 1, STILL_FPS, None),
+            SceneKind::Static => (self.frames_per_view, 1, STILL_FPS, self.max_frames),
+            SceneKind::Hinge => (1, self.hinge_cycles, self.fps, self.max_frames),
+            _ => (1, self.excursion_cycles, self.fps, self.max_frames),
+        };
+        Request { scene, seed: self.seed, frames_per_view, cycles, fps, max_frames }
+    }
+}
+
+/// What the calibration found for one body.
+#[derive(Debug, Clone)]
+pub struct BodySummary {
+    /// "maxilla" or "mandible".
+    pub body: String,
+    /// Views with at least two of its tags.
+    pub views: usize,
+    /// RMS reprojection error with the nominal marker (px).
+    pub rms_before_px: f64,
+    /// With the calibrated one (px).
+    pub rms_after_px: f64,
+    /// Tags placed by the calibration.
+    pub calibrated_tags: usize,
+    /// Assembly errors found and tags left nominal, in words.
+    pub findings: Vec<String>,
+}
+
+/// One judged frame: the truth and every column's estimate of `maxilla_from_mandible`.
+#[derive(Debug, Clone)]
+pub struct FrameRecord {
+    /// The scene.
+    pub scene: SceneKind,
+    /// Frame index in the scene.
+    pub index: usize,
+    /// Capture time (s).
+    pub t: f64,
+    /// The camera.
+    pub view: View,
+    /// The jaw's motion.
+    pub motion: JawMotion,
+    /// The true `maxilla_from_mandible`.
+    pub truth: Pose,
+    /// Each column's estimate (`None`: that column gave no jaw pose).
+    pub estimates: Vec<Option<Pose>>,
+}
+
+/// A whole run.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// The columns of `FrameRecord::estimates`.
+    pub columns: Vec<Column>,
+    /// The reference stack's description, or why it was skipped.
+    pub reference: std::result::Result<String, String>,
+    /// The calibration, per body.
+    pub calibration: Vec<BodySummary>,
+    /// The calibrated marker file.
+    pub calibrated_marker: Marker,
+    /// The bite step per stack (ours, then the reference's), `None` when the stack had no
+    /// closed-jaw pose.
+    pub bite_steps: Vec<Option<BiteStep>>,
+    /// Frames of the calibration recording.
+    pub calibration_frames: usize,
+    /// Every judged frame, scene after scene.
+    pub frames: Vec<FrameRecord>,
+}
+
+/// Renders (or reads from the cache) the calibration recording and the three experiments,
+/// calibrates, and runs every frame through every column. `progress(stage, done, total)`
+/// reports rendering and tracking.
+pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> Result<Run> {
+    options.validate()?;
+    let mut cv = match OpenCv::start(&options.python)? {
+        Ok(cv) => Some(cv),
+        Err(why) => {
+            progress(&format!("SKIPPED: the reference stack — {why}"), 0, 0);
+            None
+        }
+    };
+    let reference = match &cv {
+        Some(cv) => Ok(format!("AprilTag C 3.4.5, then OpenCV {} `solvePnP` SQPnP per body", cv.version)),
+        None => Err(format!("no Python with OpenCV was found (`{}`)", crate::opencv::INSTALL_HINT)),
+    };
+    let mut columns: Vec<Column> = MarkerFile::ALL.map(|marker| Column { stack: Stack::Ours, marker }).to_vec();
+    if cv.is_some() {
+        columns.extend(MarkerFile::ALL.map(|marker| Column { stack: Stack::Reference, marker }));
+    }
+
+    let req = options.request(SceneKind::Calibration);
+    let scene = frames::scene(&options.cache, &req, &mut |d, t| progress("rendering the calibration recording", d, t))?;
+    let config = tracker_config(&scene.truth);
+    let detector = Detector::new(config.detector)?;
+    let nominal = Marker::default();
+    let mut views = Vec::new();
+    for (i, f) in scene.truth.frames.iter().enumerate() {
+        progress("detecting tags in the calibration recording", i, scene.truth.frames.len());
+        let img = read_luma(&scene.dir.join(&f.file))?;
+        let tags = detector
+            .detect(&img.view()?)?
+            .into_iter()
+            .filter(|d| nominal.find_tag(d.id).is_some())
+            .map(|d| SeenTag { id: d.id, corners: d.corners })
+            .collect();
+        views.push(CalibrationFrame { camera: scene.truth.intrinsics, tags });
+    }
+    let cal = calibrate(&nominal, &views, &CalibrationOptions::default()).context("calibrating the marker")?;
+    let calibration = cal
+        .bodies
+        .iter()
+        .map(|b| BodySummary {
+            body: b.body.to_string(),
+            views: b.views,
+            rms_before_px: b.rms_before_px,
+            rms_after_px: b.rms_after_px,
+            calibrated_tags: b.tags.len(),
+            findings: b.findings.iter().map(ToString::to_string).collect(),
+        })
+        .collect();
+
+    let mut c = ReferenceDetector::new(&ReferenceParams::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut stacks = Stacks { reference_detector: &mut c, cv: cv.as_mut() };
+
+    // The bite step: each stack's poses of the closed jaw in the calibration recording,
+    // mapped onto the scanned bite (here the true rest pose, as a bite scan would give it).
+    let calibration_frames = scene.truth.frames.len();
+    let printed = Marker::from_json(&scene.truth.true_marker.to_string())
+        .context("calibration: the marker as printed in its ground truth")?;
+    let markers = [nominal.clone(), cal.marker.clone(), printed];
+    let mut trackers = new_trackers(&markers, &scene.truth)?;
+    let mut closed: [Vec<Pose>; 2] = [Vec::new(), Vec::new()];
+    // A bite is filmed as a clinician films the patient, from the front: the recording's
+    // views at the face's level within 45° of straight ahead. (The oblique views see tags
+    // that stay nominal, which would bias the mean.)
+    let bite_frames: Vec<_> = scene
+        .truth
+        .frames
+        .iter()
+        .filter(|f| f.spec.view.elevation_deg == 0.0 && f.spec.view.azimuth_deg.abs() <= BITE_AZIMUTH_DEG)
+        .collect();
+    for (i, f) in bite_frames.iter().enumerate() {
+        progress("tracking the closed jaw for the bite step", i, bite_frames.len());
+        let (ours, theirs) = stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?;
+        closed[0].extend(ours[1]);
+        closed[1].extend(theirs.and_then(|t| t[1]));
+    }
+    let bite = scene.truth.frames.first().map(|f| f.maxilla_from_mandible).context("an empty calibration recording")?;
+    let scanned = Registration { maxilla_scan_from_mandible_scan_at_intercuspation: bite, ..Registration::identity() };
+    let mut bites = Vec::new();
+    for samples in &closed {
+        bites.push(calibrate_intercuspation(&scanned, samples).ok());
+    }
+    let bite_steps: Vec<Option<BiteStep>> = bites
+        .iter()
+        .map(|b| {
+            b.as_ref().map(|b| BiteStep {
+                samples: b.samples,
+                translation_mm: b.translation_mm,
+                rotation_deg: b.rotation_deg,
+                spread_mm: b.spread_mm,
+            })
+        })
+        .collect();
+    // With the stack's estimates for [nominal, calibrated, printed], the columns' estimates.
+    let expand = |estimates: [Option<Pose>; 3], stack: usize| -> Vec<Option<Pose>> {
+        MarkerFile::ALL
+            .map(|m| match m {
+                MarkerFile::Nominal => estimates[0],
+                MarkerFile::Calibrated => estimates[1],
+                MarkerFile::CalibratedBite => bites[stack]
+                    .as_ref()
+                    .and_then(|b| estimates[1].map(|e| b.registration.maxilla_scan_from_mandible_scan(&e))),
+                MarkerFile::Printed => estimates[2],
+            })
+            .to_vec()
+    };
+
+    let mut records = Vec::new();
+    for kind in [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion] {
+        let name = kind.name();
+        let req = options.request(kind);
+        let scene =
+            frames::scene(&options.cache, &req, &mut |d, t| progress(&format!("rendering the {name} scene"), d, t))?;
+        let printed = Marker::from_json(&scene.truth.true_marker.to_string())
+            .with_context(|| format!("{name}: the marker as printed in its ground truth"))?;
+        let markers = [nominal.clone(), cal.marker.clone(), printed];
+        let mut trackers = new_trackers(&markers, &scene.truth)?;
+        let total = scene.truth.frames.len();
+        for (i, f) in scene.truth.frames.iter().enumerate() {
+            progress(&format!("tracking the {name} scene"), i, total);
+            let (ours, theirs) = stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?;
+            let mut estimates = expand(ours, 0);
+            if let Some(theirs) = theirs {
+                estimates.extend(expand(theirs, 1));
+            }
+            records.push(FrameRecord {
+                scene: kind,
+                index: f.index,
+                t: f.t,
+                view: f.spec.view,
+                motion: f.spec.motion,
+                truth: f.maxilla_from_mandible,
+                estimates,
+            });
+        }
+        progress(&format!("tracking the {name} scene"), total, total);
+    }
+    Ok(Run {
+        columns,
+        reference,
+        calibration,
+        calibrated_marker: cal.marker,
+        bite_steps,
+        calibration_frames,
+        frames: records,
+    })
+}
+
+/// What the bite step corrected for one stack.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiteStep {
+    /// Closed-jaw frames with a pose.
+    pub samples: usize,
+    /// How far it moved the mandible (mm).
+    pub translation_mm: f64,
+    /// How far it turned it (°).
+    pub rotation_deg: f64,
+    /// The samples' largest distance from their mean (mm).
+    pub spread_mm: f64,
+}
+
+/// One tracker per marker file.
+fn new_trackers(markers: &[Marker; 3], truth: &jawtrack_synth::GroundTruth) -> Result<Vec<Tracker>> {
+    let config = tracker_config(truth);
+    Ok(markers.iter().map(|m| Tracker::new(m.clone(), config)).collect::<std::result::Result<Vec<_>, _>>()?)
+}
+
+/// Both pipelines.
+struct Stacks<'a> {
+    reference_detector: &'a mut ReferenceDetector,
+    cv: Option<&'a mut OpenCv>,
+}
+
+impl Stacks<'_> {
+    /// `maxilla_from_mandible` of one frame by our trackers (one per marker file) and, when
+    /// OpenCV is there, by the reference stack with the same marker files.
+    #[allow(clippy::type_complexity)]
+    fn frame(
+        &mut self,
+        trackers: &mut [Tracker],
+        markers: &[Marker; 3],
+        path: &std::path::Path,
+        truth: &jawtrack_synth::GroundTruth,
+        t: f64,
+    ) -> Result<([Option<Pose>; 3], Option<[Option<Pose>; 3]>)> {
+        let img = read_luma(path)?;
+        let camera = &truth.intrinsics;
+        let mut ours = [None; 3];
+        for (tracker, out) in trackers.iter_mut().zip(&mut ours) {
+            let r = tracker.track(&img.view()?, camera, t).with_context(|| format!("tracking {}", path.display()))?;
+            *out = r.maxilla_from_mandible;
+        }
+        let Some(cv) = self.cv.as_deref_mut() else { return Ok((ours, None)) };
+        let detections = self
+            .reference_detector
+            .detect(&img.luma, img.width, img.height, img.width)
+            .map_err(|e| anyhow::anyhow!("C library on {}: {e}", path.display()))?;
+        let refs: Vec<&Marker> = markers.iter().collect();
+        let mut theirs = [None; 3];
+        for (pose, out) in
+            reference::maxilla_from_mandible(cv, &refs, &detections, camera)?.into_iter().zip(&mut theirs)
+        {
+            *out = pose.ok();
+        }
+        Ok((ours, Some(theirs)))
+    }
+}
+
+fn tracker_config(truth: &jawtrack_synth::GroundTruth) -> TrackerConfig {
+    TrackerConfig {
+        detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
+        ..TrackerConfig::default()
+    }
+}
+
+/// A frame's luma plane.
+struct Luma {
+    luma: Vec<u8>,
+    width: usize,
+    height: usize,
+}
+
+impl Luma {
+    fn view(&self) -> Result<ImageView<'_>> {
+        Ok(ImageView::new(&self.luma, self.width, self.height, self.width)?)
+    }
+}
+
+fn read_luma(path: &std::path::Path) -> Result<Luma> {
+    let img = image::open(path).with_context(|| format!("reading {}", path.display()))?.to_luma8();
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    Ok(Luma { luma: img.into_raw(), width, height })
+}
+
+/// An estimate's error along the head's axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorParts {
+    /// Position error of the mandible marker along head X, Y, Z (mm).
+    pub position_mm: Vector3<f64>,
+    /// The error rotation's components about head X, Y, Z (°).
+    pub rotation_deg: Vector3<f64>,
+}
+
+impl ErrorParts {
+    /// The position error's length (mm).
+    pub fn mm(&self) -> f64 {
+        self.position_mm.norm()
+    }
+
+    /// The error rotation's angle (°).
+    pub fn deg(&self) -> f64 {
+        self.rotation_deg.norm()
+    }
+}
+
+/// The error of an estimate of `maxilla_from_mandible` against the truth, along the head's
+/// axes (`head_from_maxilla` turns maxilla-frame vectors into head-frame ones).
+pub fn error_parts(estimate: &Pose, truth: &Pose, head_from_maxilla: &Pose) -> ErrorParts {
+    let turn = head_from_maxilla.rotation();
+    let position_mm = turn * (estimate.translation() - truth.translation());
+    let delta = estimate.rotation() * truth.rotation().inverse();
+    ErrorParts { position_mm, rotation_deg: (turn * delta.scaled_axis()).map(f64::to_degrees) }
+}
+
+/// Mean and sample standard deviation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeanSd {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (0 for one value).
+    pub sd: f64,
+}
+
+impl MeanSd {
+    /// Of some values; `None` when there are none.
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Option<MeanSd> {
+        let v: Vec<f64> = values.into_iter().collect();
+        if v.is_empty() {
+            return None;
+        }
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let sd = if v.len() > 1 { (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { 0.0 };
+        Some(MeanSd { mean, sd })
+    }
+}
+
+/// Ordinary least squares of tracked values on true ones.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Regression {
+    /// Points.
+    pub n: usize,
+    /// Slope (`None` when the truth does not move along this axis).
+    pub slope: Option<f64>,
+    /// Coefficient of determination (`None` likewise).
+    pub r2: Option<f64>,
+    /// Standard error of the estimate (mm): the residuals' RMS over n − 2 degrees of freedom;
+    /// when the truth does not move, the tracked values' SD about their mean (n − 1).
+    pub se_mm: f64,
+}
+
+/// Truth spread (mm) below which an axis counts as not moving.
+const STILL_MM: f64 = 1e-3;
+
+/// Regresses `tracked` on `truth`; `None` with fewer than 3 points.
+pub fn regress(truth: &[f64], tracked: &[f64]) -> Option<Regression> {
+    let n = truth.len().min(tracked.len());
+    if n < 3 {
+        return None;
+    }
+    let (x, y) = (&truth[..n], &tracked[..n]);
+    let nf = n as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / nf, y.iter().sum::<f64>() / nf);
+    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+    let syy: f64 = y.iter().map(|b| (b - my).powi(2)).sum();
+    if (sxx / nf).sqrt() < STILL_MM {
+        return Some(Regression { n, slope: None, r2: None, se_mm: (syy / (nf - 1.0)).sqrt() });
+    }
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let slope = sxy / sxx;
+    let ss_res: f64 = x.iter().zip(y).map(|(a, b)| (b - my - slope * (a - mx)).powi(2)).sum();
+    let r2 = if syy > 0.0 { 1.0 - ss_res / syy } else { 1.0 };
+    Some(Regression { n, slope: Some(slope), r2: Some(r2), se_mm: (ss_res / (nf - 2.0)).sqrt() })
+}
+
+/// One static view's errors for one column.
+#[derive(Debug, Clone)]
+pub struct StaticRow {
+    /// Hand-held (else on a tripod).
+    pub hand_held: bool,
+    /// Camera azimuth (°).
+    pub azimuth_deg: f64,
+    /// Camera distance (mm).
+    pub distance_mm: f64,
+    /// Frames of the view.
+    pub frames: usize,
+    /// Errors of the frames with a jaw pose.
+    pub errors: Vec<ErrorParts>,
+}
+
+impl StaticRow {
+    /// Mean and SD of the position error along head axis `axis` (0 X, 1 Y, 2 Z).
+    pub fn position(&self, axis: usize) -> Option<MeanSd> {
+        MeanSd::of(self.errors.iter().map(|e| e.position_mm[axis]))
+    }
+
+    /// Mean and SD of the rotation error about head axis `axis`.
+    pub fn rotation(&self, axis: usize) -> Option<MeanSd> {
+        MeanSd::of(self.errors.iter().map(|e| e.rotation_deg[axis]))
+    }
+
+    /// Mean and SD of the position error's length.
+    pub fn mm(&self) -> Option<MeanSd> {
+        MeanSd::of(self.errors.iter().map(ErrorParts::mm))
+    }
+
+    /// Mean and SD of the orientation error's angle.
+    pub fn deg(&self) -> Option<MeanSd> {
+        MeanSd::of(self.errors.iter().map(ErrorParts::deg))
+    }
+}
+
+/// The run's frames of `scene` with column `column`'s estimate, as (frame, error), plus the
+/// frames without one.
+fn judged(run: &Run, scene: SceneKind, column: usize) -> impl Iterator<Item = (&FrameRecord, Option<ErrorParts>)> {
+    let head_from_maxilla = Rig::default().head_from_maxilla;
+    run.frames
+        .iter()
+        .filter(move |f| f.scene == scene)
+        .map(move |f| (f, f.estimates[column].map(|e| error_parts(&e, &f.truth, &head_from_maxilla))))
+}
+
+/// The static table for one column: tripod then hand-held, by distance, then by angle.
+pub fn static_rows(run: &Run, column: usize) -> Vec<StaticRow> {
+    let mut rows: Vec<StaticRow> = Vec::new();
+    for (f, error) in judged(run, SceneKind::Static, column) {
+        let hand_held = f.view.hand_seed.is_some();
+        let row = match rows.iter_mut().find(|r| {
+            r.hand_held == hand_held && r.azimuth_deg == f.view.azimuth_deg && r.distance_mm == f.view.distance_mm
+        }) {
+            Some(r) => r,
+            None => {
+                rows.push(StaticRow {
+                    hand_held,
+                    azimuth_deg: f.view.azimuth_deg,
+                    distance_mm: f.view.distance_mm,
+                    frames: 0,
+                    errors: Vec::new(),
+                });
+                rows.last_mut().expect("just pushed")
+            }
+        };
+        row.frames += 1;
+        row.errors.extend(error);
+    }
+    rows
+}
+
+/// One opening (hinge) or glide (excursion) for one column: the incisor's displacement from
+/// its closed position along the head's axes, truth and tracked, for the frames with a pose.
+#[derive(Debug, Clone)]
+pub struct DynamicRow {
+    /// "10 mm", "left", …
+    pub label: String,
+    /// Frames of the movement.
+    pub frames: usize,
+    /// True incisor displacement (mm), frames with a pose.
+    pub truth: Vec<Vector3<f64>>,
+    /// Tracked incisor displacement (mm), same frames.
+    pub tracked: Vec<Vector3<f64>>,
+    /// Pose errors, same frames.
+    pub errors: Vec<ErrorParts>,
+}
+
+impl DynamicRow {
+    /// The regression of the tracked incisor on the truth along head axis `axis`.
+    pub fn regression(&self, axis: usize) -> Option<Regression> {
+        let truth: Vec<f64> = self.truth.iter().map(|v| v[axis]).collect();
+        let tracked: Vec<f64> = self.tracked.iter().map(|v| v[axis]).collect();
+        regress(&truth, &tracked)
+    }
+
+    /// The largest standard error over the three axes (mm).
+    pub fn worst_se_mm(&self) -> Option<f64> {
+        (0..3).map(|a| self.regression(a).map(|r| r.se_mm)).collect::<Option<Vec<_>>>()?.into_iter().reduce(f64::max)
+    }
+
+    /// Mean and SD of the incisor's 3D error (mm).
+    pub fn incisor_mm(&self) -> Option<MeanSd> {
+        MeanSd::of(self.truth.iter().zip(&self.tracked).map(|(a, b)| (a - b).norm()))
+    }
+}
+
+/// The hinge (by opening) or excursion (by glide) table for one column.
+pub fn dynamic_rows(run: &Run, scene: SceneKind, column: usize) -> Vec<DynamicRow> {
+    let rig = Rig::default();
+    let closed = rig.lower_incisal_point;
+    let mut rows: Vec<DynamicRow> = Vec::new();
+    for (f, error) in judged(run, scene, column) {
+        let label = match f.motion {
+            JawMotion::Hinge { opening_mm, .. } => format!("{opening_mm:.0} mm"),
+            JawMotion::Glide { direction, .. } => format!("{direction:?}").to_lowercase(),
+            JawMotion::Rest => "rest".into(),
+            JawMotion::Chew { .. } => "chew".into(),
+        };
+        let row = match rows.iter_mut().find(|r| r.label == label) {
+            Some(r) => r,
+            None => {
+                rows.push(DynamicRow { label, frames: 0, truth: Vec::new(), tracked: Vec::new(), errors: Vec::new() });
+                rows.last_mut().expect("just pushed")
+            }
+        };
+        row.frames += 1;
+        if let (Some(estimate), Some(error)) = (f.estimates[column], error) {
+            row.truth.push(rig.lower_incisor(&f.truth).coords - closed);
+            row.tracked.push(rig.lower_incisor(&estimate).coords - closed);
+            row.errors.push(error);
+        }
+    }
+    if scene == SceneKind::Hinge {
+        rows.sort_by(|a, b| a.label.len().cmp(&b.label.len()).then(a.label.cmp(&b.label)));
+    }
+    rows
+}
+
+/// Frames of a scene, how many had a pose, how many were flips, and the worst orientation
+/// error (°), for one column.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Flips {
+    /// Frames.
+    pub frames: usize,
+    /// Frames with a jaw pose.
+    pub posed: usize,
+    /// Frames more than `FLIP_DEG` off.
+    pub flips: usize,
+    /// Worst orientation error (°).
+    pub worst_deg: f64,
+}
+
+/// Flips of one column in one scene.
+pub fn flips(run: &Run, scene: SceneKind, column: usize) -> Flips {
+    let mut out = Flips { frames: 0, posed: 0, flips: 0, worst_deg: 0.0 };
+    for (_, error) in judged(run, scene, column) {
+        out.frames += 1;
+        if let Some(e) = error {
+            out.posed += 1;
+            out.flips += usize::from(e.deg() > FLIP_DEG);
+            out.worst_deg = out.worst_deg.max(e.deg());
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    #[test]
+    fn regression_recovers_a_line_and_its_scatter() {
+        let truth: Vec<f64> = (0..50).map(|i| i as f64 * 0.8).collect();
+        // Slope 1.02, offset 0.3, residuals ±0.05 alternating: SE = 0.05·√(n/(n−2)).
+        let tracked: Vec<f64> =
+            truth.iter().enumerate().map(|(i, x)| 0.3 + 1.02 * x + if i % 2 == 0 { 0.05 } else { -0.05 }).collect();
+        let r = regress(&truth, &tracked).expect("enough points");
+        assert!((r.slope.expect("moving") - 1.02).abs() < 1e-3, "{r:?}");
+        assert!((r.se_mm - 0.05 * (50.0f64 / 48.0).sqrt()).abs() < 2e-3, "{r:?}");
+        assert!(r.r2.expect("moving") > 0.999 && r.r2.expect("moving") < 1.0);
+        // An axis that does not move: the SD of the tracked values, no slope.
+        let still = regress(&[1.0; 4], &[0.0, 0.2, 0.0, 0.2]).expect("enough points");
+        assert_eq!((still.slope, still.r2), (None, None));
+        assert!((still.se_mm - (0.04f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert!(regress(&[1.0, 2.0], &[1.0, 2.0]).is_none());
+    }
+
+    #[test]
+    fn errors_are_read_along_the_head_axes() {
+        let rig = Rig::default();
+        let truth = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 44.0, 0.0));
+        // 0.1 mm along maxilla +X and 0.2° about maxilla +Z: the maxilla marker faces forward
+        // (a half turn about Y from the head), so that is head −X and about head −Z.
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.2f64.to_radians());
+        let estimate = Pose::from_parts(turn, Vector3::new(0.1, 44.0, 0.0));
+        let e = error_parts(&estimate, &truth, &rig.head_from_maxilla);
+        assert!((e.position_mm - Vector3::new(-0.1, 0.0, 0.0)).norm() < 1e-12, "{e:?}");
+        assert!((e.rotation_deg - Vector3::new(0.0, 0.0, -0.2)).norm() < 1e-9, "{e:?}");
+        assert!((e.mm() - 0.1).abs() < 1e-12 && (e.deg() - 0.2).abs() < 1e-9);
+    }
+
+    #[test]
+    fn mean_and_sd() {
+        let m = MeanSd::of([1.0, 2.0, 3.0]).expect("values");
+        assert!((m.mean - 2.0).abs() < 1e-12 && (m.sd - 1.0).abs() < 1e-12);
+        assert_eq!(MeanSd::of([5.0]).map(|m| m.sd), Some(0.0));
+        assert!(MeanSd::of(std::iter::empty()).is_none());
+    }
+}
