@@ -32,6 +32,9 @@ pub(crate) struct BenchArgs {
 enum BenchKind {
     /// Time per frame of detection, pose and the whole pipeline; PnP per body beside OpenCV.
     Pipeline(PipelineArgs),
+    /// The thesis's benchtop experiments on rendered frames: static grid, hinge, excursions,
+    /// after calibrating the marker; tables, CSV, plots and a report, beside the reference stack.
+    Accuracy(crate::accuracy::AccuracyArgs),
 }
 
 #[derive(Args)]
@@ -59,6 +62,7 @@ struct PipelineArgs {
 pub(crate) fn run(a: &BenchArgs) -> Result<()> {
     match &a.which {
         BenchKind::Pipeline(p) => pipeline(p),
+        BenchKind::Accuracy(a) => crate::accuracy::run(a),
     }
 }
 

@@ -12,6 +12,7 @@ macro_rules! say {
     }};
 }
 
+mod accuracy;
 mod bench;
 mod calibrate;
 mod demo;
@@ -56,7 +57,8 @@ enum Command {
     /// Track recorded frames: both marker poses and the mandible in the maxilla, one JSON line
     /// per frame.
     Track(track::TrackArgs),
-    /// Benchmarks: `bench pipeline` times the tracking pipeline and PnP beside OpenCV.
+    /// Benchmarks: `bench pipeline` times the tracking pipeline and PnP beside OpenCV;
+    /// `bench accuracy` runs the thesis's benchtop experiments on rendered frames.
     Bench(bench::BenchArgs),
     /// Calibrate the marker from frames of it turned in front of the camera: finds tags glued
     /// turned or on the wrong face, refines every tag's place, writes a marker file.

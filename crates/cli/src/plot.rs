@@ -1,6 +1,9 @@
 //! Small SVG line charts for the CLI's reports (trajectories against their truth): axes with
-//! round-number ticks, one polyline or set of dots per series, a legend.
+//! round-number ticks, one polyline or set of dots per series, a legend; saved as SVG and, for
+//! reports read where SVG is not shown, rasterised to PNG by resvg.
 
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
 use svg::Document;
 use svg::node::element::{Circle, Line, Polyline, Rectangle, Text};
 
@@ -147,6 +150,25 @@ pub(crate) fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<
     doc
 }
 
+/// Writes `doc` as `<stem>.svg` and `<stem>.png` (twice the SVG's size; text in the system's
+/// sans-serif font, left out when the system has none); returns both paths.
+pub(crate) fn save_svg_and_png(doc: &Document, stem: &Path) -> Result<[PathBuf; 2]> {
+    use resvg::{tiny_skia, usvg};
+    let svg_path = stem.with_extension("svg");
+    let png_path = stem.with_extension("png");
+    let text = doc.to_string();
+    std::fs::write(&svg_path, &text).with_context(|| format!("writing {}", svg_path.display()))?;
+    let mut options = usvg::Options::default();
+    options.fontdb_mut().load_system_fonts();
+    let tree = usvg::Tree::from_str(&text, &options).context("reading back our own SVG")?;
+    const SCALE: f32 = 2.0;
+    let size = tree.size().to_int_size().scale_by(SCALE).context("the chart's size")?;
+    let mut pixmap = tiny_skia::Pixmap::new(size.width(), size.height()).context("a pixmap for the chart")?;
+    resvg::render(&tree, tiny_skia::Transform::from_scale(SCALE, SCALE), &mut pixmap.as_mut());
+    pixmap.save_png(&png_path).with_context(|| format!("writing {}", png_path.display()))?;
+    Ok([svg_path, png_path])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -174,5 +196,17 @@ mod tests {
         assert_eq!(text.matches("<polyline").count(), 1);
         assert_eq!(text.matches("<circle").count(), 2, "the NaN point is left out");
         assert!(text.contains("truth") && text.contains("tracked"), "legend");
+    }
+
+    #[test]
+    fn a_chart_saves_as_svg_and_a_png_that_is_not_blank() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let s = [Series { name: "line", color: "#c00", style: Style::Line, points: vec![(0.0, 0.0), (1.0, 2.0)] }];
+        let [svg, png] = save_svg_and_png(&chart("t", "x", "y", &s, false), &dir.path().join("c")).expect("saved");
+        assert!(std::fs::read_to_string(svg).expect("svg").contains("<polyline"));
+        let img = image::open(png).expect("a PNG").to_rgb8();
+        assert_eq!((img.width(), img.height()), (2 * W as u32, 2 * H as u32));
+        let red = img.pixels().filter(|p| p[0] > 150 && p[1] < 80 && p[2] < 80).count();
+        assert!(red > 100, "the red line is drawn ({red} red pixels)");
     }
 }
