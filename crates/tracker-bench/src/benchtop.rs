@@ -760,6 +760,86 @@ mod tests {
         assert!((e.mm() - 0.1).abs() < 1e-12 && (e.deg() - 0.2).abs() < 1e-9);
     }
 
+    /// A run of two static frames from one view and a hinge opening, one column, with
+    /// estimates off by known amounts.
+    fn tiny_run() -> Run {
+        let rig = Rig::default();
+        let rest = rig.head_from_maxilla.inverse() * rig.head_from_mandible_rest;
+        let view =
+            View { distance_mm: 100.0, azimuth_deg: 30.0, elevation_deg: 0.0, target: [0.0; 3], hand_seed: None };
+        // 0.04 mm along maxilla +Y is 0.04 mm along head +Y (the half turn is about Y).
+        let off = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 0.04, 0.0));
+        let flip =
+            Pose::from_parts(UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 2f64.to_radians()), Vector3::zeros());
+        let mut frames = vec![
+            FrameRecord {
+                scene: SceneKind::Static,
+                index: 0,
+                t: 0.0,
+                view,
+                motion: JawMotion::Rest,
+                truth: rest,
+                estimates: vec![Some(off * rest)],
+            },
+            FrameRecord {
+                scene: SceneKind::Static,
+                index: 1,
+                t: 0.1,
+                view,
+                motion: JawMotion::Rest,
+                truth: rest,
+                estimates: vec![None],
+            },
+        ];
+        let motion = JawMotion::Hinge { opening_mm: 20.0, start_s: 0.0, period_s: 2.0 };
+        for i in 0..10 {
+            let t = i as f64 * 0.2;
+            let (maxilla, mandible) = rig.markers(&motion, t);
+            let truth = maxilla.inverse() * mandible;
+            let estimate = if i == 5 { rest * flip } else { truth };
+            frames.push(FrameRecord {
+                scene: SceneKind::Hinge,
+                index: i,
+                t,
+                view,
+                motion,
+                truth,
+                estimates: vec![Some(estimate)],
+            });
+        }
+        Run {
+            columns: vec![Column { stack: Stack::Ours, marker: MarkerFile::Calibrated }],
+            reference: Err("not run".into()),
+            calibration: Vec::new(),
+            calibrated_marker: Marker::default(),
+            bite_steps: vec![None],
+            calibration_frames: 0,
+            frames,
+        }
+    }
+
+    #[test]
+    fn tables_group_frames_and_count_what_is_missing() {
+        let run = tiny_run();
+        let rows = static_rows(&run, 0);
+        assert_eq!(rows.len(), 1);
+        let row = &rows[0];
+        assert_eq!((row.frames, row.errors.len(), row.hand_held), (2, 1, false));
+        assert!((row.position(1).expect("a pose").mean - 0.04).abs() < 1e-9, "{row:?}");
+        assert!(row.mm().expect("a pose").mean < 0.041 && row.deg().expect("a pose").mean < 1e-9);
+
+        let hinge = dynamic_rows(&run, SceneKind::Hinge, 0);
+        assert_eq!(hinge.len(), 1);
+        assert_eq!((hinge[0].label.as_str(), hinge[0].frames, hinge[0].errors.len()), ("20 mm", 10, 10));
+        // The one wild frame (the jaw shown closed and turned at peak opening) spoils the fit.
+        assert!(hinge[0].worst_se_mm().expect("fits") > 1.0);
+
+        let f = flips(&run, SceneKind::Hinge, 0);
+        assert_eq!((f.frames, f.posed, f.flips), (10, 10, 1));
+        let s = flips(&run, SceneKind::Static, 0);
+        assert_eq!((s.frames, s.posed, s.flips), (2, 1, 0));
+    }
+
     #[test]
     fn mean_and_sd() {
         let m = MeanSd::of([1.0, 2.0, 3.0]).expect("values");
