@@ -59,6 +59,11 @@ pub struct CalibrationOptions {
     /// Corner residual (px) beyond which the adjustment's loss grows linearly (Huber): a
     /// corner blurred or seen edge-on weighs less than one seen well.
     pub huber_px: f64,
+    /// After a first adjustment, a tag's sighting in a view is dropped when its RMS error
+    /// exceeds this many times the median sighting's …
+    pub outlier_ratio: f64,
+    /// … and this (px); the adjustment then runs again without it.
+    pub outlier_px: f64,
     /// Another placement is taken when the nominal one misses by more than this (px RMS) …
     pub gross_min_px: f64,
     /// … and the other fits at least this many times better.
@@ -74,6 +79,8 @@ impl Default for CalibrationOptions {
             rotation_prior_deg: 2.0,
             max_iterations: 100,
             huber_px: 1.0,
+            outlier_ratio: 4.0,
+            outlier_px: 0.3,
             gross_min_px: 5.0,
             gross_ratio: 4.0,
         }
@@ -392,8 +399,24 @@ fn calibrate_body(
         }
     }
     // 2. Bundle adjustment of the poses and the well-seen tags.
-    let free: Vec<usize> = (0..tags.len()).filter(|&t| counts[t] >= options.min_views).collect();
+    let mut free: Vec<usize> = (0..tags.len()).filter(|&t| counts[t] >= options.min_views).collect();
     adjust(&mut views, &mut models, &free, options);
+    // 3. A tag seen badly in one view (glare, the other marker's edge across it, a grazing
+    //    angle) pulls every placement, Huber loss or not: drop such sightings, adjust again.
+    let mut counts = counts;
+    for _ in 0..2 {
+        if drop_outlier_sightings(&mut views, &models, options) == 0 {
+            break;
+        }
+        counts = (0..tags.len()).map(|t| views.iter().filter(|v| v.seen.iter().any(|s| s.tag == t)).count()).collect();
+        free = (0..tags.len()).filter(|&t| counts[t] >= options.min_views).collect();
+        for (t, m) in models.iter_mut().enumerate() {
+            if !free.contains(&t) {
+                m.e = Vector3::zeros();
+            }
+        }
+        adjust(&mut views, &mut models, &free, options);
+    }
 
     let mut findings = findings_assembly;
     let mut corrections = Vec::new();
@@ -429,6 +452,39 @@ fn calibrate_body(
         findings,
     };
     Some((fixed, report))
+}
+
+/// Drops the sightings whose RMS error is past `options.outlier_ratio` × the median
+/// sighting's and past `options.outlier_px` (unless that would leave their tag uncalibrated),
+/// then the views left with fewer than two tags. Returns how many sightings went.
+fn drop_outlier_sightings(views: &mut Vec<View>, models: &[TagModel], options: &CalibrationOptions) -> usize {
+    let rms = |v: &View, s: &Seen| (tag_sse(v, s, &models[s.tag], &v.pose, [0, 1, 2, 3]) / 4.0).sqrt();
+    let mut all: Vec<f64> = views.iter().flat_map(|v| v.seen.iter().map(move |s| rms(v, s))).collect();
+    if all.is_empty() {
+        return 0;
+    }
+    all.sort_by(f64::total_cmp);
+    let limit = (all[all.len() / 2] * options.outlier_ratio).max(options.outlier_px);
+    // A tag seen badly everywhere (all its sightings oblique) keeps them rather than being
+    // left nominal: a place fitted to poor sightings is nearer the truth than none.
+    let mut kept = vec![0usize; models.len()];
+    let mut seen = vec![0usize; models.len()];
+    for v in views.iter() {
+        for s in &v.seen {
+            seen[s.tag] += 1;
+            kept[s.tag] += usize::from(rms(v, s) <= limit);
+        }
+    }
+    let spared: Vec<bool> =
+        (0..models.len()).map(|t| seen[t] >= options.min_views && kept[t] < options.min_views).collect();
+    let mut dropped = 0;
+    for v in views.iter_mut() {
+        let keep: Vec<Seen> = v.seen.iter().copied().filter(|s| spared[s.tag] || rms(v, s) <= limit).collect();
+        dropped += v.seen.len() - keep.len();
+        v.seen = keep;
+    }
+    views.retain(|v| v.seen.len() >= 2);
+    dropped
 }
 
 /// RMS reprojection error (px) over every corner of every view.

@@ -182,3 +182,30 @@ fn no_usable_view_is_an_error() {
     let e = calibrate(&Marker::default(), &[bad], &CalibrationOptions::default()).expect_err("bad camera");
     assert!(e.to_string().contains("frame 0"), "{e}");
 }
+
+#[test]
+fn a_tag_seen_badly_in_a_few_views_does_not_pull_the_others() {
+    let mut rng = Lcg(23);
+    let truth = printed(&mut rng);
+    let (mut frames, _) = views(&truth, 60, 0.2, &mut rng);
+    // Glare or the other marker's edge across a tag: two of its corners off by 4 px, on each
+    // body in every third view.
+    for f in frames.iter_mut().step_by(3) {
+        for upper in [true, false] {
+            if let Some(t) = f.tags.iter_mut().find(|t| (t.id < 12) == upper) {
+                for c in &mut t.corners[..2] {
+                    c[0] += 4.0;
+                }
+            }
+        }
+    }
+    let kept = CalibrationOptions { outlier_ratio: f64::INFINITY, ..CalibrationOptions::default() };
+    let with = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates");
+    let without = calibrate(&Marker::default(), &frames, &kept).expect("calibrates");
+    for kind in BodyKind::ALL {
+        let (a, b) = (shape_difference(&with.marker, &truth, kind), shape_difference(&without.marker, &truth, kind));
+        eprintln!("{kind}: shape off by {a:.4} mm dropping bad sightings, {b:.4} mm keeping them");
+        assert!(a < 0.02, "{kind}: {a:.4} mm");
+        assert!(a < b, "{kind}: dropping bad sightings helps ({a:.4} vs {b:.4} mm)");
+    }
+}
