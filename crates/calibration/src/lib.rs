@@ -455,8 +455,8 @@ fn calibrate_body(
 }
 
 /// Drops the sightings whose RMS error is past `options.outlier_ratio` × the median
-/// sighting's and past `options.outlier_px` (unless that would leave their tag uncalibrated),
-/// then the views left with fewer than two tags. Returns how many sightings went.
+/// sighting's and past `options.outlier_px`, and the views left with fewer than two tags,
+/// unless that would leave a tag uncalibrated. Returns how many sightings went.
 fn drop_outlier_sightings(views: &mut Vec<View>, models: &[TagModel], options: &CalibrationOptions) -> usize {
     let rms = |v: &View, s: &Seen| (tag_sse(v, s, &models[s.tag], &v.pose, [0, 1, 2, 3]) / 4.0).sqrt();
     let mut all: Vec<f64> = views.iter().flat_map(|v| v.seen.iter().map(move |s| rms(v, s))).collect();
@@ -465,26 +465,41 @@ fn drop_outlier_sightings(views: &mut Vec<View>, models: &[TagModel], options: &
     }
     all.sort_by(f64::total_cmp);
     let limit = (all[all.len() / 2] * options.outlier_ratio).max(options.outlier_px);
-    // A tag seen badly everywhere (all its sightings oblique) keeps them rather than being
-    // left nominal: a place fitted to poor sightings is nearer the truth than none.
-    let mut kept = vec![0usize; models.len()];
-    let mut seen = vec![0usize; models.len()];
-    for v in views.iter() {
-        for s in &v.seen {
-            seen[s.tag] += 1;
-            kept[s.tag] += usize::from(rms(v, s) <= limit);
+    // A tag that would be left in too few views (its sightings all oblique, or its views
+    // emptied of other tags) keeps its sightings rather than being left nominal: a place
+    // fitted to poor sightings is nearer the truth than none.
+    let count = |views: &[View]| {
+        let mut n = vec![0usize; models.len()];
+        for v in views {
+            for s in &v.seen {
+                n[s.tag] += 1;
+            }
+        }
+        n
+    };
+    let before = count(views);
+    let mut spared = vec![false; models.len()];
+    loop {
+        let kept: Vec<View> = views
+            .iter()
+            .map(|v| View {
+                seen: v.seen.iter().copied().filter(|s| spared[s.tag] || rms(v, s) <= limit).collect(),
+                ..v.clone()
+            })
+            .filter(|v| v.seen.len() >= 2)
+            .collect();
+        let after = count(&kept);
+        let starved: Vec<usize> = (0..models.len())
+            .filter(|&t| !spared[t] && before[t] >= options.min_views && after[t] < options.min_views)
+            .collect();
+        if starved.is_empty() {
+            *views = kept;
+            return before.iter().sum::<usize>() - after.iter().sum::<usize>();
+        }
+        for t in starved {
+            spared[t] = true;
         }
     }
-    let spared: Vec<bool> =
-        (0..models.len()).map(|t| seen[t] >= options.min_views && kept[t] < options.min_views).collect();
-    let mut dropped = 0;
-    for v in views.iter_mut() {
-        let keep: Vec<Seen> = v.seen.iter().copied().filter(|s| spared[s.tag] || rms(v, s) <= limit).collect();
-        dropped += v.seen.len() - keep.len();
-        v.seen = keep;
-    }
-    views.retain(|v| v.seen.len() >= 2);
-    dropped
 }
 
 /// RMS reprojection error (px) over every corner of every view.
