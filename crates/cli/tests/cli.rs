@@ -299,7 +299,8 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     let o = jawtrack(&["calibrate-marker", "--intrinsics", intrinsics, "--out", calibrated, frames]);
     assert!(o.status.success(), "{}", stderr(&o));
     let report = String::from_utf8_lossy(&o.stdout);
-    assert!(report.contains("maxilla: 18 views") && report.contains("px calibrated"), "{report}");
+    // 18 frames; one view's sightings miss by far more than the others' and are left out.
+    assert!(report.contains("maxilla: 17 views") && report.contains("px calibrated"), "{report}");
     // Faces turned toward the patient are never seen: named, kept nominal.
     assert!(stderr(&o).contains("warning: tag 9 was seen in 0 usable view(s)"), "{}", stderr(&o));
     let o = jawtrack(&["check-marker", calibrated]);
