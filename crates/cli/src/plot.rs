@@ -159,7 +159,18 @@ pub(crate) fn save_svg_and_png(doc: &Document, stem: &Path) -> Result<[PathBuf; 
     let text = doc.to_string();
     std::fs::write(&svg_path, &text).with_context(|| format!("writing {}", svg_path.display()))?;
     let mut options = usvg::Options::default();
-    options.fontdb_mut().load_system_fonts();
+    let fonts = options.fontdb_mut();
+    fonts.load_system_fonts();
+    // usvg reads "sans-serif" as Arial unless told otherwise: name a face the system has.
+    let has = |name: &str| fonts.faces().any(|f| f.families.iter().any(|(n, _)| n == name));
+    let family = ["DejaVu Sans", "Liberation Sans", "Noto Sans", "Arial", "Helvetica"]
+        .into_iter()
+        .find(|n| has(n))
+        .map(str::to_owned)
+        .or_else(|| fonts.faces().next().and_then(|f| f.families.first()).map(|(n, _)| n.clone()));
+    if let Some(family) = family {
+        fonts.set_sans_serif_family(family);
+    }
     let tree = usvg::Tree::from_str(&text, &options).context("reading back our own SVG")?;
     const SCALE: f32 = 2.0;
     let size = tree.size().to_int_size().scale_by(SCALE).context("the chart's size")?;
