@@ -375,8 +375,7 @@ fn calibrate_body(
     for v in &mut views {
         v.pose = fit_pose(v, &nominal, None).unwrap_or_else(Isometry3::identity);
     }
-    let counts: Vec<usize> =
-        (0..tags.len()).map(|t| views.iter().filter(|v| v.seen.iter().any(|s| s.tag == t)).count()).collect();
+    let counts = views_per_tag(&views, tags.len());
     let per_tag_rms = |models: &[TagModel], views: &[View], t: usize| -> f64 {
         let (mut sum, mut n) = (0.0, 0);
         for v in views {
@@ -408,7 +407,7 @@ fn calibrate_body(
         if drop_outlier_sightings(&mut views, &models, options) == 0 {
             break;
         }
-        counts = (0..tags.len()).map(|t| views.iter().filter(|v| v.seen.iter().any(|s| s.tag == t)).count()).collect();
+        counts = views_per_tag(&views, tags.len());
         free = (0..tags.len()).filter(|&t| counts[t] >= options.min_views).collect();
         for (t, m) in models.iter_mut().enumerate() {
             if !free.contains(&t) {
@@ -500,6 +499,11 @@ fn drop_outlier_sightings(views: &mut Vec<View>, models: &[TagModel], options: &
             spared[t] = true;
         }
     }
+}
+
+/// How many views see each of `tags` tags.
+fn views_per_tag(views: &[View], tags: usize) -> Vec<usize> {
+    (0..tags).map(|t| views.iter().filter(|v| v.seen.iter().any(|s| s.tag == t)).count()).collect()
 }
 
 /// RMS reprojection error (px) over every corner of every view.

@@ -398,6 +398,10 @@ fn new_trackers(markers: &[Marker; 3], truth: &jawtrack_synth::GroundTruth) -> R
     Ok(markers.iter().map(|m| Tracker::new(m.clone(), config)).collect::<std::result::Result<Vec<_>, _>>()?)
 }
 
+/// One stack's `maxilla_from_mandible` with each of the nominal, calibrated and printed
+/// marker files.
+type PerMarker = [Option<Pose>; 3];
+
 /// Both pipelines.
 struct Stacks<'a> {
     reference_detector: &'a mut ReferenceDetector,
@@ -407,7 +411,6 @@ struct Stacks<'a> {
 impl Stacks<'_> {
     /// `maxilla_from_mandible` of one frame by our trackers (one per marker file) and, when
     /// OpenCV is there, by the reference stack with the same marker files.
-    #[allow(clippy::type_complexity)]
     fn frame(
         &mut self,
         trackers: &mut [Tracker],
@@ -415,7 +418,7 @@ impl Stacks<'_> {
         path: &std::path::Path,
         truth: &jawtrack_synth::GroundTruth,
         t: f64,
-    ) -> Result<([Option<Pose>; 3], Option<[Option<Pose>; 3]>)> {
+    ) -> Result<(PerMarker, Option<PerMarker>)> {
         let img = read_luma(path)?;
         let camera = &truth.intrinsics;
         let mut ours = [None; 3];
