@@ -9,7 +9,7 @@ use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_calibration::{CalibrationOptions, Finding, calibrate};
 use jawtrack_marker::Marker;
-use jawtrack_tracker::record::frame_record;
+use jawtrack_tracker::record::{RecordingHeader, frame_record};
 use jawtrack_tracker::{Tracker, TrackerConfig};
 use std::io::Write as _;
 
@@ -123,6 +123,10 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
         let mut tracker = Tracker::new(marker, config)?;
         let poses = dir.join(file);
         let mut out = std::io::BufWriter::new(std::fs::File::create(&poses)?);
+        let mut header = RecordingHeader::new("jawtrack demo");
+        header.intrinsics = Some(truth.intrinsics);
+        header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
+        writeln!(out, "{}", header.to_line())?;
         let (mut dt, mut dr, mut ms, mut path) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (i, f) in truth.frames.iter().enumerate() {
             let img = image::open(dir.join(&f.file))?.to_luma8();

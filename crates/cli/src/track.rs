@@ -1,6 +1,6 @@
 //! `jawtrack track`: tracks recorded frames (image files, folders of them sorted by name, or a
 //! video decoded by ffmpeg) and writes one JSON line per frame in the tracker's recording
-//! schema (`jawtrack_tracker::record`). Every line is flushed as it is written, so a killed
+//! schema (`jawtrack_tracker::record`), after a header line naming the camera, marker and settings. Every line is flushed as it is written, so a killed
 //! run leaves a readable file.
 
 use crate::frames::open_frames;
@@ -9,7 +9,7 @@ use clap::Args;
 use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_tracker::record::frame_record;
+use jawtrack_tracker::record::{RecordingHeader, frame_record};
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -95,6 +95,14 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     } else {
         Box::new(std::fs::File::create(&a.out).with_context(|| format!("creating {}", a.out.display()))?)
     };
+    let mut header = RecordingHeader::new("jawtrack track");
+    header.intrinsics = Some(a.intrinsics);
+    header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
+    header.settings = serde_json::json!({
+        "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
+        "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
+    });
+    writeln!(out, "{}", header.to_line()).and_then(|()| out.flush()).context("writing the poses")?;
     let bar = progress_bar(source.len());
     let mut summary = Summary::default();
     let mut index = 0;

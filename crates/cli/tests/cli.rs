@@ -147,8 +147,10 @@ fn track_writes_one_line_per_frame_with_the_jaw_pose() {
         serde_json::from_str(&std::fs::read_to_string(Path::new(set).join("ground_truth.json")).expect("truth"))
             .expect("json");
     let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).expect("json line")).collect();
-    assert_eq!(lines.len(), 6);
-    for (i, (line, f)) in lines.iter().zip(truth["frames"].as_array().expect("frames")).enumerate() {
+    assert_eq!(lines.len(), 7, "a header and six frames");
+    assert_eq!(lines[0]["recording"]["source"], "jawtrack track");
+    assert_eq!(lines[0]["recording"]["intrinsics"]["fx"], 1500.0);
+    for (i, (line, f)) in lines[1..].iter().zip(truth["frames"].as_array().expect("frames")).enumerate() {
         assert_eq!(line["frame"], i);
         assert!(line["maxilla"]["cov"].as_array().is_some_and(|c| c.len() == 36));
         // The nominal marker (print errors unknown): the mandible in the maxilla within 1 mm.
@@ -256,6 +258,7 @@ fn track_reads_a_video_through_ffmpeg_as_it_reads_the_frames() {
         std::fs::read_to_string(p)
             .expect("poses")
             .lines()
+            .skip(1)
             .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("json")["maxilla_from_mandible"].clone())
             .collect()
     };
@@ -271,7 +274,7 @@ fn jaw_error(poses: &Path, set: &Path) -> (f64, f64) {
         serde_json::from_str(&std::fs::read_to_string(set.join("ground_truth.json")).expect("truth")).expect("json");
     let (mut dt, mut dr, mut n) = (0.0, 0.0, 0.0);
     for (line, f) in
-        std::fs::read_to_string(poses).expect("poses").lines().zip(truth["frames"].as_array().expect("frames"))
+        std::fs::read_to_string(poses).expect("poses").lines().skip(1).zip(truth["frames"].as_array().expect("frames"))
     {
         let line: serde_json::Value = serde_json::from_str(line).expect("json line");
         let m: [f64; 16] = serde_json::from_value(line["maxilla_from_mandible"].clone()).expect("a jaw pose");
