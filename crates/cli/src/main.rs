@@ -18,6 +18,8 @@ mod calibrate;
 mod demo;
 mod detect;
 mod frames;
+mod link;
+mod live;
 mod plot;
 mod track;
 
@@ -63,6 +65,16 @@ enum Command {
     /// Calibrate the marker from frames of it turned in front of the camera: finds tags glued
     /// turned or on the wrong face, refines every tag's place, writes a marker file.
     CalibrateMarker(calibrate::CalibrateArgs),
+    /// Make a pairing key for the phone link (prints it; keep it secret).
+    Keygen,
+    /// Receive the phone's pose stream: record it, count losses, acknowledge, and optionally
+    /// serve the live 3D viewer.
+    Receive(link::ReceiveArgs),
+    /// Simulate the phone: replay a recording to a receiver, with optional loss, reordering
+    /// and duplication.
+    Send(link::SendArgs),
+    /// Replay a recording in the 3D viewer with a timeline.
+    View(live::ViewArgs),
 }
 
 #[derive(Args)]
@@ -165,6 +177,13 @@ fn main() {
         Command::Track(a) => track::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::CalibrateMarker(a) => calibrate::run(&a),
+        Command::Keygen => {
+            link::keygen();
+            Ok(())
+        }
+        Command::Receive(a) => link::receive(&a),
+        Command::Send(a) => link::send(&a),
+        Command::View(a) => live::view(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

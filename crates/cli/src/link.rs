@@ -1,0 +1,436 @@
+//! The desktop end of the phone link: `jawtrack receive` records the sealed pose datagrams the
+//! phone streams (one JSON line per accepted frame, flushed as it arrives), counts what was
+//! lost, reordered, duplicated or rejected, acknowledges so the phone can show the link is
+//! alive, and optionally serves the live viewer. `jawtrack send` is a phone simulator that
+//! replays a recording, with deliberate loss, reordering and duplication for tests and demos.
+//! `jawtrack keygen` makes a pairing key. The datagram itself lives in `jawtrack_wire`.
+
+use crate::live::{LiveServer, LiveState, ViewerOptions};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_tracker::record::{FrameRecord, RecordingHeader, read_recording};
+use jawtrack_wire::link::{Counters, Link, LinkConfig, Verdict};
+use jawtrack_wire::{Ack, Key, Message, PosePacket, Security, Session, decode, encode_ack, unix_ms};
+use rand::{Rng, SeedableRng};
+use std::io::Write;
+use std::net::{SocketAddr, UdpSocket};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How the pairing key is given, shared by `receive` and `send`.
+#[derive(Args)]
+pub(crate) struct KeyArgs {
+    /// The pairing key, 64 hex digits (from `jawtrack keygen`); or set JAWTRACK_KEY, which
+    /// keeps it out of the process list.
+    #[arg(long, env = "JAWTRACK_KEY", hide_env_values = true)]
+    key: Option<String>,
+    /// Send and accept unauthenticated, unencrypted datagrams. For development only: never with
+    /// patient data.
+    #[arg(long, conflicts_with = "key")]
+    insecure_plaintext: bool,
+}
+
+impl KeyArgs {
+    fn security(&self) -> Result<Security> {
+        match (&self.key, self.insecure_plaintext) {
+            (Some(k), false) => Ok(Security::Sealed(k.parse().context("--key")?)),
+            (None, true) => Ok(Security::Plaintext),
+            _ => bail!(
+                "give the pairing key with --key (or JAWTRACK_KEY); `jawtrack keygen` makes one. \
+                 --insecure-plaintext is for development only"
+            ),
+        }
+    }
+}
+
+fn key_id(security: &Security) -> Option<String> {
+    match security {
+        Security::Sealed(k) => Some(k.id()),
+        Security::Plaintext => None,
+    }
+}
+
+/// Arguments of `jawtrack receive`.
+#[derive(Args)]
+pub(crate) struct ReceiveArgs {
+    /// Address and UDP port to listen on, e.g. 0.0.0.0:5005 (all interfaces).
+    #[arg(long, default_value = "0.0.0.0:5005")]
+    listen: SocketAddr,
+    #[command(flatten)]
+    key: KeyArgs,
+    /// The recording to write (JSON lines, the schema of `jawtrack track`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Serve the live viewer at this address, e.g. 127.0.0.1:8080.
+    #[arg(long)]
+    serve: Option<SocketAddr>,
+    #[command(flatten)]
+    viewer: ViewerOptions,
+    /// Stop after this many seconds (default: run until Ctrl-C).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Stop once nothing has arrived for this many seconds after the first datagram.
+    #[arg(long)]
+    idle_exit: Option<f64>,
+    /// Refuse datagrams whose sender clock is further than this from ours (s); 0 turns the
+    /// check off (e.g. to receive a replay of an old capture).
+    #[arg(long, default_value_t = 60.0)]
+    max_clock_skew: f64,
+}
+
+/// What a receiver run did, printed as one JSON line at exit.
+fn summary_json(c: &Counters, acks: u64, elapsed: f64) -> serde_json::Value {
+    let cpu = process_cpu_seconds();
+    serde_json::json!({
+        "received": c.received,
+        "accepted": c.accepted,
+        "lost": c.lost,
+        "reordered": c.reordered,
+        "duplicated": c.duplicated,
+        "rejected": c.rejected_total(),
+        "rejected_by_reason": c.rejected,
+        "acks_sent": acks,
+        "duration_s": elapsed,
+        "cpu_s": cpu,
+        "cpu_share_of_one_core": cpu.map(|c| c / elapsed.max(1e-9)),
+    })
+}
+
+fn describe(c: &Counters) -> String {
+    format!(
+        "received {}, accepted {}, lost {}, reordered {}, duplicated {}, rejected {}",
+        c.received,
+        c.accepted,
+        c.lost,
+        c.reordered,
+        c.duplicated,
+        c.rejected_total()
+    )
+}
+
+/// CPU time of this process so far (s), from /proc (Linux only).
+pub(crate) fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which may hold spaces) start at the last ')'.
+    let fields: Vec<&str> = stat.get(stat.rfind(')')? + 2..)?.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    // USER_HZ is 100 on every Linux architecture we run on.
+    Some(ticks / 100.0)
+}
+
+pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
+    let security = a.key.security()?;
+    if security == Security::Plaintext {
+        eprintln!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
+    }
+    if !(a.max_clock_skew.is_finite() && a.max_clock_skew >= 0.0) {
+        bail!("--max-clock-skew must be a number of seconds ≥ 0, got {}", a.max_clock_skew);
+    }
+    for (name, v) in [("--duration", a.duration), ("--idle-exit", a.idle_exit)] {
+        if let Some(v) = v
+            && !(v.is_finite() && v > 0.0)
+        {
+            bail!("{name} must be a positive number of seconds, got {v}");
+        }
+    }
+    let socket = UdpSocket::bind(a.listen).with_context(|| format!("listening on {}", a.listen))?;
+    socket.set_read_timeout(Some(Duration::from_millis(100)))?;
+    let mut header = RecordingHeader::new("jawtrack receive");
+    header.key_id = key_id(&security);
+    header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
+    let mut out = std::fs::File::create(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    write_line(&mut out, &header.to_line()).with_context(|| format!("writing {}", a.out.display()))?;
+
+    let live = Arc::new(LiveState::new(&a.viewer, "live")?);
+    let _server = match a.serve {
+        Some(addr) => Some(LiveServer::start(addr, live.clone())?),
+        None => None,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst)).context("installing the Ctrl-C handler")?;
+    }
+    eprintln!(
+        "listening on {} ({}); recording to {}{}",
+        socket.local_addr()?,
+        match &security {
+            Security::Sealed(k) => format!("key id {}", k.id()),
+            Security::Plaintext => "PLAINTEXT".into(),
+        },
+        a.out.display(),
+        a.serve.map(|s| format!("; viewer at http://{s}/")).unwrap_or_default()
+    );
+
+    let config = LinkConfig {
+        max_clock_skew_ms: (a.max_clock_skew > 0.0).then_some((a.max_clock_skew * 1e3) as u64),
+        ..LinkConfig::default()
+    };
+    let mut link = Link::new(config);
+    let receiver_session: u64 = rand::random();
+    let (mut ack_seq, mut last_ack): (u64, Option<(SocketAddr, Instant)>) = (0, None);
+    let started = Instant::now();
+    let (mut last_status, mut last_live, mut last_arrival) = (Instant::now(), Instant::now(), None::<Instant>);
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    // Longer than any datagram, so an oversized one shows as a wrong length, not a cut one.
+    let mut buf = [0u8; 2048];
+    while !stop.load(Ordering::SeqCst) {
+        if a.duration.is_some_and(|d| started.elapsed().as_secs_f64() >= d)
+            || a.idle_exit.zip(last_arrival).is_some_and(|(idle, t)| t.elapsed().as_secs_f64() >= idle)
+        {
+            break;
+        }
+        if last_live.elapsed() >= Duration::from_millis(500) {
+            last_live = Instant::now();
+            live.status(&link.counters(), last_arrival);
+        }
+        if last_status.elapsed() >= Duration::from_secs(if tty { 1 } else { 10 }) {
+            last_status = Instant::now();
+            let c = link.counters();
+            if tty {
+                eprint!("\r\x1b[K{}", describe(&c));
+            } else {
+                eprintln!("{}", describe(&c));
+            }
+        }
+        let (n, from) = match socket.recv_from(&mut buf) {
+            Ok(x) => x,
+            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => continue,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            // ICMP errors from earlier acknowledgements (the phone went away) surface here.
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
+            Err(e) => return Err(e).context("receiving"),
+        };
+        last_arrival = Some(Instant::now());
+        let (header, packet) = match decode(&buf[..n], &security) {
+            Ok(Message::Pose(h, p)) => (h, p),
+            Ok(Message::Ack(..)) => {
+                link.count_rejection("not_a_pose");
+                continue;
+            }
+            Err(e) => {
+                link.reject(&e);
+                continue;
+            }
+        };
+        let now_ms = unix_ms();
+        if let Verdict::Accept { .. } = link.check(&header, now_ms) {
+            let record = packet.to_record(&header, now_ms as f64 / 1e3);
+            write_line(&mut out, &record.to_line()).with_context(|| format!("writing {}", a.out.display()))?;
+            live.pose(&record, Some(header.seq));
+        }
+        // Acknowledge at most 10 times a second per phone: enough for a live link light.
+        let due = last_ack.is_none_or(|(peer, t)| peer != from || t.elapsed() >= Duration::from_millis(100));
+        if due && let Some(s) = link.session(header.session) {
+            let ack = Ack {
+                session: s.session,
+                highest_seq: s.highest_seq,
+                accepted: s.accepted,
+                lost: s.lost,
+                rejected: link.counters().rejected_total(),
+            };
+            let datagram = encode_ack((receiver_session, ack_seq, now_ms), &ack, &security);
+            // A phone that vanished is not an error for the receiver.
+            if socket.send_to(&datagram, from).is_ok() {
+                ack_seq += 1;
+                last_ack = Some((from, Instant::now()));
+            }
+        }
+    }
+    if tty {
+        eprintln!();
+    }
+    let c = link.counters();
+    eprintln!(
+        "stopped after {:.1} s: {}; recording in {}",
+        started.elapsed().as_secs_f64(),
+        describe(&c),
+        a.out.display()
+    );
+    for (reason, n) in &c.rejected {
+        eprintln!("  rejected as {reason}: {n}");
+    }
+    say!("{}", summary_json(&c, ack_seq, started.elapsed().as_secs_f64()));
+    Ok(())
+}
+
+/// Writes a line in one call, so a killed process leaves at most that line cut short.
+fn write_line(out: &mut std::fs::File, line: &str) -> std::io::Result<()> {
+    let mut bytes = Vec::with_capacity(line.len() + 1);
+    bytes.extend_from_slice(line.as_bytes());
+    bytes.push(b'\n');
+    out.write_all(&bytes)
+}
+
+/// Arguments of `jawtrack send`.
+#[derive(Args)]
+pub(crate) struct SendArgs {
+    /// The recording to replay (JSON lines from `jawtrack track`, `receive` or the phone).
+    #[arg(long)]
+    replay: PathBuf,
+    /// Where the receiver listens.
+    #[arg(long)]
+    to: SocketAddr,
+    #[command(flatten)]
+    key: KeyArgs,
+    /// Datagrams per second.
+    #[arg(long, default_value_t = 30.0)]
+    rate: f64,
+    /// Send this many datagrams, cycling through the recording (default: each frame once).
+    #[arg(long)]
+    count: Option<u64>,
+    /// Probability of dropping a datagram (its sequence number is used, so the receiver sees
+    /// a gap). The last datagram is always sent, so every loss is visible.
+    #[arg(long, default_value_t = 0.0)]
+    loss: f64,
+    /// Probability of holding a datagram back and sending it after the next one.
+    #[arg(long, default_value_t = 0.0)]
+    reorder: f64,
+    /// Probability of sending a datagram twice.
+    #[arg(long, default_value_t = 0.0)]
+    duplicate: f64,
+    /// Seed of the loss, reorder and duplicate draws.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+pub(crate) fn send(a: &SendArgs) -> Result<()> {
+    let security = a.key.security()?;
+    for (name, p) in [("--loss", a.loss), ("--reorder", a.reorder), ("--duplicate", a.duplicate)] {
+        if !(0.0..1.0).contains(&p) {
+            bail!("{name} must be a probability in [0, 1), got {p}");
+        }
+    }
+    if !(a.rate.is_finite() && a.rate > 0.0) {
+        bail!("--rate must be a positive number of datagrams per second, got {}", a.rate);
+    }
+    let file = std::fs::File::open(&a.replay).with_context(|| format!("opening {}", a.replay.display()))?;
+    let recording =
+        read_recording(std::io::BufReader::new(file)).with_context(|| format!("reading {}", a.replay.display()))?;
+    for (line, why) in &recording.skipped {
+        eprintln!("warning: {} line {line} skipped: {why}", a.replay.display());
+    }
+    let frames: Vec<FrameRecord> = recording.frames;
+    if frames.is_empty() {
+        bail!("{} holds no frames to replay", a.replay.display());
+    }
+    let total = a.count.unwrap_or(frames.len() as u64);
+    let socket =
+        UdpSocket::bind(if a.to.is_ipv4() { "0.0.0.0:0" } else { "[::]:0" }).context("opening a UDP socket")?;
+    socket.set_nonblocking(true)?;
+    let mut session = Session::new(security);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("sending [{bar:30}] {pos}/{len} datagrams, {elapsed} elapsed")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let (mut sent, mut dropped, mut reordered, mut duplicated, mut acks, mut refused) =
+        (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
+    let mut last_ack: Option<Ack> = None;
+    let mut held: Option<Vec<u8>> = None;
+    let period = Duration::from_secs_f64(1.0 / a.rate);
+    let start = Instant::now();
+    let mut buf = [0u8; 2048];
+    let transmit = |d: &[u8], rng: &mut rand_chacha::ChaCha8Rng, sent: &mut u64, duplicated: &mut u64| {
+        let copies = if rng.random_bool(a.duplicate) { 2 } else { 1 };
+        for _ in 0..copies {
+            // Loopback drops nothing; a full socket buffer is retried rather than lost.
+            while let Err(e) = socket.send_to(d, a.to) {
+                if e.kind() != std::io::ErrorKind::WouldBlock {
+                    return Err(e);
+                }
+                std::thread::sleep(Duration::from_micros(200));
+            }
+            *sent += 1;
+        }
+        *duplicated += copies - 1;
+        Ok(())
+    };
+    for i in 0..total {
+        let due = start + period.mul_f64(i as f64);
+        if let Some(wait) = due.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        let mut record = frames[(i % frames.len() as u64) as usize].clone();
+        // Cycled frames keep counting up, as a live session would.
+        record.frame = i;
+        record.t = i as f64 / a.rate;
+        let datagram = session.pose_datagram(&PosePacket::from_record(&record));
+        let last = i + 1 == total;
+        if !last && rng.random_bool(a.loss) {
+            dropped += 1;
+        } else if !last && held.is_none() && rng.random_bool(a.reorder) {
+            held = Some(datagram);
+        } else {
+            transmit(&datagram, &mut rng, &mut sent, &mut duplicated).context("sending")?;
+            if let Some(h) = held.take() {
+                transmit(&h, &mut rng, &mut sent, &mut duplicated).context("sending")?;
+                reordered += 1;
+            }
+        }
+        while let Ok((n, _)) = socket.recv_from(&mut buf) {
+            match session.read_ack(&buf[..n]) {
+                Ok(ack) => {
+                    acks += 1;
+                    last_ack = Some(ack);
+                }
+                Err(_) => refused += 1,
+            }
+        }
+        bar.inc(1);
+    }
+    // Late acknowledgements of the last datagrams.
+    let until = Instant::now() + Duration::from_millis(300);
+    while Instant::now() < until {
+        match socket.recv_from(&mut buf) {
+            Ok((n, _)) => match session.read_ack(&buf[..n]) {
+                Ok(ack) => {
+                    acks += 1;
+                    last_ack = Some(ack);
+                }
+                Err(_) => refused += 1,
+            },
+            Err(_) => std::thread::sleep(Duration::from_millis(10)),
+        }
+    }
+    bar.finish_and_clear();
+    let elapsed = start.elapsed().as_secs_f64();
+    eprintln!(
+        "sent {total} frames as {sent} datagrams in {elapsed:.1} s (session {:#018x}): dropped {dropped}, reordered {reordered}, duplicated {duplicated}; {}",
+        session.id(),
+        match last_ack {
+            Some(ack) => format!("{acks} acknowledgements, the last: {} accepted, {} lost", ack.accepted, ack.lost),
+            None => "no acknowledgement (is the receiver running, with the same key?)".into(),
+        }
+    );
+    say!(
+        "{}",
+        serde_json::json!({
+            "session": format!("{:#018x}", session.id()),
+            "frames": total,
+            "datagrams_sent": sent,
+            "dropped": dropped,
+            "reordered": reordered,
+            "duplicated": duplicated,
+            "acks": acks,
+            "acks_refused": refused,
+            "last_ack": last_ack.map(|a| serde_json::json!({"accepted": a.accepted, "lost": a.lost, "highest_seq": a.highest_seq})),
+            "duration_s": elapsed,
+        })
+    );
+    Ok(())
+}
+
+/// Prints a new pairing key and its id.
+pub(crate) fn keygen() {
+    let key = Key::generate();
+    eprintln!(
+        "key id {} (safe to share; the key itself is secret: give it to the phone and the receiver only)",
+        key.id()
+    );
+    say!("{}", key.to_hex());
+}

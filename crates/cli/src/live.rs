@@ -1,0 +1,377 @@
+//! The web viewer's server side: the page (`viewer/`, three.js from npm), the scene (the two
+//! meshes, or the two marker dodecahedrons when no scan is given), the live poses over a
+//! WebSocket for `jawtrack receive --serve`, and a whole recording for `jawtrack view`.
+//!
+//! The readouts (opening, lateral and protrusive displacement of the lower incisor) are
+//! computed here, not in the browser: the incisor point and the head's axes come from the
+//! standard harness mounting (`jawtrack_synth::Rig`), and the displacement is taken from the
+//! rest position, which the "Calibrate" button sets to the mean of the last frames while the
+//! patient bites in maximal intercuspation (the first frame until then).
+
+use anyhow::{Context, Result, bail};
+use axum::Router;
+use axum::extract::ws::{Message as WsMessage, WebSocket, WebSocketUpgrade};
+use axum::extract::{Path as UrlPath, State};
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Json, Response};
+use axum::routing::get;
+use clap::Args;
+use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
+use jawtrack_pose::Pose;
+use jawtrack_synth::scenes::Rig;
+use jawtrack_tracker::record::FrameRecord;
+use jawtrack_tracker::registration::mean_pose;
+use jawtrack_wire::link::Counters;
+use serde_json::{Value, json};
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use tower_http::services::{ServeDir, ServeFile};
+
+/// Frames averaged by the intercuspation step (half a second at 30 frames/s).
+const CALIBRATION_FRAMES: usize = 15;
+
+/// Meshes and page location, shared by `receive` and `view`.
+#[derive(Args, Clone)]
+pub(crate) struct ViewerOptions {
+    /// The upper arch's scan (STL, PLY or OBJ, mm) to show instead of the maxilla marker.
+    #[arg(long, requires = "mandible")]
+    maxilla: Option<PathBuf>,
+    /// The lower arch's scan, placed by each frame's pose of the mandible in the maxilla.
+    #[arg(long, requires = "maxilla")]
+    mandible: Option<PathBuf>,
+    /// Where the viewer page is (with three.js installed by `npm ci --prefix viewer`).
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../../viewer"))]
+    viewer_dir: PathBuf,
+}
+
+/// What the viewer shows, and the poses it moves by.
+pub(crate) struct LiveState {
+    mode: &'static str,
+    viewer_dir: PathBuf,
+    meshes: [Option<(PathBuf, &'static str)>; 2],
+    tx: tokio::sync::broadcast::Sender<Arc<str>>,
+    inner: Mutex<Inner>,
+    recording: Option<Value>,
+    rig: Rig,
+}
+
+#[derive(Default)]
+struct Inner {
+    recent: VecDeque<Pose>,
+    rest: Option<Pose>,
+    /// The last status's time and accepted count, for the rate.
+    last_status: Option<(Instant, u64)>,
+}
+
+fn mesh_format(path: &Path) -> Result<&'static str> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("stl") => Ok("stl"),
+        Some("ply") => Ok("ply"),
+        Some("obj") => Ok("obj"),
+        _ => bail!("{}: the viewer reads STL, PLY or OBJ meshes (by file extension)", path.display()),
+    }
+}
+
+impl LiveState {
+    pub(crate) fn new(options: &ViewerOptions, mode: &'static str) -> Result<Self> {
+        let mut meshes = [None, None];
+        for (slot, path) in meshes.iter_mut().zip([&options.maxilla, &options.mandible]) {
+            if let Some(p) = path {
+                let format = mesh_format(p)?;
+                if !p.is_file() {
+                    bail!("{}: no such mesh file", p.display());
+                }
+                *slot = Some((p.clone(), format));
+            }
+        }
+        Ok(LiveState {
+            mode,
+            viewer_dir: options.viewer_dir.clone(),
+            meshes,
+            tx: tokio::sync::broadcast::channel(256).0,
+            inner: Mutex::new(Inner::default()),
+            recording: None,
+            rig: Rig::default(),
+        })
+    }
+
+    /// A state for replaying `frames` (`jawtrack view`).
+    pub(crate) fn replay(options: &ViewerOptions, header: Option<Value>, frames: &[FrameRecord]) -> Result<Self> {
+        let mut state = LiveState::new(options, "replay")?;
+        let rest = frames.iter().find_map(|f| f.maxilla_from_mandible);
+        state.inner.get_mut().map_err(|_| anyhow::anyhow!("state poisoned"))?.rest = rest;
+        let list: Vec<Value> = frames.iter().map(|f| state.frame_message(f, f.seq, rest.as_ref())).collect();
+        state.recording = Some(json!({ "header": header, "frames": list }));
+        Ok(state)
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
+        // A panic elsewhere cannot leave these few poses inconsistent: keep serving.
+        self.inner.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// The lower incisor in the scene (maxilla) frame, and its displacement from `rest` as
+    /// (opening, lateral toward the patient's left, protrusive) in mm.
+    fn readouts(&self, m: &Pose, rest: Option<&Pose>) -> (Value, [Option<f64>; 3]) {
+        let incisor = self.rig.lower_incisor(m);
+        let in_scene = self.rig.head_from_maxilla.inverse().transform_point(&incisor);
+        let moved = rest.map(|r| incisor - self.rig.lower_incisor(r));
+        // Head frame: X the patient's left, Y down, Z posterior.
+        let d = [moved.map(|v| v.y), moved.map(|v| v.x), moved.map(|v| -v.z)];
+        (json!([in_scene.x, in_scene.y, in_scene.z]), d)
+    }
+
+    fn frame_message(&self, f: &FrameRecord, seq: Option<u64>, rest: Option<&Pose>) -> Value {
+        let tags = |b: &Option<jawtrack_tracker::record::BodyRecord>| b.as_ref().map_or(0, |b| b.tags.len());
+        let (incisor, [opening, lateral, protrusive]) = match &f.maxilla_from_mandible {
+            Some(m) => self.readouts(m, rest),
+            None => (Value::Null, [None; 3]),
+        };
+        json!({
+            "type": "pose",
+            "seq": seq,
+            "t": f.t,
+            "maxilla_from_mandible": f.maxilla_from_mandible,
+            "incisor": incisor,
+            "opening_mm": opening,
+            "lateral_mm": lateral,
+            "protrusive_mm": protrusive,
+            "tags": {"maxilla": tags(&f.maxilla), "mandible": tags(&f.mandible)},
+        })
+    }
+
+    /// A frame arrived: remember it and show it.
+    pub(crate) fn pose(&self, f: &FrameRecord, seq: Option<u64>) {
+        let rest = {
+            let mut inner = self.lock();
+            if let Some(m) = f.maxilla_from_mandible {
+                inner.rest.get_or_insert(m);
+                inner.recent.push_back(m);
+                if inner.recent.len() > CALIBRATION_FRAMES {
+                    inner.recent.pop_front();
+                }
+            }
+            inner.rest
+        };
+        if self.tx.receiver_count() > 0 {
+            // Only an absent viewer makes this fail.
+            let _ = self.tx.send(self.frame_message(f, seq, rest.as_ref()).to_string().into());
+        }
+    }
+
+    /// The link's counts, for the status badge.
+    pub(crate) fn status(&self, c: &Counters, last_arrival: Option<Instant>) {
+        let link = match last_arrival.map(|t| t.elapsed().as_secs_f64()) {
+            None => "waiting",
+            Some(s) if s < 1.0 => "up",
+            Some(_) => "stale",
+        };
+        let expected = c.accepted + c.lost;
+        let now = Instant::now();
+        let rate = self.lock().last_status.replace((now, c.accepted)).map_or(0.0, |(then, accepted)| {
+            (c.accepted - accepted) as f64 / now.duration_since(then).as_secs_f64().max(1e-3)
+        });
+        let message = json!({
+            "type": "status",
+            "link": link,
+            "received": c.received,
+            "accepted": c.accepted,
+            "lost": c.lost,
+            "reordered": c.reordered,
+            "duplicated": c.duplicated,
+            "rejected": c.rejected_total(),
+            "rate_hz": rate,
+            "loss_percent": if expected > 0 { 100.0 * c.lost as f64 / expected as f64 } else { 0.0 },
+        });
+        if self.tx.receiver_count() > 0 {
+            let _ = self.tx.send(message.to_string().into());
+        }
+    }
+
+    /// The maximal-intercuspation step: the mean of the last frames becomes the rest position.
+    fn calibrate(&self) -> Value {
+        let mut inner = self.lock();
+        let recent: Vec<Pose> = inner.recent.iter().copied().collect();
+        match mean_pose(&recent) {
+            Some(mean) if recent.len() >= 3 => {
+                let moved = inner.rest.map(|r| (self.rig.lower_incisor(&mean) - self.rig.lower_incisor(&r)).norm());
+                inner.rest = Some(mean);
+                json!({"type": "calibrated", "ok": true, "message": format!(
+                    "rest position set from the last {} frames{}", recent.len(),
+                    moved.map(|d| format!(" (the incisor's rest moved {d:.2} mm)")).unwrap_or_default())})
+            }
+            _ => json!({"type": "calibrated", "ok": false, "message": format!(
+                "need at least 3 recent frames with both jaws tracked, have {}", recent.len())}),
+        }
+    }
+
+    fn scene(&self) -> Value {
+        let mesh = |i: usize, name: &str| match &self.meshes[i] {
+            Some((_, format)) => json!({"format": format, "url": format!("/api/mesh/{name}")}),
+            None => dodecahedron_mesh(),
+        };
+        json!({
+            "mode": self.mode,
+            "maxilla": mesh(0, "maxilla"),
+            "mandible": mesh(1, "mandible"),
+            "maxilla_from_mandible_rest": self.lock().rest,
+        })
+    }
+}
+
+/// The marker solid as inline triangles (body frame, mm).
+fn dodecahedron_mesh() -> Value {
+    let solid = Dodecahedron::new(DEFAULT_EDGE_MM);
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for face in solid.faces() {
+        let base = positions.len() / 3;
+        for v in &face.vertices {
+            positions.extend([v.x, v.y, v.z]);
+        }
+        for k in 1..4 {
+            indices.extend([base, base + k, base + k + 1]);
+        }
+    }
+    json!({"format": "mesh", "positions": positions, "indices": indices})
+}
+
+/// The running web server (on its own thread; it ends with the process).
+pub(crate) struct LiveServer;
+
+impl LiveServer {
+    /// Binds `addr` now (so a taken port is reported at once) and serves on a thread.
+    pub(crate) fn start(addr: SocketAddr, state: Arc<LiveState>) -> Result<LiveServer> {
+        let three = state.viewer_dir.join("node_modules/three/build/three.module.js");
+        if !state.viewer_dir.join("index.html").is_file() || !three.is_file() {
+            bail!(
+                "the viewer page is not ready in {}: run `npm ci --prefix viewer` in the repository (or pass --viewer-dir)",
+                state.viewer_dir.display()
+            );
+        }
+        let listener = std::net::TcpListener::bind(addr).with_context(|| format!("serving the viewer on {addr}"))?;
+        listener.set_nonblocking(true)?;
+        let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
+        let dir = state.viewer_dir.clone();
+        let app = Router::new()
+            .route_service("/", ServeFile::new(dir.join("index.html")))
+            .route_service("/viewer.js", ServeFile::new(dir.join("viewer.js")))
+            .route_service("/style.css", ServeFile::new(dir.join("style.css")))
+            .nest_service("/vendor/three", ServeDir::new(dir.join("node_modules/three")))
+            .route("/api/scene", get(|State(s): State<Arc<LiveState>>| async move { Json(s.scene()) }))
+            .route("/api/mesh/{body}", get(mesh))
+            .route("/api/recording", get(recording))
+            .route("/ws", get(socket))
+            .with_state(state);
+        std::thread::Builder::new().name("viewer".into()).spawn(move || {
+            runtime.block_on(async move {
+                match tokio::net::TcpListener::from_std(listener) {
+                    Ok(l) => {
+                        if let Err(e) = axum::serve(l, app).await {
+                            eprintln!("viewer server stopped: {e}");
+                        }
+                    }
+                    Err(e) => eprintln!("viewer server could not start: {e}"),
+                }
+            });
+        })?;
+        Ok(LiveServer)
+    }
+}
+
+async fn mesh(State(s): State<Arc<LiveState>>, UrlPath(body): UrlPath<String>) -> Response {
+    let slot = match body.as_str() {
+        "maxilla" => 0,
+        "mandible" => 1,
+        _ => return (StatusCode::NOT_FOUND, "no such body").into_response(),
+    };
+    match &s.meshes[slot] {
+        Some((path, _)) => match tokio::fs::read(path).await {
+            Ok(bytes) => ([(header::CONTENT_TYPE, "application/octet-stream")], bytes).into_response(),
+            Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, format!("{}: {e}", path.display())).into_response(),
+        },
+        None => (StatusCode::NOT_FOUND, "no mesh file given for this body").into_response(),
+    }
+}
+
+async fn recording(State(s): State<Arc<LiveState>>) -> Response {
+    match &s.recording {
+        Some(r) => Json(r.clone()).into_response(),
+        None => (StatusCode::NOT_FOUND, "live mode: poses come over /ws").into_response(),
+    }
+}
+
+async fn socket(State(s): State<Arc<LiveState>>, upgrade: WebSocketUpgrade) -> Response {
+    upgrade.on_upgrade(move |ws| session(ws, s))
+}
+
+async fn session(mut ws: WebSocket, s: Arc<LiveState>) {
+    let mut poses = s.tx.subscribe();
+    loop {
+        tokio::select! {
+            out = poses.recv() => match out {
+                Ok(text) => if ws.send(WsMessage::Text(text.as_ref().into())).await.is_err() { return },
+                // A slow browser skips frames rather than holding the receiver back.
+                Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => continue,
+                Err(tokio::sync::broadcast::error::RecvError::Closed) => return,
+            },
+            incoming = ws.recv() => match incoming {
+                Some(Ok(WsMessage::Text(text))) => {
+                    let asked: Value = serde_json::from_str(text.as_str()).unwrap_or(Value::Null);
+                    if asked["type"] == "calibrate_intercuspation" {
+                        let reply = s.calibrate().to_string();
+                        if ws.send(WsMessage::Text(reply.into())).await.is_err() { return }
+                    }
+                }
+                Some(Ok(_)) => {}
+                Some(Err(_)) | None => return,
+            },
+        }
+    }
+}
+
+/// Arguments of `jawtrack view`.
+#[derive(Args)]
+pub(crate) struct ViewArgs {
+    /// The recording to replay (JSON lines).
+    recording: PathBuf,
+    /// Address to serve the page at.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    serve: SocketAddr,
+    #[command(flatten)]
+    viewer: ViewerOptions,
+    /// Stop serving after this many seconds (default: until Ctrl-C).
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+pub(crate) fn view(a: &ViewArgs) -> Result<()> {
+    let file = std::fs::File::open(&a.recording).with_context(|| format!("opening {}", a.recording.display()))?;
+    let rec = jawtrack_tracker::record::read_recording(std::io::BufReader::new(file))
+        .with_context(|| format!("reading {}", a.recording.display()))?;
+    for (line, why) in &rec.skipped {
+        eprintln!("warning: {} line {line} skipped: {why}", a.recording.display());
+    }
+    if rec.frames.is_empty() {
+        bail!("{} holds no frames", a.recording.display());
+    }
+    let header = rec.header.as_ref().and_then(|h| serde_json::to_value(h).ok());
+    let state = Arc::new(LiveState::replay(&a.viewer, header, &rec.frames)?);
+    LiveServer::start(a.serve, state)?;
+    eprintln!("replaying {} frames at http://{}/ (Ctrl-C to stop)", rec.frames.len(), a.serve);
+    let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        ctrlc::set_handler(move || stop.store(true, std::sync::atomic::Ordering::SeqCst))?;
+    }
+    let start = Instant::now();
+    while !stop.load(std::sync::atomic::Ordering::SeqCst)
+        && a.duration.is_none_or(|d| start.elapsed().as_secs_f64() < d)
+    {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    Ok(())
+}
