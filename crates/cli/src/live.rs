@@ -3,11 +3,10 @@
 //! WebSocket for `jawtrack receive --serve`, and a whole recording for `jawtrack view`.
 //!
 //! The readouts (opening, lateral and protrusive displacement of the lower incisor) are
-//! computed here, not in the browser: the incisor point and the head's axes come from the
-//! standard harness mounting (`jawtrack_synth::Rig`), and the displacement is taken from the
-//! rest position, which the "Calibrate" button sets to the mean of the last frames while the
+//! computed here, not in the browser ([`crate::motion`]), from the rest position, which the "Calibrate" button sets to the mean of the last frames while the
 //! patient bites in maximal intercuspation (the first frame until then).
 
+use crate::motion::Incisor;
 use anyhow::{Context, Result, bail};
 use axum::Router;
 use axum::extract::ws::{Message as WsMessage, WebSocket, WebSocketUpgrade};
@@ -18,7 +17,6 @@ use axum::routing::get;
 use clap::Args;
 use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
 use jawtrack_pose::Pose;
-use jawtrack_synth::scenes::Rig;
 use jawtrack_tracker::record::FrameRecord;
 use jawtrack_tracker::registration::mean_pose;
 use jawtrack_wire::link::Counters;
@@ -55,7 +53,7 @@ pub(crate) struct LiveState {
     tx: tokio::sync::broadcast::Sender<Arc<str>>,
     inner: Mutex<Inner>,
     recording: Option<Value>,
-    rig: Rig,
+    incisor: Incisor,
 }
 
 #[derive(Default)]
@@ -95,7 +93,7 @@ impl LiveState {
             tx: tokio::sync::broadcast::channel(256).0,
             inner: Mutex::new(Inner::default()),
             recording: None,
-            rig: Rig::default(),
+            incisor: Incisor::standard(),
         })
     }
 
@@ -117,12 +115,9 @@ impl LiveState {
     /// The lower incisor in the scene (maxilla) frame, and its displacement from `rest` as
     /// (opening, lateral toward the patient's left, protrusive) in mm.
     fn readouts(&self, m: &Pose, rest: Option<&Pose>) -> (Value, [Option<f64>; 3]) {
-        let incisor = self.rig.lower_incisor(m);
-        let in_scene = self.rig.head_from_maxilla.inverse().transform_point(&incisor);
-        let moved = rest.map(|r| incisor - self.rig.lower_incisor(r));
-        // Head frame: X the patient's left, Y down, Z posterior.
-        let d = [moved.map(|v| v.y), moved.map(|v| v.x), moved.map(|v| -v.z)];
-        (json!([in_scene.x, in_scene.y, in_scene.z]), d)
+        let p = self.incisor.in_maxilla(m);
+        let d = rest.map(|r| self.incisor.displacement(m, r));
+        (json!([p.x, p.y, p.z]), [d.map(|d| d.opening), d.map(|d| d.lateral), d.map(|d| d.protrusive)])
     }
 
     fn frame_message(&self, f: &FrameRecord, seq: Option<u64>, rest: Option<&Pose>) -> Value {
@@ -198,7 +193,7 @@ impl LiveState {
         let recent: Vec<Pose> = inner.recent.iter().copied().collect();
         match mean_pose(&recent) {
             Some(mean) if recent.len() >= 3 => {
-                let moved = inner.rest.map(|r| (self.rig.lower_incisor(&mean) - self.rig.lower_incisor(&r)).norm());
+                let moved = inner.rest.map(|r| (self.incisor.in_head(&mean) - self.incisor.in_head(&r)).norm());
                 inner.rest = Some(mean);
                 json!({"type": "calibrated", "ok": true, "message": format!(
                     "rest position set from the last {} frames{}", recent.len(),
@@ -374,4 +369,66 @@ pub(crate) fn view(a: &ViewArgs) -> Result<()> {
         std::thread::sleep(std::time::Duration::from_millis(100));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn options() -> ViewerOptions {
+        ViewerOptions { maxilla: None, mandible: None, viewer_dir: PathBuf::from("viewer") }
+    }
+
+    fn frame(opening_rad: f64) -> FrameRecord {
+        let m = Pose::from_axis_angle(Vector3::new(opening_rad, 0.0, 0.0), Vector3::new(0.0, 44.0, 0.0));
+        FrameRecord {
+            frame: 0,
+            path: None,
+            t: 0.0,
+            maxilla: None,
+            mandible: None,
+            maxilla_from_mandible: Some(m),
+            maxilla_scan_from_mandible_scan: None,
+            flags: Vec::new(),
+            searched: None,
+            timings_s: None,
+            seq: None,
+            received_unix_s: None,
+        }
+    }
+
+    #[test]
+    fn the_calibration_step_sets_the_rest_from_recent_frames_only_when_there_are_enough() {
+        let state = LiveState::new(&options(), "live").expect("state");
+        state.pose(&frame(0.2), Some(0));
+        state.pose(&frame(0.0), Some(1));
+        let refused = state.calibrate();
+        assert_eq!(refused["ok"], false, "{refused}");
+        for i in 2..40 {
+            state.pose(&frame(0.0), Some(i));
+        }
+        let done = state.calibrate();
+        assert_eq!(done["ok"], true, "{done}");
+        // The first frame was open: the rest moved to the closed position.
+        let rest = state.lock().rest.expect("rest");
+        let (angle, _) = rest.distance_to(&frame(0.0).maxilla_from_mandible.expect("pose"));
+        assert!(angle < 1e-12);
+        let (_, [opening, lateral, _]) = state.readouts(&frame(0.0).maxilla_from_mandible.expect("pose"), Some(&rest));
+        assert_eq!((opening, lateral), (Some(0.0), Some(0.0)));
+    }
+
+    #[test]
+    fn the_scene_falls_back_to_the_marker_solids_and_refuses_unknown_meshes() {
+        let state = LiveState::new(&options(), "live").expect("state");
+        let scene = state.scene();
+        assert_eq!(scene["maxilla"]["format"], "mesh");
+        assert_eq!(
+            scene["maxilla"]["indices"].as_array().map(Vec::len),
+            Some(12 * 3 * 3),
+            "12 pentagons, 3 triangles each"
+        );
+        let bad = ViewerOptions { maxilla: Some("a.dxf".into()), mandible: Some("b.stl".into()), ..options() };
+        assert!(LiveState::new(&bad, "live").is_err_and(|e| e.to_string().contains("STL, PLY or OBJ")));
+    }
 }

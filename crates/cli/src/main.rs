@@ -17,9 +17,12 @@ mod bench;
 mod calibrate;
 mod demo;
 mod detect;
+mod export;
 mod frames;
 mod link;
+mod linkbench;
 mod live;
+mod motion;
 mod plot;
 mod track;
 
@@ -75,6 +78,11 @@ enum Command {
     Send(link::SendArgs),
     /// Replay a recording in the 3D viewer with a timeline.
     View(live::ViewArgs),
+    /// Export a recording as CSV or as clean, time-ordered JSON lines.
+    Export(export::ExportArgs),
+    /// Plot a recording's lower-incisor path in the sagittal, frontal and transverse planes
+    /// (SVG and PNG).
+    Plot(export::PlotArgs),
 }
 
 #[derive(Args)]
@@ -184,6 +192,8 @@ fn main() {
         Command::Receive(a) => link::receive(&a),
         Command::Send(a) => link::send(&a),
         Command::View(a) => live::view(&a),
+        Command::Export(a) => export::export(&a),
+        Command::Plot(a) => export::plot(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,0 +1,241 @@
+//! `jawtrack bench link`: the phone link's targets measured on loopback against a real
+//! `jawtrack receive` process.
+//!
+//! 1. Soak: sealed pose datagrams at `--rate` for `--duration`; the receiver must accept every
+//!    one sent, record each (the file read back), and its CPU time over the run is its share of
+//!    one core.
+//! 2. Garbage: `--random` datagrams of random bytes (a third starting with the right magic and
+//!    version), forgeries under another key, bit-flipped genuine datagrams and replays; the
+//!    receiver must stay up, count every one as rejected or duplicated, accept none of them,
+//!    and still accept a genuine datagram afterwards.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_pose::Pose;
+use jawtrack_tracker::record::read_recording;
+use jawtrack_wire::{BodyPose, Key, PosePacket, Security, Session, encode_pose, unix_ms};
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::net::UdpSocket;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Arguments of `jawtrack bench link`.
+#[derive(Args)]
+pub(crate) struct LinkBenchArgs {
+    /// Datagrams per second in the soak.
+    #[arg(long, default_value_t = 240.0)]
+    rate: f64,
+    /// Length of the soak (s).
+    #[arg(long, default_value_t = 600.0)]
+    duration: f64,
+    /// Random datagrams in the garbage phase.
+    #[arg(long, default_value_t = 1_000_000)]
+    random: u64,
+    /// A short run (10 s soak, 20 000 random datagrams) for CI.
+    #[arg(long)]
+    quick: bool,
+    /// Folder for the receivers' recordings.
+    #[arg(long, default_value = "target/bench-link")]
+    out: PathBuf,
+}
+
+/// A `jawtrack receive` child listening on a free loopback port.
+struct Receiver {
+    child: Child,
+    port: u16,
+}
+
+impl Receiver {
+    fn start(key: &Key, out: &Path) -> Result<Receiver> {
+        let port = UdpSocket::bind("127.0.0.1:0")?.local_addr()?.port();
+        let mut child = Command::new(std::env::current_exe().context("finding this program")?)
+            .args(["receive", "--listen", &format!("127.0.0.1:{port}"), "--idle-exit", "2", "--out"])
+            .arg(out)
+            .env("JAWTRACK_KEY", key.to_hex())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .context("starting `jawtrack receive`")?;
+        let mut err = BufReader::new(child.stderr.take().context("the receiver's stderr")?);
+        let mut line = String::new();
+        err.read_line(&mut line)?;
+        if !line.contains("listening on") {
+            bail!("the receiver did not start: {line}");
+        }
+        std::thread::spawn(move || std::io::copy(&mut err, &mut std::io::sink()));
+        Ok(Receiver { child, port })
+    }
+
+    fn to(&self) -> String {
+        format!("127.0.0.1:{}", self.port)
+    }
+
+    /// Waits for the receiver to go idle and exit; its summary.
+    fn finish(self) -> Result<Value> {
+        let out = self.child.wait_with_output()?;
+        if !out.status.success() {
+            bail!("the receiver failed (exit {:?})", out.status.code());
+        }
+        let text = String::from_utf8_lossy(&out.stdout);
+        serde_json::from_str(text.lines().last().context("no summary from the receiver")?)
+            .context("the receiver's summary")
+    }
+}
+
+/// A jaw opening and closing once a second, both bodies tracked.
+fn packet(i: u64, rate: f64) -> PosePacket {
+    let t = i as f64 / rate;
+    let angle = 0.2 * (0.5 - 0.5 * (std::f64::consts::TAU * t).cos());
+    let body = |y: f64| BodyPose {
+        camera_from_body: Pose::from_axis_angle(Vector3::new(0.0, 0.3, 0.0), Vector3::new(0.0, y, 100.0)),
+        tags_mask: 0b111,
+        tag_count: 3,
+        rms_px: 0.2,
+    };
+    PosePacket {
+        t,
+        frame: i,
+        maxilla: Some(body(-22.0)),
+        mandible: Some(body(22.0)),
+        maxilla_from_mandible: Some(Pose::from_axis_angle(Vector3::new(angle, 0.0, 0.0), Vector3::new(0.0, 44.0, 0.0))),
+        flags: 0,
+    }
+}
+
+pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
+    let (duration, random) = if a.quick { (10.0, 20_000) } else { (a.duration, a.random) };
+    if !(a.rate.is_finite() && a.rate > 0.0 && duration.is_finite() && duration > 0.0) {
+        bail!("--rate and --duration must be positive");
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let key = Key::generate();
+    let socket = UdpSocket::bind("127.0.0.1:0")?;
+    socket.set_nonblocking(true)?;
+    let mut buf = [0u8; 2048];
+
+    // 1. Soak.
+    let soak_file = a.out.join("soak.jsonl");
+    let receiver = Receiver::start(&key, &soak_file)?;
+    let mut session = Session::new(Security::Sealed(key.clone()));
+    let total = (a.rate * duration).round() as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("soak [{bar:30}] {pos}/{len} datagrams, {elapsed} of ~{duration}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let (start, period) = (Instant::now(), Duration::from_secs_f64(1.0 / a.rate));
+    let mut acks = 0u64;
+    for i in 0..total {
+        if let Some(wait) = (start + period.mul_f64(i as f64)).checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        socket.send_to(&session.pose_datagram(&packet(i, a.rate)), receiver.to()).context("sending")?;
+        while let Ok((n, _)) = socket.recv_from(&mut buf) {
+            acks += u64::from(session.read_ack(&buf[..n]).is_ok());
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let soak = receiver.finish()?;
+    let recorded = read_recording(BufReader::new(std::fs::File::open(&soak_file)?))?;
+    // Over the soak itself: the receiver's idle second before it exits adds no CPU time.
+    let cpu_share = soak["cpu_s"].as_f64().map(|c| c / duration);
+    let soak_ok = soak["accepted"].as_u64() == Some(total)
+        && soak["lost"] == 0
+        && recorded.frames.len() as u64 == total
+        && recorded.skipped.is_empty();
+
+    // 2. Garbage, forgeries and replays.
+    let garbage_file = a.out.join("garbage.jsonl");
+    let receiver = Receiver::start(&key, &garbage_file)?;
+    let mut session = Session::new(Security::Sealed(key.clone()));
+    let genuine: Vec<Vec<u8>> = (0..100).map(|i| session.pose_datagram(&packet(i, 30.0))).collect();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let (mut rejected, mut replays, mut sent) = (0u64, 0u64, 0u64);
+    let bar = indicatif::ProgressBar::new(random);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("garbage [{bar:30}] {pos}/{len} datagrams, {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let send = |d: &[u8], sent: &mut u64| -> Result<()> {
+        // Paced so that loopback's queue never overflows: a datagram the kernel drops would
+        // never be counted, and the comparison below would fail.
+        if sent.is_multiple_of(20) {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        *sent += 1;
+        socket.send_to(d, receiver.to()).map(|_| ()).context("sending")
+    };
+    for d in &genuine {
+        send(d, &mut sent)?;
+    }
+    let other = Security::Sealed(Key::generate());
+    for i in 0..random {
+        let n = rng.random_range(0..600);
+        let mut d: Vec<u8> = (0..n).map(|_| rng.random()).collect();
+        if i % 3 == 0 && n >= 5 {
+            d[..5].copy_from_slice(b"JAWT\x01");
+        }
+        if i % 100 == 0 {
+            // A forgery under another key, or a genuine datagram with one bit flipped.
+            d = encode_pose((session.id(), 1000 + i, unix_ms()), &packet(i, 30.0), &other);
+            if i % 200 == 0 {
+                d = genuine[(i / 200 % 100) as usize].clone();
+                let bit = rng.random_range(0..d.len() * 8);
+                d[bit / 8] ^= 1 << (bit % 8);
+            }
+        }
+        send(&d, &mut sent)?;
+        rejected += 1;
+        if i % 1000 == 0 {
+            send(&genuine[(i / 1000 % 100) as usize], &mut sent)?;
+            replays += 1;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    std::thread::sleep(Duration::from_millis(100));
+    socket.send_to(&session.pose_datagram(&packet(100, 30.0)), receiver.to())?;
+    sent += 1;
+    let garbage = receiver.finish()?;
+    let garbage_ok = garbage["accepted"] == 101
+        && garbage["duplicated"].as_u64() == Some(replays)
+        && garbage["rejected"].as_u64() == Some(rejected)
+        && garbage["received"].as_u64() == Some(sent);
+
+    say!("| measure | target | result |");
+    say!("|---|---|---|");
+    say!(
+        "| soak: {total} sealed datagrams at {} /s for {duration:.0} s | all accepted and recorded | sent {total}, accepted {}, lost {}, recorded {} frames ({} unreadable lines); {acks} acknowledgements |",
+        a.rate,
+        soak["accepted"],
+        soak["lost"],
+        recorded.frames.len(),
+        recorded.skipped.len()
+    );
+    say!(
+        "| receiver CPU during the soak | < 5% of one core | {} ({} s CPU over the {duration:.0} s soak) |",
+        cpu_share.map_or("unknown (no /proc)".into(), |c| format!("{:.2}%", c * 100.0)),
+        soak["cpu_s"],
+    );
+    say!(
+        "| {random} random datagrams + forgeries + {replays} replays | 0 accepted, all counted | accepted {} (the 101 genuine), duplicated {}, rejected {} of {rejected}; by reason {} |",
+        garbage["accepted"],
+        garbage["duplicated"],
+        garbage["rejected"],
+        garbage["rejected_by_reason"]
+    );
+    if !(soak_ok && garbage_ok) {
+        bail!("the link missed a target (see the table)");
+    }
+    if cpu_share.is_some_and(|c| c >= 0.05) {
+        bail!("the receiver used {:.1}% of a core (target < 5%)", cpu_share.unwrap_or(0.0) * 100.0);
+    }
+    Ok(())
+}

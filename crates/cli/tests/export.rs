@@ -1,0 +1,125 @@
+//! `jawtrack export` and `jawtrack plot` on a tracked hinge fixture and on a received
+//! recording written out of order.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn jawtrack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(args).output().expect("the binary runs")
+}
+
+fn ok(o: &Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn tracked_hinge(dir: &Path) -> String {
+    let out = dir.join("hinge.jsonl").to_str().expect("utf-8").to_owned();
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/hinge-1080p");
+    ok(&jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", &out, set]));
+    out
+}
+
+#[test]
+fn csv_export_gives_the_incisor_opening_per_frame() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let poses = tracked_hinge(dir.path());
+    let text = ok(&jawtrack(&["export", &poses, "--csv"]));
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
+    let headers = reader.headers().expect("header row").clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).unwrap_or_else(|| panic!("column {name}"));
+    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
+    assert_eq!(rows.len(), 5);
+    let opening = |rows: &[csv::StringRecord]| -> Vec<f64> {
+        rows.iter().map(|r| r[col("opening_mm")].parse().expect("a number")).collect()
+    };
+    let tracked = opening(&rows);
+    assert_eq!(tracked[0], 0.0, "measured from the first frame");
+    // The same export of the fixture's true poses: the tracked opening follows it.
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/hinge-1080p/ground_truth.json"))
+            .expect("truth"),
+    )
+    .expect("json");
+    let lines: Vec<String> = truth["frames"]
+        .as_array()
+        .expect("frames")
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            serde_json::json!({"frame": i, "t": f["t"], "maxilla": null, "mandible": null,
+                "maxilla_from_mandible": f["maxilla_from_mandible"]})
+            .to_string()
+        })
+        .collect();
+    let truth_file = dir.path().join("truth.jsonl");
+    std::fs::write(&truth_file, lines.join("\n")).expect("write");
+    let text = ok(&jawtrack(&["export", truth_file.to_str().expect("utf-8"), "--csv"]));
+    let rows: Vec<csv::StringRecord> =
+        csv::Reader::from_reader(text.as_bytes()).records().map(|r| r.expect("row")).collect();
+    let real = opening(&rows);
+    assert!(real.iter().any(|&o| o > 2.0), "the fixture opens the jaw: {real:?}");
+    for (t, r) in tracked.iter().zip(&real) {
+        assert!((t - r).abs() < 0.3, "tracked {tracked:?} vs true {real:?} (nominal marker: within 0.3 mm)");
+    }
+}
+
+#[test]
+fn jsonl_export_puts_received_frames_back_in_sequence_order() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let poses = tracked_hinge(dir.path());
+    let text = std::fs::read_to_string(&poses).expect("poses");
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    // As a receiver writes them: seq numbers, arrival order 0 2 1 4 3, one line cut short.
+    for (k, line) in lines.iter_mut().enumerate().skip(1) {
+        let mut v: serde_json::Value = serde_json::from_str(line).expect("json");
+        v["seq"] = (k - 1).into();
+        *line = v.to_string();
+    }
+    lines.swap(2, 3);
+    lines.swap(4, 5);
+    lines.push("{\"frame\": 9, \"t\": 0.".into());
+    let shuffled = dir.path().join("shuffled.jsonl");
+    std::fs::write(&shuffled, lines.join("\n")).expect("write");
+    let o = jawtrack(&["export", shuffled.to_str().expect("utf-8"), "--jsonl"]);
+    let out = ok(&o);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("line 7 skipped"), "the cut line is named");
+    let seqs: Vec<u64> = out
+        .lines()
+        .skip(1)
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("json")["seq"].as_u64().expect("seq"))
+        .collect();
+    assert_eq!(seqs, vec![0, 1, 2, 3, 4]);
+    assert!(out.lines().next().is_some_and(|h| h.contains("\"recording\"")));
+}
+
+#[test]
+fn plot_writes_the_three_planes_and_the_opening_as_svg_and_png() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let poses = tracked_hinge(dir.path());
+    let plots = dir.path().join("plots");
+    let listed = ok(&jawtrack(&["plot", &poses, "--out", plots.to_str().expect("utf-8")]));
+    for stem in ["incisor_sagittal", "incisor_frontal", "incisor_transverse", "incisor_opening"] {
+        for ext in ["svg", "png"] {
+            let p = plots.join(format!("{stem}.{ext}"));
+            assert!(listed.contains(p.to_str().expect("utf-8")), "{stem}.{ext} listed");
+            assert!(std::fs::metadata(&p).is_ok_and(|m| m.len() > 1000), "{} written", p.display());
+        }
+    }
+}
+
+#[test]
+fn export_and_plot_refuse_what_they_cannot_use() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let empty = dir.path().join("empty.jsonl");
+    std::fs::write(&empty, "{\"frame\":0,\"t\":0,\"maxilla\":null,\"mandible\":null,\"maxilla_from_mandible\":null}\n")
+        .expect("write");
+    let check = |o: Output, needle: &str| {
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!o.status.success() && e.contains(needle) && !e.contains("panicked"), "wanted '{needle}': {e}");
+    };
+    check(jawtrack(&["plot", empty.to_str().expect("utf-8"), "--out", "/tmp/x"]), "no frame has a jaw pose");
+    check(jawtrack(&["export", "/nonexistent.jsonl", "--csv"]), "/nonexistent.jsonl");
+    check(jawtrack(&["export", empty.to_str().expect("utf-8")]), "--csv");
+    check(jawtrack(&["export", empty.to_str().expect("utf-8"), "--csv", "--rest-frame", "4"]), "no such frame");
+}
