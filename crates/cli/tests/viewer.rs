@@ -1,5 +1,5 @@
 //! The live viewer in headless Chromium: `jawtrack receive --serve` fed by `jawtrack send`, and
-//! `jawtrack view` replaying the recording, each checked by `viewer/tests/check.mjs` (the page
+//! `jawtrack view` replaying the recording on meshes read from STL files, each checked by `viewer/tests/check.mjs` (the page
 //! loads, the mandible moves, no console error, the screenshot is not blank).
 //!
 //! Needs Chromium (`/usr/bin/chromium`, or `CHROMIUM`) and `npm ci --prefix viewer`; CI
@@ -109,7 +109,20 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
     eprintln!("live: {}", String::from_utf8_lossy(&live.stdout).trim());
 
     let http = free_port();
-    let mut viewer = spawn(&["view", recording_str, "--serve", &format!("127.0.0.1:{http}"), "--duration", "120"]);
+    // The replay shows meshes from files: the harness body (STL) on both jaws.
+    let stl = concat!(env!("CARGO_MANIFEST_DIR"), "/../../harness-cad/dodecahedron-with-post.stl");
+    let mut viewer = spawn(&[
+        "view",
+        recording_str,
+        "--serve",
+        &format!("127.0.0.1:{http}"),
+        "--duration",
+        "120",
+        "--maxilla",
+        stl,
+        "--mandible",
+        stl,
+    ]);
     let replay = check(&format!("http://127.0.0.1:{http}/"), "replay", &dir.path().join("replay.png"));
     viewer.kill().ok();
     viewer.wait().ok();
