@@ -1,0 +1,336 @@
+//! One tracker behind both doors: runs a frame, turns the tracker's result into the records
+//! the app reads (with the overlay already in the preview's coordinates), remembers the
+//! recent jaw poses for the intercuspation step, and converts results back into the recording
+//! schema for the recorder and the link.
+
+use crate::{Intrinsics, JawTrackError, Settings, invalid};
+use jawtrack_apriltag::ImageView;
+use jawtrack_marker::{BodyKind, Marker};
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_tracker::record::{BodyRecord, FrameRecord, TimingsRecord};
+use jawtrack_tracker::{BodyResult, Flag, Tracker};
+use nalgebra::{Point3, Vector3};
+use std::collections::VecDeque;
+
+/// Frames the intercuspation step averages (half a second at 30 frames/s).
+const INTERCUSPATION_FRAMES: usize = 15;
+/// Length of the axes drawn on each body (mm).
+const AXIS_MM: f64 = 10.0;
+
+/// One body in a frame's result.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct BodyPose {
+    /// Maps the body's marker frame into the camera frame: 4×4 row-major, mm.
+    pub camera_from_body: Vec<f64>,
+    /// 6×6 covariance of (rotation vector [rad], translation [mm]), row-major.
+    pub covariance: Vec<f64>,
+    /// Tags used.
+    pub tags: Vec<u32>,
+    /// Tags seen but dropped.
+    pub rejected_tags: Vec<u32>,
+    /// RMS reprojection error (px).
+    pub rms_px: f64,
+}
+
+/// A detected tag for the overlay.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct TagOverlay {
+    /// tag36h11 id.
+    pub id: u32,
+    /// `"maxilla"` or `"mandible"`.
+    pub body: String,
+    /// Corners (bottom-left, bottom-right, top-right, top-left of the upright tag) as x, y
+    /// pairs in capture-device coordinates: (0, 0) the frame's top-left corner, (1, 1) its
+    /// bottom-right, as `AVCaptureVideoPreviewLayer.layerPointConverted(fromCaptureDevicePoint:)`
+    /// takes them.
+    pub corners: Vec<f64>,
+    /// The tag's centre, same coordinates.
+    pub center: Vec<f64>,
+}
+
+/// A body's axes for the overlay, in capture-device coordinates.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct AxisOverlay {
+    /// `"maxilla"` or `"mandible"`.
+    pub body: String,
+    /// The body's origin (the dodecahedron's centre).
+    pub origin: Vec<f64>,
+    /// The ends of its x, y and z axes (10 mm long): six numbers, x then y for each.
+    pub ends: Vec<f64>,
+}
+
+/// What the overlay draws over the preview.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct Overlay {
+    /// The tags detected.
+    pub tags: Vec<TagOverlay>,
+    /// Each tracked body's axes (those in front of the camera).
+    pub axes: Vec<AxisOverlay>,
+}
+
+/// What the tracker made of one frame.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct FrameResult {
+    /// The frame's index since the tracker started (or was reset).
+    pub frame: u64,
+    /// The frame's time (s), as given.
+    pub t: f64,
+    /// The upper jaw's marker, if solved.
+    pub maxilla: Option<BodyPose>,
+    /// The lower jaw's marker, if solved.
+    pub mandible: Option<BodyPose>,
+    /// The mandible marker in the maxilla marker's frame, 4×4 row-major.
+    pub maxilla_from_mandible: Option<Vec<f64>>,
+    /// The lower scan in the upper scan (after the intercuspation step), 4×4 row-major.
+    pub maxilla_scan_from_mandible_scan: Option<Vec<f64>>,
+    /// Quality flags by name, e.g. `mandible:single_tag`.
+    pub flags: Vec<String>,
+    /// The overlay's geometry.
+    pub overlay: Overlay,
+    /// Tag detection time (ms).
+    pub detection_ms: f64,
+    /// Pose time (ms).
+    pub pose_ms: f64,
+    /// Frames per second over the last second of frame times (0 until there are two).
+    pub fps: f64,
+}
+
+/// The intercuspation step's outcome.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct IntercuspationResult {
+    /// Frames averaged.
+    pub frames: u32,
+    /// How far the correction moved the lower scan's origin (mm).
+    pub translation_mm: f64,
+    /// How far it turned the lower scan (°).
+    pub rotation_deg: f64,
+    /// How far the frames spread about their mean (mm): how still the patient held the bite.
+    pub spread_mm: f64,
+}
+
+/// A tracker with what the app needs around it.
+pub(crate) struct Engine {
+    tracker: Tracker,
+    pub(crate) settings: Settings,
+    frame: u64,
+    pub(crate) last: Option<FrameResult>,
+    recent: VecDeque<Pose>,
+    times: VecDeque<f64>,
+    /// Luma of BGRA frames, reused between frames.
+    pub(crate) luma: Vec<u8>,
+}
+
+fn kind_name(kind: BodyKind) -> String {
+    kind.name().to_owned()
+}
+
+impl Engine {
+    pub(crate) fn new(marker: Marker, settings: Settings) -> Result<Self, JawTrackError> {
+        let tracker = Tracker::new(marker, settings.tracker_config()?).map_err(|e| invalid(e.to_string()))?;
+        Ok(Engine {
+            tracker,
+            settings,
+            frame: 0,
+            last: None,
+            recent: VecDeque::new(),
+            times: VecDeque::new(),
+            luma: Vec::new(),
+        })
+    }
+
+    pub(crate) fn update_settings(&mut self, settings: Settings) -> Result<(), JawTrackError> {
+        let registration = self.tracker.registration().copied();
+        let mut tracker = Tracker::new(self.tracker.marker().clone(), settings.tracker_config()?)
+            .map_err(|e| invalid(e.to_string()))?;
+        tracker.set_registration(registration);
+        self.tracker = tracker;
+        self.settings = settings;
+        Ok(())
+    }
+
+    pub(crate) fn reset(&mut self) {
+        self.tracker.reset();
+        self.tracker.set_registration(None);
+        self.frame = 0;
+        self.last = None;
+        self.recent.clear();
+        self.times.clear();
+    }
+
+    pub(crate) fn marker_json(&self) -> String {
+        self.tracker.marker().to_json()
+    }
+
+    pub(crate) fn track(
+        &mut self,
+        view: &ImageView<'_>,
+        intrinsics: &Intrinsics,
+        t: f64,
+    ) -> Result<FrameResult, JawTrackError> {
+        if !t.is_finite() {
+            return Err(invalid(format!("frame time {t} is not a number")));
+        }
+        let camera = intrinsics.camera()?;
+        let r = self.tracker.track(view, &camera, t).map_err(|e| invalid(e.to_string()))?;
+        if let Some(m) = r.maxilla_from_mandible {
+            self.recent.push_back(m);
+            if self.recent.len() > INTERCUSPATION_FRAMES {
+                self.recent.pop_front();
+            }
+        }
+        self.times.push_back(t);
+        while self.times.len() > 2 && self.times.front().is_some_and(|&first| t - first > 1.0) {
+            self.times.pop_front();
+        }
+        let fps = match (self.times.front(), self.times.len()) {
+            (Some(&first), n) if n >= 2 && t > first => (n - 1) as f64 / (t - first),
+            _ => 0.0,
+        };
+        let (w, h) = (view.width() as f64, view.height() as f64);
+        let device = |p: [f64; 2]| vec![(p[0] + 0.5) / w, (p[1] + 0.5) / h];
+        let tags = r
+            .detections
+            .iter()
+            .filter_map(|d| {
+                let (kind, _) = self.tracker.marker().find_tag(d.id)?;
+                Some(TagOverlay {
+                    id: d.id,
+                    body: kind_name(kind),
+                    corners: d.corners.iter().flat_map(|&c| device(c)).collect(),
+                    center: device(d.center),
+                })
+            })
+            .collect();
+        let axes = BodyKind::ALL
+            .iter()
+            .filter_map(|&kind| {
+                let b = r.body(kind)?;
+                let project = |p: Vector3<f64>| {
+                    camera.project(&b.camera_from_body.transform_point(&Point3::from(p))).map(|q| device([q.x, q.y]))
+                };
+                let origin = project(Vector3::zeros())?;
+                let ends: Option<Vec<Vec<f64>>> =
+                    [Vector3::x(), Vector3::y(), Vector3::z()].iter().map(|a| project(a * AXIS_MM)).collect();
+                Some(AxisOverlay { body: kind_name(kind), origin, ends: ends?.concat() })
+            })
+            .collect();
+        let body = |b: &BodyResult| BodyPose {
+            camera_from_body: b.camera_from_body.to_row_major().to_vec(),
+            covariance: b.covariance.transpose().iter().copied().collect(),
+            tags: b.tags.clone(),
+            rejected_tags: b.rejected_tags.clone(),
+            rms_px: b.rms_px,
+        };
+        let result = FrameResult {
+            frame: self.frame,
+            t,
+            maxilla: r.maxilla.as_ref().map(body),
+            mandible: r.mandible.as_ref().map(body),
+            maxilla_from_mandible: r.maxilla_from_mandible.map(|p| p.to_row_major().to_vec()),
+            maxilla_scan_from_mandible_scan: r.maxilla_scan_from_mandible_scan.map(|p| p.to_row_major().to_vec()),
+            flags: r.flags.iter().map(Flag::name).collect(),
+            overlay: Overlay { tags, axes },
+            detection_ms: r.timings.detection_s * 1e3,
+            pose_ms: r.timings.pose_s * 1e3,
+            fps,
+        };
+        self.frame += 1;
+        self.last = Some(result.clone());
+        Ok(result)
+    }
+
+    pub(crate) fn calibrate_intercuspation(&mut self) -> Result<IntercuspationResult, JawTrackError> {
+        let recent: Vec<Pose> = self.recent.iter().copied().collect();
+        if recent.len() < 3 {
+            return Err(invalid(format!(
+                "the intercuspation step needs at least 3 recent frames with both jaws tracked, have {}",
+                recent.len()
+            )));
+        }
+        let cal = self.tracker.calibrate_intercuspation(&recent).map_err(|e| invalid(e.to_string()))?;
+        Ok(IntercuspationResult {
+            frames: cal.samples as u32,
+            translation_mm: cal.translation_mm,
+            rotation_deg: cal.rotation_deg,
+            spread_mm: cal.spread_mm,
+        })
+    }
+}
+
+fn pose_of(m: &[f64], what: &str) -> Result<Pose, JawTrackError> {
+    let m: [f64; 16] =
+        m.try_into().map_err(|_| invalid(format!("{what}: a 4×4 matrix has 16 numbers, got {}", m.len())))?;
+    Pose::from_row_major(&m, what).map_err(|e| invalid(e.to_string()))
+}
+
+/// A result as a line of the recording schema.
+pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
+    let body = |b: &Option<BodyPose>, what: &str| -> Result<Option<BodyRecord>, JawTrackError> {
+        let Some(b) = b else { return Ok(None) };
+        if b.covariance.len() != 36 {
+            return Err(invalid(format!("{what}: a covariance has 36 numbers, got {}", b.covariance.len())));
+        }
+        Ok(Some(BodyRecord {
+            camera_from_body: pose_of(&b.camera_from_body, what)?,
+            tags: b.tags.clone(),
+            rejected_tags: b.rejected_tags.clone(),
+            rms_px: b.rms_px,
+            cov: Some(b.covariance.clone()),
+        }))
+    };
+    Ok(FrameRecord {
+        frame: r.frame,
+        path: None,
+        t: r.t,
+        maxilla: body(&r.maxilla, "camera_from_maxilla")?,
+        mandible: body(&r.mandible, "camera_from_mandible")?,
+        maxilla_from_mandible: r
+            .maxilla_from_mandible
+            .as_deref()
+            .map(|m| pose_of(m, "maxilla_from_mandible"))
+            .transpose()?,
+        maxilla_scan_from_mandible_scan: r
+            .maxilla_scan_from_mandible_scan
+            .as_deref()
+            .map(|m| pose_of(m, "maxilla_scan_from_mandible_scan"))
+            .transpose()?,
+        flags: r.flags.clone(),
+        searched: None,
+        timings_s: Some(TimingsRecord { detection: r.detection_ms / 1e3, pose: r.pose_ms / 1e3 }),
+        seq: None,
+        received_unix_s: None,
+    })
+}
+
+/// The camera from AVFoundation's intrinsic matrix (`matrix_float3x3`, column-major: fx at
+/// [0], fy at [4], the principal point at [6] and [7]) given for `reference` dimensions,
+/// scaled to the delivered frame. AVFoundation's pixel coordinates start at the top-left
+/// corner of the top-left pixel; ours at its centre, hence the half pixel.
+#[uniffi::export]
+pub fn intrinsics_from_camera_matrix(
+    matrix: Vec<f32>,
+    reference_width: u32,
+    reference_height: u32,
+    width: u32,
+    height: u32,
+) -> Result<Intrinsics, JawTrackError> {
+    if matrix.len() != 9 {
+        return Err(invalid(format!("the intrinsic matrix has 9 numbers, got {}", matrix.len())));
+    }
+    if reference_width == 0 || reference_height == 0 || width == 0 || height == 0 {
+        return Err(invalid(format!(
+            "frame sizes must be positive: reference {reference_width}×{reference_height}, frame {width}×{height}"
+        )));
+    }
+    let (sx, sy) = (f64::from(width) / f64::from(reference_width), f64::from(height) / f64::from(reference_height));
+    let m = |i: usize| f64::from(matrix[i]);
+    let i = Intrinsics { fx: m(0) * sx, fy: m(4) * sy, cx: m(6) * sx - 0.5, cy: m(7) * sy - 0.5, k1: 0.0, k2: 0.0 };
+    i.camera()?;
+    Ok(i)
+}
+
+impl From<&CameraIntrinsics> for Intrinsics {
+    fn from(c: &CameraIntrinsics) -> Self {
+        Intrinsics { fx: c.fx, fy: c.fy, cx: c.cx, cy: c.cy, k1: c.k1, k2: c.k2 }
+    }
+}

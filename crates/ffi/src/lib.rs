@@ -1,0 +1,329 @@
+//! The JawTrack library as the iPhone app sees it.
+//!
+//! Two doors into the same trackers:
+//! - a **uniffi** API for control and results ([`Tracker`], [`Settings`], [`FrameResult`],
+//!   [`Recorder`], [`LinkEncoder`], [`AppSettings`]), from which Swift (and, for the tests
+//!   here, Python) bindings are generated;
+//! - plain **C** entry points ([`c_api`], header `include/jawtrack.h` made by cbindgen) that
+//!   track a camera frame in place: the luma plane's pointer, size and bytes per row go
+//!   straight to the detector, no copy. Swift calls them inside
+//!   `CVPixelBufferLockBaseAddress`, passing [`Tracker::handle`], then reads the frame's full
+//!   result with [`Tracker::last_result`].
+//!
+//! Everything the app decides that can be decided without UIKit lives here: settings ranges,
+//! intrinsics scaled to the delivered frame, the overlay's geometry, the recording schema and
+//! the link's datagrams. No panic crosses either door: uniffi turns one into an error, and the
+//! C functions catch it and return [`c_api::JtStatus::Panic`].
+
+pub mod c_api;
+mod engine;
+mod settings;
+
+pub use engine::{
+    AxisOverlay, BodyPose, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
+};
+pub use settings::{
+    AppSettings, Camera, FocusMode, Resolution, Settings, default_app_settings, default_settings,
+    validate_app_settings, validate_settings,
+};
+
+use engine::{Engine, record_of};
+use jawtrack_apriltag::ImageView;
+use jawtrack_marker::Marker;
+use jawtrack_pose::CameraIntrinsics;
+use jawtrack_tracker::record::RecordingHeader;
+use jawtrack_wire::{Key, PosePacket, Security, Session};
+use std::io::Write;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+uniffi::setup_scaffolding!("jawtrack");
+
+/// What went wrong, as the app sees it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error, uniffi::Error)]
+pub enum JawTrackError {
+    /// A setting, file or buffer the caller gave is not usable; the message names it.
+    #[error("{message}")]
+    InvalidArgument {
+        /// What is wrong.
+        message: String,
+    },
+    /// Reading or writing a file failed.
+    #[error("{message}")]
+    Io {
+        /// What failed.
+        message: String,
+    },
+    /// A datagram that is not a valid acknowledgement for this session.
+    #[error("{message}")]
+    Link {
+        /// Why it was refused.
+        message: String,
+    },
+}
+
+pub(crate) fn invalid(message: impl Into<String>) -> JawTrackError {
+    JawTrackError::InvalidArgument { message: message.into() }
+}
+
+/// Camera intrinsics in pixels of the delivered frame (pixel centres at integer coordinates).
+#[derive(Debug, Clone, Copy, PartialEq, uniffi::Record)]
+pub struct Intrinsics {
+    /// Focal length along x (px).
+    pub fx: f64,
+    /// Focal length along y (px).
+    pub fy: f64,
+    /// Principal point x (px).
+    pub cx: f64,
+    /// Principal point y (px).
+    pub cy: f64,
+    /// Radial distortion k1.
+    pub k1: f64,
+    /// Radial distortion k2.
+    pub k2: f64,
+}
+
+impl Intrinsics {
+    pub(crate) fn camera(&self) -> Result<CameraIntrinsics, JawTrackError> {
+        let c = CameraIntrinsics { fx: self.fx, fy: self.fy, cx: self.cx, cy: self.cy, k1: self.k1, k2: self.k2 };
+        c.validate().map_err(|e| invalid(format!("camera intrinsics: {e}")))?;
+        Ok(c)
+    }
+}
+
+/// Locks a mutex whose data stays consistent even if a holder panicked (every update is a
+/// single assignment), so one caught panic does not disable the tracker for good.
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// A tracker: frames in, the jaw pose out.
+#[derive(uniffi::Object)]
+pub struct Tracker {
+    handle: u64,
+    engine: Arc<Mutex<Engine>>,
+}
+
+#[uniffi::export]
+impl Tracker {
+    /// A tracker with `settings`, for the marker file's JSON (`None`: the nominal 12.7 mm
+    /// marker).
+    #[uniffi::constructor]
+    pub fn new(settings: Settings, marker_json: Option<String>) -> Result<Arc<Self>, JawTrackError> {
+        let marker = match marker_json {
+            Some(text) => Marker::from_json(&text).map_err(|e| invalid(format!("marker file: {e}")))?,
+            None => Marker::default(),
+        };
+        let engine = Arc::new(Mutex::new(Engine::new(marker, settings)?));
+        let handle = c_api::register(engine.clone());
+        Ok(Arc::new(Tracker { handle, engine }))
+    }
+
+    /// The number the C frame entry points take to reach this tracker. It is never reused and
+    /// stops working when the tracker is released.
+    pub fn handle(&self) -> u64 {
+        self.handle
+    }
+
+    /// Changes the settings; the bodies' motion is kept.
+    pub fn update_settings(&self, settings: Settings) -> Result<(), JawTrackError> {
+        lock(&self.engine).update_settings(settings)
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> Settings {
+        lock(&self.engine).settings.clone()
+    }
+
+    /// Forgets the bodies' motion and the calibration step (a new session).
+    pub fn reset(&self) {
+        lock(&self.engine).reset();
+    }
+
+    /// Tracks a luma frame passed by value. It copies the frame (uniffi does): the app uses
+    /// the C entry points instead; this is for tests and tools.
+    pub fn track_luma(
+        &self,
+        luma: Vec<u8>,
+        width: u32,
+        height: u32,
+        bytes_per_row: u32,
+        intrinsics: Intrinsics,
+        t: f64,
+    ) -> Result<FrameResult, JawTrackError> {
+        let view = ImageView::new(&luma, width as usize, height as usize, bytes_per_row as usize)
+            .map_err(|e| invalid(format!("frame: {e}")))?;
+        lock(&self.engine).track(&view, &intrinsics, t)
+    }
+
+    /// The result of the last frame tracked (by either door), if any.
+    pub fn last_result(&self) -> Option<FrameResult> {
+        lock(&self.engine).last.clone()
+    }
+
+    /// The maximal-intercuspation step: the patient bites; the mean of the last frames with
+    /// both jaws tracked becomes the scanned intercuspal position.
+    pub fn calibrate_intercuspation(&self) -> Result<IntercuspationResult, JawTrackError> {
+        lock(&self.engine).calibrate_intercuspation()
+    }
+
+    /// The marker file tracked, as JSON (for the recording's header).
+    pub fn marker_json(&self) -> String {
+        lock(&self.engine).marker_json()
+    }
+}
+
+impl Drop for Tracker {
+    fn drop(&mut self) {
+        c_api::unregister(self.handle);
+    }
+}
+
+/// What a recording's header says about where it came from.
+#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+pub struct RecordingInfo {
+    /// The device and camera, e.g. "iPhone15,2 back wide".
+    pub device: Option<String>,
+    /// The camera at the start of the recording.
+    pub intrinsics: Option<Intrinsics>,
+    /// The marker file's JSON.
+    pub marker_json: Option<String>,
+    /// The app's settings as JSON.
+    pub settings_json: Option<String>,
+    /// The pairing key's id when streaming (never the key).
+    pub key_id: Option<String>,
+}
+
+/// Writes a session as JSON Lines in the schema of `jawtrack track`: a header line, then one
+/// line per frame, each flushed to the file as it is appended, so a killed app leaves a
+/// readable recording.
+#[derive(uniffi::Object)]
+pub struct Recorder {
+    file: Mutex<Option<std::fs::File>>,
+    frames: Mutex<u64>,
+    path: String,
+}
+
+#[uniffi::export]
+impl Recorder {
+    /// Creates (or truncates) `path` and writes the header.
+    #[uniffi::constructor]
+    pub fn open(path: String, info: RecordingInfo) -> Result<Arc<Self>, JawTrackError> {
+        let mut header = RecordingHeader::new("JawTrack iOS");
+        header.device = info.device;
+        header.intrinsics = info.intrinsics.map(|i| i.camera()).transpose()?;
+        header.marker = match info.marker_json {
+            Some(m) => Some(serde_json::from_str(&m).map_err(|e| invalid(format!("marker JSON: {e}")))?),
+            None => None,
+        };
+        header.settings = match info.settings_json {
+            Some(s) => serde_json::from_str(&s).map_err(|e| invalid(format!("settings JSON: {e}")))?,
+            None => serde_json::Value::Null,
+        };
+        header.key_id = info.key_id;
+        let mut file =
+            std::fs::File::create(&path).map_err(|e| JawTrackError::Io { message: format!("{path}: {e}") })?;
+        write_line(&mut file, &header.to_line(), &path)?;
+        Ok(Arc::new(Recorder { file: Mutex::new(Some(file)), frames: Mutex::new(0), path }))
+    }
+
+    /// Appends a frame.
+    pub fn append(&self, result: FrameResult) -> Result<(), JawTrackError> {
+        let line = record_of(&result)?.to_line();
+        let mut file = lock(&self.file);
+        let f = file.as_mut().ok_or_else(|| invalid(format!("{}: the recording is closed", self.path)))?;
+        write_line(f, &line, &self.path)?;
+        *lock(&self.frames) += 1;
+        Ok(())
+    }
+
+    /// Frames appended so far.
+    pub fn frames_written(&self) -> u64 {
+        *lock(&self.frames)
+    }
+
+    /// Syncs the file to storage and closes it; later appends are refused.
+    pub fn close(&self) -> Result<(), JawTrackError> {
+        if let Some(f) = lock(&self.file).take() {
+            f.sync_all().map_err(|e| JawTrackError::Io { message: format!("{}: {e}", self.path) })?;
+        }
+        Ok(())
+    }
+}
+
+/// One `write` per line: a killed process leaves at most that line cut short.
+fn write_line(f: &mut std::fs::File, line: &str, path: &str) -> Result<(), JawTrackError> {
+    let mut bytes = Vec::with_capacity(line.len() + 1);
+    bytes.extend_from_slice(line.as_bytes());
+    bytes.push(b'\n');
+    f.write_all(&bytes).map_err(|e| JawTrackError::Io { message: format!("{path}: {e}") })
+}
+
+/// The receiver's acknowledgement, as the app shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, uniffi::Record)]
+pub struct LinkAck {
+    /// The highest sequence number the receiver has.
+    pub highest_seq: u64,
+    /// Datagrams of this session it accepted.
+    pub accepted: u64,
+    /// Sequence numbers of this session it is missing.
+    pub lost: u64,
+    /// Datagrams it rejected since it started.
+    pub rejected: u64,
+}
+
+/// Seals frames into datagrams for the receiver (`docs/wire.md`) and reads its
+/// acknowledgements: one link session.
+#[derive(uniffi::Object)]
+pub struct LinkEncoder {
+    session: Mutex<Session>,
+    key_id: Option<String>,
+}
+
+#[uniffi::export]
+impl LinkEncoder {
+    /// A session sealed under the pairing key (64 hex digits). `key_hex` `None` with
+    /// `insecure_plaintext` sends in clear, for development only.
+    #[uniffi::constructor]
+    pub fn new(key_hex: Option<String>, insecure_plaintext: bool) -> Result<Arc<Self>, JawTrackError> {
+        let (security, key_id) = match (key_hex, insecure_plaintext) {
+            (Some(k), false) => {
+                let key: Key = k.parse().map_err(|e| invalid(format!("{e}")))?;
+                let id = key.id();
+                (Security::Sealed(key), Some(id))
+            }
+            (None, true) => (Security::Plaintext, None),
+            (Some(_), true) => return Err(invalid("a pairing key and plaintext are exclusive")),
+            (None, false) => return Err(invalid("a pairing key is needed (or plaintext, for development only)")),
+        };
+        Ok(Arc::new(LinkEncoder { session: Mutex::new(Session::new(security)), key_id }))
+    }
+
+    /// The session's id (random).
+    pub fn session_id(&self) -> u64 {
+        lock(&self.session).id()
+    }
+
+    /// The pairing key's id, for the recording header and the settings screen.
+    pub fn key_id(&self) -> Option<String> {
+        self.key_id.clone()
+    }
+
+    /// The next datagram, carrying `result`.
+    pub fn encode(&self, result: FrameResult) -> Result<Vec<u8>, JawTrackError> {
+        let packet = PosePacket::from_record(&record_of(&result)?);
+        Ok(lock(&self.session).pose_datagram(&packet))
+    }
+
+    /// Reads a datagram from the receiver; only a valid acknowledgement of this session passes.
+    pub fn read_ack(&self, datagram: Vec<u8>) -> Result<LinkAck, JawTrackError> {
+        let ack =
+            lock(&self.session).read_ack(&datagram).map_err(|e| JawTrackError::Link { message: e.to_string() })?;
+        Ok(LinkAck { highest_seq: ack.highest_seq, accepted: ack.accepted, lost: ack.lost, rejected: ack.rejected })
+    }
+}
+
+/// Checks a pairing key typed or scanned (64 hex digits, surrounding blanks ignored); its id.
+#[uniffi::export]
+pub fn pairing_key_id(text: String) -> Result<String, JawTrackError> {
+    text.trim().parse::<Key>().map(|k| k.id()).map_err(|e| invalid(e.to_string()))
+}

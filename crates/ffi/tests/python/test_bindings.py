@@ -1,0 +1,172 @@
+"""The uniffi Python bindings of jawtrack-ffi driving the same objects the Swift app uses:
+Tracker, Recorder, LinkEncoder and the settings checks, on the hinge fixture.
+
+Run by tests/python.rs, which builds the library, generates the bindings into a folder and
+passes: BINDINGS_DIR FRAMES_DIR EXPECTED_JSON OUT_DIR. The frames are binary PGM files; the
+expected poses come from the Rust tracker."""
+
+import json
+import math
+import struct
+import sys
+import unittest
+from pathlib import Path
+
+BINDINGS, FRAMES, EXPECTED, OUT = (Path(p) for p in sys.argv[1:5])
+sys.path.insert(0, str(BINDINGS))
+import jawtrack  # noqa: E402  (generated)
+
+INTRINSICS = jawtrack.Intrinsics(fx=1500.0, fy=1500.0, cx=959.5, cy=539.5, k1=0.0, k2=0.0)
+KEY = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff"
+
+
+def read_pgm(path):
+    data = path.read_bytes()
+    magic, w, h, maxval, pixels = data.split(maxsplit=4)
+    assert magic == b"P5" and maxval == b"255"
+    return int(w), int(h), pixels
+
+
+def frames():
+    return [read_pgm(p) for p in sorted(FRAMES.glob("*.pgm"))]
+
+
+class Bindings(unittest.TestCase):
+    def track_all(self, tracker):
+        results = []
+        for i, (w, h, pixels) in enumerate(frames()):
+            results.append(tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0))
+        return results
+
+    def test_tracker_gives_the_rust_poses_and_the_overlay(self):
+        tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
+        results = self.track_all(tracker)
+        expected = json.loads(EXPECTED.read_text())
+        self.assertEqual(len(results), len(expected))
+        for i, (r, want) in enumerate(zip(results, expected)):
+            self.assertEqual(r.frame, i)
+            self.assertEqual(r.maxilla_from_mandible, want, f"frame {i}")
+            self.assertIsNotNone(r.maxilla)
+            self.assertEqual(len(r.maxilla.covariance), 36)
+            self.assertGreater(len(r.overlay.tags), 3)
+            for tag in r.overlay.tags:
+                self.assertIn(tag.body, ("maxilla", "mandible"))
+                self.assertTrue(all(0.0 <= c <= 1.0 for c in tag.corners), tag.corners)
+            self.assertEqual({a.body for a in r.overlay.axes}, {"maxilla", "mandible"})
+        self.assertEqual(tracker.last_result(), results[-1])
+        self.assertAlmostEqual(results[-1].fps, 30.0, places=6)
+        self.assertGreater(tracker.handle(), 0)
+
+    def test_the_intercuspation_step_needs_frames_then_corrects(self):
+        tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+            tracker.calibrate_intercuspation()
+        self.assertIn("at least 3", str(e.exception))
+        w, h, pixels = frames()[0]
+        for i in range(5):
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0)
+        cal = tracker.calibrate_intercuspation()
+        self.assertEqual(cal.frames, 5)
+        self.assertLess(cal.spread_mm, 0.05, "the same frame five times")
+        after = tracker.track_luma(pixels, w, h, w, INTRINSICS, 5 / 30.0)
+        scan = after.maxilla_scan_from_mandible_scan
+        self.assertIsNotNone(scan, "the step sets the registration")
+        # The bite just calibrated reads as the scanned intercuspal position (identity).
+        self.assertLess(max(abs(scan[3]), abs(scan[7]), abs(scan[11])), 0.05)
+
+    def test_misuse_raises_errors_naming_the_problem(self):
+        bad = jawtrack.default_settings()
+        bad.decimate = 2.5
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+            jawtrack.Tracker(bad, None)
+        self.assertIn("decimation", str(e.exception))
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            jawtrack.Tracker(jawtrack.default_settings(), '{"version": 7}')
+        tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
+        w, h, pixels = frames()[0]
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+            tracker.track_luma(pixels[: len(pixels) // 2], w, h, w, INTRINSICS, 0.0)
+        self.assertIn("needs", str(e.exception))
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            tracker.track_luma(pixels, w, h, w - 1, INTRINSICS, 0.0)
+        broken = jawtrack.Intrinsics(fx=-1.0, fy=1500.0, cx=959.5, cy=539.5, k1=0.0, k2=0.0)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            tracker.track_luma(pixels, w, h, w, broken, 0.0)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            tracker.update_settings(bad)
+        settings = jawtrack.default_app_settings()
+        jawtrack.validate_app_settings(settings, False)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+            jawtrack.validate_app_settings(settings, True)
+        self.assertIn("receiver host", str(e.exception))
+        self.assertEqual(len(jawtrack.pairing_key_id(" " + KEY + "\n")), 16)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            jawtrack.pairing_key_id("not a key")
+
+    def test_intrinsics_scale_to_the_delivered_frame(self):
+        # AVFoundation's matrix, column-major, for a 4032×3024 reference; frame 1920×1440.
+        m = [2800.0, 0, 0, 0, 2800.0, 0, 2016.0, 1512.0, 1.0]
+        k = jawtrack.intrinsics_from_camera_matrix(m, 4032, 3024, 1920, 1440)
+        s = 1920 / 4032
+        self.assertAlmostEqual(k.fx, 2800.0 * s, places=3)
+        self.assertAlmostEqual(k.cx, 2016.0 * s - 0.5, places=3)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            jawtrack.intrinsics_from_camera_matrix(m[:8], 4032, 3024, 1920, 1440)
+
+    def test_the_recorder_writes_the_track_schema_line_by_line(self):
+        tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
+        path = OUT / "session.jsonl"
+        info = jawtrack.RecordingInfo(device="test", intrinsics=INTRINSICS, marker_json=tracker.marker_json(),
+                                      settings_json='{"fps": 30}', key_id=None)
+        rec = jawtrack.Recorder.open(str(path), info)
+        results = self.track_all(tracker)
+        for r in results:
+            rec.append(r)
+            # Flushed per frame: the file already holds every line appended.
+            self.assertEqual(len(path.read_text().splitlines()), 1 + rec.frames_written())
+        rec.close()
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            rec.append(results[0])
+        lines = [json.loads(l) for l in path.read_text().splitlines()]
+        self.assertEqual(lines[0]["recording"]["source"], "JawTrack iOS")
+        self.assertEqual(lines[0]["recording"]["settings"], {"fps": 30})
+        for line, r in zip(lines[1:], results):
+            self.assertEqual(line["frame"], r.frame)
+            got = line["maxilla_from_mandible"]
+            self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in zip(got, r.maxilla_from_mandible)))
+            self.assertEqual(len(line["maxilla"]["cov"]), 36)
+        with self.assertRaises(jawtrack.JawTrackError.Io):
+            jawtrack.Recorder.open(str(OUT / "no-such-folder" / "x.jsonl"), info)
+
+    def test_the_link_encoder_seals_datagrams_libsodium_can_open(self):
+        tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
+        r = self.track_all(tracker)[-1]
+        enc = jawtrack.LinkEncoder(KEY, False)
+        first, second = enc.encode(r), enc.encode(r)
+        self.assertEqual(len(first), 264)
+        magic, version, kind, security, _, session, seq, _ = struct.unpack("<4sBBBBQQQ", first[:32])
+        self.assertEqual((magic, version, kind, security, session, seq), (b"JAWT", 1, 1, 1, enc.session_id(), 0))
+        self.assertEqual(struct.unpack("<Q", second[16:24])[0], 1)
+        self.assertEqual(enc.key_id(), jawtrack.pairing_key_id(KEY))
+        with self.assertRaises(jawtrack.JawTrackError.Link):
+            enc.read_ack(b"garbage")
+        with self.assertRaises(jawtrack.JawTrackError.Link):
+            enc.read_ack(first)  # a pose, not an acknowledgement
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            jawtrack.LinkEncoder(None, False)
+        try:
+            from nacl.bindings import crypto_aead_xchacha20poly1305_ietf_decrypt
+        except ImportError:
+            print("SKIPPED: opening the datagram with libsodium: PyNaCl is not installed")
+            return
+        nonce = bytes([1]) + bytes(7) + first[8:24]
+        body = crypto_aead_xchacha20poly1305_ietf_decrypt(first[32:], first[:32], nonce, bytes.fromhex(KEY))
+        t, frame = struct.unpack("<dQ", body[:16])
+        self.assertEqual((t, frame), (r.t, r.frame))
+        tx, ty, tz = struct.unpack("<3d", body[136 + 32:136 + 56])
+        m = r.maxilla_from_mandible
+        self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in [(tx, m[3]), (ty, m[7]), (tz, m[11])]))
+
+
+if __name__ == "__main__":
+    unittest.main(argv=[sys.argv[0], "-v"])
