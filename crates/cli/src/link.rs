@@ -78,6 +78,38 @@ pub(crate) struct ReceiveArgs {
     /// check off (e.g. to receive a replay of an old capture).
     #[arg(long, default_value_t = 60.0)]
     max_clock_skew: f64,
+    /// Show a QR code with this computer's address, the port and the pairing key, for the
+    /// phone's settings screen to scan. It shows the key: only where no one else can see.
+    #[arg(long)]
+    qr: bool,
+}
+
+/// The address the phone should send to: the listening address, or, when it listens on every
+/// interface, the one this computer uses toward the network (no packet is sent to learn it).
+fn reachable_address(listen: SocketAddr) -> std::net::IpAddr {
+    if !listen.ip().is_unspecified() {
+        return listen.ip();
+    }
+    UdpSocket::bind("0.0.0.0:0")
+        .and_then(|s| s.connect("192.0.2.1:9").and_then(|()| s.local_addr()))
+        .map(|a| a.ip())
+        .unwrap_or(listen.ip())
+}
+
+fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
+    let uri = jawtrack_wire::pairing_uri(&reachable_address(listen).to_string(), listen.port(), key);
+    let code = qrcode::QrCode::new(uri.as_bytes()).context("making the pairing QR code")?;
+    let picture = code
+        .render::<qrcode::render::unicode::Dense1x2>()
+        .dark_color(qrcode::render::unicode::Dense1x2::Light)
+        .light_color(qrcode::render::unicode::Dense1x2::Dark)
+        .quiet_zone(true)
+        .build();
+    eprintln!(
+        "{picture}\nscan with JawTrack on the phone (Settings → Pair): {}",
+        uri.split("&key=").next().unwrap_or("")
+    );
+    Ok(())
 }
 
 /// What a receiver run did, printed as one JSON line at exit.
@@ -136,6 +168,12 @@ pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
         }
     }
     let socket = UdpSocket::bind(a.listen).with_context(|| format!("listening on {}", a.listen))?;
+    if a.qr {
+        match &security {
+            Security::Sealed(key) => show_pairing_qr(socket.local_addr()?, key)?,
+            Security::Plaintext => bail!("--qr shows the pairing key: there is none with --insecure-plaintext"),
+        }
+    }
     socket.set_read_timeout(Some(Duration::from_millis(100)))?;
     let mut header = RecordingHeader::new("jawtrack receive");
     header.key_id = key_id(&security);

@@ -322,6 +322,27 @@ impl LinkEncoder {
     }
 }
 
+/// What a pairing QR code (shown by `jawtrack receive --qr`) or a typed key gives the app.
+#[derive(Debug, Clone, PartialEq, Eq, uniffi::Record)]
+pub struct Pairing {
+    /// The receiver's address, when the code names it.
+    pub host: Option<String>,
+    /// The receiver's UDP port, when the code names it.
+    pub port: Option<u32>,
+    /// The pairing key, 64 hex digits.
+    pub key_hex: String,
+    /// The key's id.
+    pub key_id: String,
+}
+
+/// Reads a scanned or typed pairing: a bare key (64 hex digits) or the receiver's
+/// `jawtrack://pair?host=H&port=P&key=K` (`jawtrack_wire::pairing_uri`).
+#[uniffi::export]
+pub fn parse_pairing(text: String) -> Result<Pairing, JawTrackError> {
+    let p = jawtrack_wire::parse_pairing_uri(text.trim()).map_err(|e| invalid(e.to_string()))?;
+    Ok(Pairing { host: p.host, port: p.port.map(u32::from), key_id: p.key.id(), key_hex: p.key.to_hex() })
+}
+
 /// Checks a pairing key typed or scanned (64 hex digits, surrounding blanks ignored); its id.
 #[uniffi::export]
 pub fn pairing_key_id(text: String) -> Result<String, JawTrackError> {

@@ -155,6 +155,46 @@ impl std::str::FromStr for Key {
     }
 }
 
+/// A pairing read from a QR code or typed: the key, and where the receiver listens when known.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PairingInfo {
+    /// The receiver's host name or address.
+    pub host: Option<String>,
+    /// The receiver's UDP port.
+    pub port: Option<u16>,
+    /// The pairing key.
+    pub key: Key,
+}
+
+/// The text of the pairing QR code: `jawtrack://pair?host=H&port=P&key=K` (K: 64 hex digits).
+pub fn pairing_uri(host: &str, port: u16, key: &Key) -> String {
+    format!("jawtrack://pair?host={host}&port={port}&key={}", key.to_hex())
+}
+
+/// Reads [`pairing_uri`]'s text, or a bare key.
+pub fn parse_pairing_uri(text: &str) -> Result<PairingInfo, KeyError> {
+    let Some(query) = text.strip_prefix("jawtrack://pair?") else {
+        return Ok(PairingInfo { host: None, port: None, key: text.parse()? });
+    };
+    let (mut host, mut port, mut key) = (None, None, None);
+    for pair in query.split('&') {
+        match pair.split_once('=') {
+            Some(("host", h)) if !h.is_empty() => host = Some(h.to_owned()),
+            Some(("port", p)) => {
+                port = Some(
+                    p.parse::<u16>()
+                        .ok()
+                        .filter(|&p| p > 0)
+                        .ok_or_else(|| KeyError(format!("bad port {p:?} in the pairing code")))?,
+                );
+            }
+            Some(("key", k)) => key = Some(k.parse::<Key>()?),
+            _ => return Err(KeyError(format!("unexpected {pair:?} in the pairing code"))),
+        }
+    }
+    Ok(PairingInfo { host, port, key: key.ok_or_else(|| KeyError("the pairing code has no key".into()))? })
+}
+
 /// How datagrams are protected.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Security {
@@ -652,6 +692,21 @@ mod tests {
         assert_eq!(session.read_ack(&d), Ok(ack));
         let other = encode_ack((42, 1, 0), &Ack { session: session.id() ^ 1, ..ack }, &s);
         assert!(session.read_ack(&other).is_err());
+    }
+
+    #[test]
+    fn a_pairing_code_round_trips_and_names_what_is_wrong() {
+        let uri = pairing_uri("192.168.1.20", 5005, &key());
+        let p = parse_pairing_uri(&uri).expect("parses");
+        assert_eq!((p.host.as_deref(), p.port, &p.key), (Some("192.168.1.20"), Some(5005), &key()));
+        assert_eq!(parse_pairing_uri(&key().to_hex()).map(|p| p.host), Ok(None));
+        for (bad, needle) in [
+            ("jawtrack://pair?host=a&port=0&key=00", "port"),
+            ("jawtrack://pair?host=a&port=1", "no key"),
+            ("jawtrack://pair?colour=red", "unexpected"),
+        ] {
+            assert!(parse_pairing_uri(bad).is_err_and(|e| e.to_string().contains(needle)), "{bad}");
+        }
     }
 
     #[test]
