@@ -94,7 +94,7 @@ fn main() {
             let lowered = <Option<FrameResult> as uniffi::Lower<UniFfiTag>>::lower(result);
             let ms = start.elapsed().as_secs_f64() * 1e3;
             assert_eq!(status, JtStatus::Ok);
-            assert!(lowered.len() > 0);
+            assert!(!lowered.is_empty());
             lowered.destroy();
             (ms, ms - inside)
         };
