@@ -198,8 +198,10 @@ fn track_with_a_registration_writes_the_scans_pose_and_names_a_bad_field() {
     let reg = reg.to_str().expect("utf-8 path");
     let o = jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--registration", reg, "--out", out, frame]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let line: serde_json::Value =
-        serde_json::from_str(std::fs::read_to_string(out).expect("poses").trim()).expect("json");
+    let text = std::fs::read_to_string(out).expect("poses");
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 2, "a header and the frame");
+    let line: serde_json::Value = serde_json::from_str(lines[1]).expect("json");
     let m: Vec<f64> = serde_json::from_value(line["maxilla_from_mandible"].clone()).expect("jaw pose");
     let s: Vec<f64> = serde_json::from_value(line["maxilla_scan_from_mandible_scan"].clone()).expect("scan pose");
     // Pure shifts on either side: the scans' pose is the markers' with the same rotation.

@@ -77,7 +77,7 @@ fn main() {
             #[allow(unsafe_code)]
             let status = unsafe {
                 jt_track_luma(
-                    ffi.handle(),
+                    ffi.frame_handle(),
                     data.as_ptr(),
                     data.len(),
                     *w,

@@ -3,7 +3,7 @@
 //! its size, bytes per row and buffer length; the detector reads it in place.
 //!
 //! Trackers are named by handles, numbers that are never reused: a handle from
-//! `jt_tracker_new` or from the uniffi `Tracker.handle()`. Every function checks its
+//! `jt_tracker_new` or from the uniffi `Tracker.frame_handle()`. Every function checks its
 //! arguments (null pointers, sizes, a buffer too short for its rows, a handle already freed)
 //! and returns a [`JtStatus`]; `jt_last_error` gives the message of the last failure on the
 //! calling thread. A panic inside is caught and reported as [`JtStatus::Panic`]: nothing

@@ -7,7 +7,7 @@
 //! - plain **C** entry points ([`c_api`], header `include/jawtrack.h` made by cbindgen) that
 //!   track a camera frame in place: the luma plane's pointer, size and bytes per row go
 //!   straight to the detector, no copy. Swift calls them inside
-//!   `CVPixelBufferLockBaseAddress`, passing [`Tracker::handle`], then reads the frame's full
+//!   `CVPixelBufferLockBaseAddress`, passing [`Tracker::frame_handle`], then reads the frame's full
 //!   result with [`Tracker::last_result`].
 //!
 //! Everything the app decides that can be decided without UIKit lives here: settings ranges,
@@ -120,7 +120,7 @@ impl Tracker {
 
     /// The number the C frame entry points take to reach this tracker. It is never reused and
     /// stops working when the tracker is released.
-    pub fn handle(&self) -> u64 {
+    pub fn frame_handle(&self) -> u64 {
         self.handle
     }
 

@@ -55,7 +55,7 @@ class Bindings(unittest.TestCase):
             self.assertEqual({a.body for a in r.overlay.axes}, {"maxilla", "mandible"})
         self.assertEqual(tracker.last_result(), results[-1])
         self.assertAlmostEqual(results[-1].fps, 30.0, places=6)
-        self.assertGreater(tracker.handle(), 0)
+        self.assertGreater(tracker.frame_handle(), 0)
 
     def test_the_intercuspation_step_needs_frames_then_corrects(self):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
