@@ -112,9 +112,8 @@ fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
     Ok(())
 }
 
-/// What a receiver run did, printed as one JSON line at exit.
-fn summary_json(c: &Counters, acks: u64, elapsed: f64) -> serde_json::Value {
-    let cpu = process_cpu_seconds();
+/// The link's counts as JSON: the receiver's exit summary and the viewer's status share them.
+pub(crate) fn counters_json(c: &Counters) -> serde_json::Value {
     serde_json::json!({
         "received": c.received,
         "accepted": c.accepted,
@@ -123,11 +122,18 @@ fn summary_json(c: &Counters, acks: u64, elapsed: f64) -> serde_json::Value {
         "duplicated": c.duplicated,
         "rejected": c.rejected_total(),
         "rejected_by_reason": c.rejected,
-        "acks_sent": acks,
-        "duration_s": elapsed,
-        "cpu_s": cpu,
-        "cpu_share_of_one_core": cpu.map(|c| c / elapsed.max(1e-9)),
     })
+}
+
+/// What a receiver run did, printed as one JSON line at exit.
+fn summary_json(c: &Counters, acks: u64, elapsed: f64) -> serde_json::Value {
+    let cpu = process_cpu_seconds();
+    let mut v = counters_json(c);
+    v["acks_sent"] = acks.into();
+    v["duration_s"] = elapsed.into();
+    v["cpu_s"] = cpu.into();
+    v["cpu_share_of_one_core"] = cpu.map(|c| c / elapsed.max(1e-9)).into();
+    v
 }
 
 fn describe(c: &Counters) -> String {

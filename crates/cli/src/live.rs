@@ -170,18 +170,11 @@ impl LiveState {
         let rate = self.lock().last_status.replace((now, c.accepted)).map_or(0.0, |(then, accepted)| {
             (c.accepted - accepted) as f64 / now.duration_since(then).as_secs_f64().max(1e-3)
         });
-        let message = json!({
-            "type": "status",
-            "link": link,
-            "received": c.received,
-            "accepted": c.accepted,
-            "lost": c.lost,
-            "reordered": c.reordered,
-            "duplicated": c.duplicated,
-            "rejected": c.rejected_total(),
-            "rate_hz": rate,
-            "loss_percent": if expected > 0 { 100.0 * c.lost as f64 / expected as f64 } else { 0.0 },
-        });
+        let mut message = crate::link::counters_json(c);
+        message["type"] = "status".into();
+        message["link"] = link.into();
+        message["rate_hz"] = rate.into();
+        message["loss_percent"] = (if expected > 0 { 100.0 * c.lost as f64 / expected as f64 } else { 0.0 }).into();
         if self.tx.receiver_count() > 0 {
             let _ = self.tx.send(message.to_string().into());
         }
