@@ -51,7 +51,7 @@ pub(crate) struct PlotArgs {
 }
 
 /// Reads a recording, warns about unreadable lines, orders the frames by sequence.
-fn load(path: &Path) -> Result<Recording> {
+pub(crate) fn load(path: &Path) -> Result<Recording> {
     let file = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
     let mut rec =
         read_recording(std::io::BufReader::new(file)).with_context(|| format!("reading {}", path.display()))?;
@@ -62,7 +62,9 @@ fn load(path: &Path) -> Result<Recording> {
     Ok(rec)
 }
 
-fn rest_pose(frames: &[FrameRecord], rest_frame: Option<u64>) -> Result<Option<Pose>> {
+/// The rest position's jaw pose: frame `rest_frame`'s (an error if it has none), or the first
+/// frame's that has one; `None` when no frame has a jaw pose.
+pub(crate) fn rest_pose(frames: &[FrameRecord], rest_frame: Option<u64>) -> Result<Option<Pose>> {
     match rest_frame {
         None => Ok(frames.iter().find_map(|f| f.maxilla_from_mandible)),
         Some(n) => match frames.iter().find(|f| f.frame == n) {

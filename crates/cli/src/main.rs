@@ -22,6 +22,7 @@ mod frames;
 mod link;
 mod linkbench;
 mod live;
+mod metrics;
 mod motion;
 mod plot;
 mod track;
@@ -83,6 +84,10 @@ enum Command {
     /// Plot a recording's lower-incisor path in the sagittal, frontal and transverse planes
     /// (SVG and PNG).
     Plot(export::PlotArgs),
+    /// Measure a recording's lower-incisor motion: widest opening, left and right lateral
+    /// excursion, protrusion and retrusion, and the envelope of motion (convex hull area) in
+    /// the sagittal and frontal planes; optionally plot the envelopes.
+    Metrics(metrics::MetricsArgs),
 }
 
 #[derive(Args)]
@@ -194,6 +199,7 @@ fn main() {
         Command::View(a) => live::view(&a),
         Command::Export(a) => export::export(&a),
         Command::Plot(a) => export::plot(&a),
+        Command::Metrics(a) => metrics::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
