@@ -1,0 +1,404 @@
+//! Kinematic contacts: with the lower scan placed by `maxilla_scan_from_mandible_scan`, every
+//! vertex of each arch gets its signed distance to the other arch; vertices that penetrate or
+//! come within the threshold are grouped into connected regions, and each region gets its
+//! area, centroid, deepest penetration (or smallest gap) and tooth. [`ContactMap`] accumulates
+//! how often and how deep each vertex was in contact over a motion.
+//!
+//! Depth is positive for penetration and negative for a gap (mm). Areas count the part of
+//! each triangle where the distance, interpolated linearly between its corners, is within
+//! the threshold, so a region's area does not jump with the mesh's resolution.
+
+use crate::distance::{Nearest, SurfaceIndex, nearest_brute_force};
+use crate::mesh::{DisjointSets, Mesh};
+use jawtrack_pose::Pose;
+use nalgebra::{Point3, Vector3};
+use serde::Serialize;
+
+/// The range of contact thresholds that make sense, from shimstock (0.01 mm) to 0.5 mm.
+pub const THRESHOLD_RANGE_MM: (f64, f64) = (0.01, 0.5);
+
+/// Which arch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    /// The upper arch.
+    Maxilla,
+    /// The lower arch.
+    Mandible,
+}
+
+/// What counts as a contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSettings {
+    /// A vertex within this gap (mm) of the other arch, or penetrating it, is in contact.
+    pub threshold_mm: f64,
+    /// The deepest penetration (mm) measured exactly; deeper vertices are not seen (an open
+    /// scan has no "inside" far from its surface).
+    pub max_depth_mm: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings { threshold_mm: 0.1, max_depth_mm: 1.0 }
+    }
+}
+
+impl ContactSettings {
+    /// Checks the threshold is within [`THRESHOLD_RANGE_MM`] and the depth positive.
+    pub fn validate(&self) -> Result<(), String> {
+        let (lo, hi) = THRESHOLD_RANGE_MM;
+        if !(lo..=hi).contains(&self.threshold_mm) {
+            return Err(format!("the contact threshold must be {lo}-{hi} mm, got {}", self.threshold_mm));
+        }
+        if !(self.max_depth_mm > 0.0 && self.max_depth_mm <= 10.0) {
+            return Err(format!("the measured penetration depth must be 0-10 mm, got {}", self.max_depth_mm));
+        }
+        Ok(())
+    }
+
+    /// How far from each surface distances must be known.
+    pub fn reach_mm(&self) -> f64 {
+        // Beyond the threshold too, so that areas interpolate to the true crossing.
+        self.max_depth_mm.max(self.threshold_mm * 2.0 + 0.3)
+    }
+}
+
+/// One arch: its mesh (optionally one part per tooth) indexed for distance queries.
+#[derive(Debug, Clone)]
+pub struct Arch {
+    /// The mesh (mm, in the arch's scan frame).
+    pub mesh: Mesh,
+    /// Distance queries against it.
+    pub index: SurfaceIndex,
+    /// Tooth names, when the arch was given one mesh per tooth.
+    pub teeth: Vec<String>,
+    /// Per triangle, its tooth (index into `teeth`).
+    tooth_of_triangle: Vec<u16>,
+    /// Per vertex, the triangles around it (CSR).
+    vertex_triangle_starts: Vec<u32>,
+    vertex_triangles: Vec<u32>,
+}
+
+impl Arch {
+    /// An arch from one mesh per named part; with more than one part, the parts are teeth.
+    pub fn new(parts: Vec<(String, Mesh)>, settings: &ContactSettings) -> Arch {
+        let (names, meshes): (Vec<String>, Vec<Mesh>) = parts.into_iter().unzip();
+        let (mesh, tooth_of_triangle) = Mesh::concat(&meshes);
+        let teeth = if names.len() > 1 { names } else { Vec::new() };
+        let index = SurfaceIndex::new(&mesh, settings.reach_mm());
+        let mut counts = vec![0u32; mesh.vertices.len() + 1];
+        for t in &mesh.triangles {
+            t.iter().for_each(|&v| counts[v as usize + 1] += 1);
+        }
+        for i in 1..counts.len() {
+            counts[i] += counts[i - 1];
+        }
+        let mut fill = counts.clone();
+        let mut vertex_triangles = vec![0u32; counts[mesh.vertices.len()] as usize];
+        for (k, t) in mesh.triangles.iter().enumerate() {
+            for &v in t {
+                vertex_triangles[fill[v as usize] as usize] = k as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Arch { mesh, index, teeth, tooth_of_triangle, vertex_triangle_starts: counts, vertex_triangles }
+    }
+
+    fn triangles_around(&self, v: usize) -> &[u32] {
+        &self.vertex_triangles[self.vertex_triangle_starts[v] as usize..self.vertex_triangle_starts[v + 1] as usize]
+    }
+}
+
+/// A connected patch of one arch in contact.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Region {
+    /// The arch it lies on.
+    pub arch: Side,
+    /// Its tooth, when the arch was given per tooth (the tooth holding most of its area).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth: Option<String>,
+    /// Area-weighted centre, in the upper scan's frame (mm).
+    pub centroid: [f64; 3],
+    /// Area within the threshold (mm²).
+    pub area_mm2: f64,
+    /// Deepest penetration (mm); negative when the region only comes near: minus the smallest
+    /// gap.
+    pub depth_mm: f64,
+    /// Vertices in contact.
+    pub vertices: usize,
+}
+
+/// The signed distance of each vertex of an arch to the other arch (NaN beyond the reach).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VertexDistances(pub Vec<f32>);
+
+/// The contacts at one pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contacts {
+    /// Regions on both arches, largest first.
+    pub regions: Vec<Region>,
+    /// Per-vertex signed distances (mm) of the upper and the lower arch.
+    pub distances: [VertexDistances; 2],
+}
+
+impl Contacts {
+    /// The deepest penetration over both arches (negative: smallest gap), if any contact.
+    pub fn max_depth_mm(&self) -> Option<f64> {
+        self.regions.iter().map(|r| r.depth_mm).reduce(f64::max)
+    }
+}
+
+/// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to `to`.
+fn distances(
+    from: &Arch,
+    other_from_from: &Pose,
+    nearest: impl Fn(&Point3<f64>) -> Option<Nearest>,
+) -> VertexDistances {
+    VertexDistances(
+        from.mesh
+            .vertices
+            .iter()
+            .map(|v| nearest(&other_from_from.transform_point(v)).map_or(f32::NAN, |n| n.distance as f32))
+            .collect(),
+    )
+}
+
+/// The contacts between `upper` and `lower` with the lower scan at `maxilla_scan_from_mandible_scan`.
+pub fn contacts(
+    upper: &Arch,
+    lower: &Arch,
+    maxilla_scan_from_mandible_scan: &Pose,
+    settings: &ContactSettings,
+) -> Contacts {
+    let to_upper = *maxilla_scan_from_mandible_scan;
+    let to_lower = to_upper.inverse();
+    let d_upper = distances(upper, &to_lower, |p| lower.index.nearest(p));
+    let d_lower = distances(lower, &to_upper, |p| upper.index.nearest(p));
+    regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
+}
+
+/// The same as [`contacts`], testing every triangle for every vertex: the reference for tests.
+pub fn contacts_brute_force(
+    upper: &Arch,
+    lower: &Arch,
+    maxilla_scan_from_mandible_scan: &Pose,
+    settings: &ContactSettings,
+) -> Contacts {
+    let reach = settings.reach_mm();
+    let within = |n: Option<Nearest>| n.filter(|n| n.distance.abs() <= reach);
+    let to_upper = *maxilla_scan_from_mandible_scan;
+    let to_lower = to_upper.inverse();
+    let d_upper = distances(upper, &to_lower, |p| within(nearest_brute_force(lower.index.surface(), p)));
+    let d_lower = distances(lower, &to_upper, |p| within(nearest_brute_force(upper.index.surface(), p)));
+    regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
+}
+
+fn regions_from(
+    upper: &Arch,
+    lower: &Arch,
+    maxilla_scan_from_mandible_scan: &Pose,
+    distances: [VertexDistances; 2],
+    settings: &ContactSettings,
+) -> Contacts {
+    let mut regions = arch_regions(upper, Side::Maxilla, &distances[0], &Pose::identity(), settings);
+    regions.extend(arch_regions(lower, Side::Mandible, &distances[1], maxilla_scan_from_mandible_scan, settings));
+    regions.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
+    Contacts { regions, distances }
+}
+
+/// Regions of one arch from its per-vertex distances.
+fn arch_regions(
+    arch: &Arch,
+    side: Side,
+    d: &VertexDistances,
+    to_upper: &Pose,
+    settings: &ContactSettings,
+) -> Vec<Region> {
+    let t = settings.threshold_mm;
+    let reach = settings.reach_mm();
+    let in_contact = |v: usize| d.0[v] as f64 <= t; // NaN compares false
+    let flagged: Vec<usize> = (0..d.0.len()).filter(|&v| in_contact(v)).collect();
+    if flagged.is_empty() {
+        return Vec::new();
+    }
+    let mut sets = DisjointSets::new(arch.mesh.vertices.len());
+    let mut seen = std::collections::HashSet::new();
+    let mut triangles = Vec::new();
+    for &v in &flagged {
+        for &tri in arch.triangles_around(v) {
+            if seen.insert(tri) {
+                triangles.push(tri as usize);
+                let ids = arch.mesh.triangles[tri as usize];
+                for k in 0..3 {
+                    let (a, b) = (ids[k] as usize, ids[(k + 1) % 3] as usize);
+                    if in_contact(a) && in_contact(b) {
+                        sets.union(a, b);
+                    }
+                }
+            }
+        }
+    }
+    struct Acc {
+        area: f64,
+        moment: Vector3<f64>,
+        depth: f64,
+        vertices: usize,
+        tooth_area: Vec<(u16, f64)>,
+    }
+    let mut by_root: std::collections::BTreeMap<usize, Acc> = std::collections::BTreeMap::new();
+    for &v in &flagged {
+        let acc = by_root.entry(sets.find(v)).or_insert(Acc {
+            area: 0.0,
+            moment: Vector3::zeros(),
+            depth: f64::NEG_INFINITY,
+            vertices: 0,
+            tooth_area: Vec::new(),
+        });
+        acc.depth = acc.depth.max(-(d.0[v] as f64));
+        acc.vertices += 1;
+    }
+    for tri in triangles {
+        let ids = arch.mesh.triangles[tri];
+        let Some(&v) = ids.iter().find(|&&v| in_contact(v as usize)) else { continue };
+        let values = ids.map(|i| {
+            let x = d.0[i as usize] as f64;
+            if x.is_nan() { reach } else { x }
+        });
+        let (area, centroid) = clipped_area(&arch.mesh.corners(tri), &values, t);
+        let root = sets.find(v as usize);
+        if let Some(acc) = by_root.get_mut(&root) {
+            acc.area += area;
+            acc.moment += centroid.coords * area;
+            let tooth = arch.tooth_of_triangle[tri];
+            match acc.tooth_area.iter_mut().find(|x| x.0 == tooth) {
+                Some(x) => x.1 += area,
+                None => acc.tooth_area.push((tooth, area)),
+            }
+        }
+    }
+    by_root
+        .into_values()
+        .map(|acc| {
+            let local = if acc.area > 0.0 { Point3::from(acc.moment / acc.area) } else { Point3::origin() };
+            let c = to_upper.transform_point(&local);
+            let tooth = acc
+                .tooth_area
+                .iter()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .and_then(|(k, _)| arch.teeth.get(*k as usize).cloned());
+            Region {
+                arch: side,
+                tooth,
+                centroid: [c.x, c.y, c.z],
+                area_mm2: acc.area,
+                depth_mm: acc.depth,
+                vertices: acc.vertices,
+            }
+        })
+        .collect()
+}
+
+/// The area and centroid of the part of triangle `p` where the linear interpolation of
+/// `values` is at most `t`.
+pub fn clipped_area(p: &[Point3<f64>; 3], values: &[f64; 3], t: f64) -> (f64, Point3<f64>) {
+    let mut poly: Vec<Point3<f64>> = Vec::with_capacity(4);
+    for k in 0..3 {
+        let (a, b) = (k, (k + 1) % 3);
+        let (fa, fb) = (values[a] - t, values[b] - t);
+        if fa <= 0.0 {
+            poly.push(p[a]);
+        }
+        if (fa <= 0.0) != (fb <= 0.0) {
+            let s = fa / (fa - fb);
+            poly.push(p[a] + (p[b] - p[a]) * s);
+        }
+    }
+    if poly.len() < 3 {
+        return (0.0, p[0]);
+    }
+    let (mut area, mut moment) = (0.0, Vector3::zeros());
+    for k in 1..poly.len() - 1 {
+        let a = (poly[k] - poly[0]).cross(&(poly[k + 1] - poly[0])).norm() / 2.0;
+        area += a;
+        moment += (poly[0].coords + poly[k].coords + poly[k + 1].coords) / 3.0 * a;
+    }
+    let centroid = if area > 0.0 { Point3::from(moment / area) } else { poly[0] };
+    (area, centroid)
+}
+
+/// How often and how deeply each vertex was in contact over a motion.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactMap {
+    /// Frames added.
+    pub frames: u32,
+    /// Per arch (upper, lower), per vertex: frames in contact.
+    pub hits: [Vec<u32>; 2],
+    /// Per arch, per vertex: deepest penetration seen (mm; negative: closest gap; -inf: never
+    /// within reach).
+    pub max_depth: [Vec<f32>; 2],
+}
+
+impl ContactMap {
+    /// An empty map for two arches.
+    pub fn new(upper: &Arch, lower: &Arch) -> Self {
+        let n = [upper.mesh.vertices.len(), lower.mesh.vertices.len()];
+        ContactMap { frames: 0, hits: n.map(|n| vec![0; n]), max_depth: n.map(|n| vec![f32::NEG_INFINITY; n]) }
+    }
+
+    /// Adds one frame's contacts.
+    pub fn add(&mut self, contacts: &Contacts, settings: &ContactSettings) {
+        self.frames += 1;
+        for arch in 0..2 {
+            for (v, &d) in contacts.distances[arch].0.iter().enumerate() {
+                if d.is_nan() {
+                    continue;
+                }
+                if d as f64 <= settings.threshold_mm {
+                    self.hits[arch][v] += 1;
+                }
+                self.max_depth[arch][v] = self.max_depth[arch][v].max(-d);
+            }
+        }
+    }
+
+    /// Per-vertex colours of one arch: grey where never in contact, then blue → green →
+    /// yellow → red with the fraction of frames in contact.
+    pub fn frequency_colours(&self, arch: usize) -> Vec<[u8; 3]> {
+        let frames = self.frames.max(1) as f64;
+        self.hits[arch].iter().map(|&h| if h == 0 { GREY } else { ramp(h as f64 / frames) }).collect()
+    }
+
+    /// Per-vertex colours of one arch by deepest contact: grey beyond the threshold, blue at
+    /// the threshold's gap through green (touching) to red at `full_depth_mm` penetration.
+    pub fn depth_colours(&self, arch: usize, settings: &ContactSettings, full_depth_mm: f64) -> Vec<[u8; 3]> {
+        let t = settings.threshold_mm;
+        self.max_depth[arch]
+            .iter()
+            .map(|&d| {
+                let d = d as f64;
+                if d < -t {
+                    GREY
+                } else if d <= 0.0 {
+                    ramp(0.5 * (d + t) / t)
+                } else {
+                    ramp(0.5 + 0.5 * (d / full_depth_mm).min(1.0))
+                }
+            })
+            .collect()
+    }
+}
+
+/// Colour of vertices never in contact.
+pub const GREY: [u8; 3] = [205, 200, 190];
+
+/// Blue → cyan → green → yellow → red for `x` in 0..1.
+pub fn ramp(x: f64) -> [u8; 3] {
+    let x = x.clamp(0.0, 1.0) * 4.0;
+    let (r, g, b) = match x {
+        x if x < 1.0 => (0.0, x, 1.0),
+        x if x < 2.0 => (0.0, 1.0, 2.0 - x),
+        x if x < 3.0 => (x - 2.0, 1.0, 0.0),
+        x => (1.0, 4.0 - x, 0.0),
+    };
+    [(r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8]
+}

@@ -1,0 +1,18 @@
+//! Occlusal contacts on intra-oral scans.
+//!
+//! - [`mesh`]: reading STL/PLY/OBJ in millimetres and checking them;
+//! - [`distance`]: exact signed distances from points to a scan surface, within a reach;
+//! - [`contacts`]: where two arches touch or come within a threshold at one pose, grouped into
+//!   regions, and the contact-frequency map over a motion;
+//! - [`dynamics`]: the mandible as a rigid body sliding over the maxillary teeth;
+//! - [`register`]: ICP of the marker's dodecahedron onto a scan of the printed harness.
+//!
+//! Everything is in the upper scan's frame unless a name says otherwise, in mm.
+
+pub mod contacts;
+pub mod distance;
+pub mod mesh;
+pub mod scenes;
+
+pub use distance::{Nearest, Surface, SurfaceIndex, nearest_brute_force};
+pub use mesh::{Mesh, MeshError, MeshReport};

@@ -1,0 +1,126 @@
+//! Test scenes with known answers, and synthetic arches of any size for benchmarks.
+//!
+//! - a flat square patch and a sphere pressed into it: the penetration depth, the cap area on
+//!   the sphere and the disc area on the patch are known in closed form;
+//! - a pair of horseshoe "arches" with cusps, the lower one a wavy copy of the upper, so that
+//!   much of their surface is within a fraction of a millimetre: a worst case for the
+//!   contact query.
+
+use crate::mesh::Mesh;
+use nalgebra::Point3;
+
+/// A flat square of side `size` (mm) at height `z`, centred on the z axis, `n` × `n` cells,
+/// facing down (−z) when `facing_down`, else up.
+pub fn patch(size: f64, n: usize, z: f64, facing_down: bool) -> Mesh {
+    grid(n, n, facing_down, |i, j| {
+        Point3::new(size * (i as f64 / n as f64 - 0.5), size * (j as f64 / n as f64 - 0.5), z)
+    })
+}
+
+/// A UV sphere of radius `r` (mm) about `centre`, normals outward; `n` latitude bands.
+pub fn sphere(centre: Point3<f64>, r: f64, n: usize) -> Mesh {
+    let (rings, segments) = (n, 2 * n);
+    let mut vertices = vec![centre + nalgebra::Vector3::new(0.0, 0.0, r)];
+    for i in 1..rings {
+        let theta = std::f64::consts::PI * i as f64 / rings as f64;
+        for j in 0..segments {
+            let phi = std::f64::consts::TAU * j as f64 / segments as f64;
+            vertices.push(
+                centre + nalgebra::Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()) * r,
+            );
+        }
+    }
+    vertices.push(centre - nalgebra::Vector3::new(0.0, 0.0, r));
+    let bottom = (vertices.len() - 1) as u32;
+    let ring = |i: usize, j: usize| (1 + (i - 1) * segments + j % segments) as u32;
+    let mut triangles = Vec::new();
+    for j in 0..segments {
+        triangles.push([0, ring(1, j), ring(1, j + 1)]);
+        triangles.push([bottom, ring(rings - 1, j + 1), ring(rings - 1, j)]);
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
+            triangles.push([a, c, d]);
+            triangles.push([a, d, b]);
+        }
+    }
+    Mesh { vertices, triangles }
+}
+
+/// A synthetic upper and lower arch of about `triangles` triangles each, in occlusion: the
+/// upper occlusal surface faces down, the lower faces up and follows it with a wavy offset
+/// of -0.10..+0.15 mm, so parts penetrate and parts stay near.
+pub fn arch_pair(triangles: usize) -> (Mesh, Mesh) {
+    // A horseshoe 50 mm wide and 45 mm deep, 10 mm across, with cusps about 0.8 mm high.
+    let across = ((triangles as f64 / 2.0 / 7.5).sqrt()).round().max(2.0) as usize;
+    let along = (triangles / 2 / across).max(2);
+    let place = |i: usize, j: usize, offset: f64| {
+        let s = i as f64 / along as f64;
+        let v = 10.0 * (j as f64 / across as f64 - 0.5);
+        let angle = std::f64::consts::PI * (s - 0.5) * 1.1;
+        let (cx, cy) = (25.0 * angle.sin(), -45.0 * angle.cos().powi(2) + 20.0);
+        let (nx, ny) = (angle.sin(), -angle.cos());
+        let arc = s * 120.0;
+        let cusps = 0.8 * (arc * 0.9).sin() * (v * 0.6).cos();
+        let wave = offset * (0.6 + (arc * 0.37).sin() * (v * 0.45).cos() * 1.0 + 0.4 * (arc * 1.3).cos());
+        Point3::new(cx + nx * v, cy + ny * v, cusps + wave)
+    };
+    let upper = grid(along, across, true, |i, j| place(i, j, 0.0));
+    let lower = grid(along, across, false, |i, j| {
+        let p = place(i, j, 0.0);
+        let q = place(i, j, 0.125);
+        // Lower surface: below the upper by 0.075 - wave, i.e. between 0.10 mm deep and 0.15 mm away.
+        Point3::new(p.x, p.y, p.z - 0.15 + (q.z - p.z))
+    });
+    (upper, lower)
+}
+
+/// A height-field style grid of `nu` × `nv` cells through `at(i, j)`, two triangles a cell.
+fn grid(nu: usize, nv: usize, facing_down: bool, at: impl Fn(usize, usize) -> Point3<f64>) -> Mesh {
+    let mut vertices = Vec::with_capacity((nu + 1) * (nv + 1));
+    for j in 0..=nv {
+        for i in 0..=nu {
+            vertices.push(at(i, j));
+        }
+    }
+    let id = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
+    let mut triangles = Vec::with_capacity(2 * nu * nv);
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if facing_down {
+                triangles.push([a, c, b]);
+                triangles.push([a, d, c]);
+            } else {
+                triangles.push([a, b, c]);
+                triangles.push([a, c, d]);
+            }
+        }
+    }
+    Mesh { vertices, triangles }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scenes_face_the_way_they_say() {
+        let down = patch(10.0, 4, 0.0, true);
+        assert!(down.area_normal(0).z < 0.0);
+        let ball = sphere(Point3::origin(), 2.0, 16);
+        let r = ball.report();
+        assert_eq!((r.boundary_edges, r.non_manifold_edges, r.components), (0, 0, 1));
+        // Outward normals: the first triangle is at the top.
+        assert!(ball.area_normal(0).z > 0.0);
+        let (upper, lower) = arch_pair(20_000);
+        assert!(upper.triangles.len().abs_diff(20_000) < 1000, "{}", upper.triangles.len());
+        assert!(upper.area_normal(0).z < 0.0 && lower.area_normal(0).z > 0.0);
+        let extent = {
+            let [lo, hi] = upper.bounds();
+            hi - lo
+        };
+        assert!(extent.x > 40.0 && extent.y > 30.0, "{extent}");
+    }
+}
