@@ -8,7 +8,7 @@
 //! each triangle where the distance, interpolated linearly between its corners, is within
 //! the threshold, so a region's area does not jump with the mesh's resolution.
 
-use crate::distance::{Nearest, SurfaceIndex, nearest_brute_force};
+use crate::distance::{Lookup, Nearest, SurfaceIndex, nearest_brute_force};
 use crate::mesh::{DisjointSets, Mesh};
 use jawtrack_pose::Pose;
 use nalgebra::{Point3, Vector3};
@@ -56,11 +56,14 @@ impl ContactSettings {
         Ok(())
     }
 
-    /// How far from each surface distances must be known.
-    pub fn reach_mm(&self) -> f64 {
-        // Beyond the threshold too, so that areas interpolate to the true crossing.
-        self.max_depth_mm.max(self.threshold_mm * 2.0 + 0.3)
+    /// How far in front of each surface distances must be known: beyond the threshold too,
+    /// so that areas interpolate to the true crossing.
+    pub fn above_mm(&self) -> f64 {
+        self.threshold_mm * 2.0 + 0.3
     }
+
+    /// The grid spacing of the distance index (mm).
+    pub const CELL_MM: f64 = 0.1;
 }
 
 /// One arch: its mesh (optionally one part per tooth) indexed for distance queries.
@@ -85,7 +88,8 @@ impl Arch {
         let (names, meshes): (Vec<String>, Vec<Mesh>) = parts.into_iter().unzip();
         let (mesh, tooth_of_triangle) = Mesh::concat(&meshes);
         let teeth = if names.len() > 1 { names } else { Vec::new() };
-        let index = SurfaceIndex::new(&mesh, settings.reach_mm());
+        let index =
+            SurfaceIndex::with_band(&mesh, settings.max_depth_mm, settings.above_mm(), ContactSettings::CELL_MM);
         let mut counts = vec![0u32; mesh.vertices.len() + 1];
         for t in &mesh.triangles {
             t.iter().for_each(|&v| counts[v as usize + 1] += 1);
@@ -128,7 +132,8 @@ pub struct Region {
     pub vertices: usize,
 }
 
-/// The signed distance of each vertex of an arch to the other arch (NaN beyond the reach).
+/// The signed distance of each vertex of an arch to the other arch: exact within the
+/// threshold, interpolated from the grid beyond it, NaN outside the band.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VertexDistances(pub Vec<f32>);
 
@@ -149,16 +154,16 @@ impl Contacts {
 }
 
 /// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to `to`.
-fn distances(
-    from: &Arch,
-    other_from_from: &Pose,
-    nearest: impl Fn(&Point3<f64>) -> Option<Nearest>,
-) -> VertexDistances {
+fn distances(from: &Arch, other_from_from: &Pose, lookup: impl Fn(&Point3<f64>) -> Lookup) -> VertexDistances {
     VertexDistances(
         from.mesh
             .vertices
             .iter()
-            .map(|v| nearest(&other_from_from.transform_point(v)).map_or(f32::NAN, |n| n.distance as f32))
+            .map(|v| match lookup(&other_from_from.transform_point(v)) {
+                Lookup::Far => f32::NAN,
+                Lookup::Approximate(d) => d as f32,
+                Lookup::Exact(n) => n.distance as f32,
+            })
             .collect(),
     )
 }
@@ -172,20 +177,53 @@ pub fn contacts(
 ) -> Contacts {
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
-    let d_upper = distances(upper, &to_lower, |p| lower.index.nearest(p));
-    let d_lower = distances(lower, &to_upper, |p| upper.index.nearest(p));
+    let (lo, hi, t) = (-settings.max_depth_mm, settings.above_mm(), settings.threshold_mm);
+    let mut d_upper = distances(upper, &to_lower, |p| lower.index.lookup(p, lo, hi, t));
+    let mut d_lower = distances(lower, &to_upper, |p| upper.index.lookup(p, lo, hi, t));
+    // The corners of triangles in contact set the areas: make theirs exact too.
+    exact_around_contacts(upper, &mut d_upper, t, |p| lower.index.lookup(&to_lower.transform_point(p), lo, hi, hi));
+    exact_around_contacts(lower, &mut d_lower, t, |p| upper.index.lookup(&to_upper.transform_point(p), lo, hi, hi));
     regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
 }
 
-/// The same as [`contacts`], testing every triangle for every vertex: the reference for tests.
+/// Replaces the interpolated distances of vertices sharing a triangle with a vertex in
+/// contact by exact ones.
+fn exact_around_contacts(
+    arch: &Arch,
+    d: &mut VertexDistances,
+    threshold: f64,
+    lookup: impl Fn(&Point3<f64>) -> Lookup,
+) {
+    let flagged: Vec<usize> = (0..d.0.len()).filter(|&v| d.0[v] as f64 <= threshold).collect();
+    for v in flagged {
+        for &tri in arch.triangles_around(v) {
+            for &corner in &arch.mesh.triangles[tri as usize] {
+                let c = corner as usize;
+                if d.0[c] as f64 > threshold {
+                    d.0[c] = match lookup(&arch.mesh.vertices[c]) {
+                        Lookup::Exact(n) => n.distance as f32,
+                        Lookup::Approximate(x) => x as f32,
+                        Lookup::Far => f32::NAN,
+                    };
+                }
+            }
+        }
+    }
+}
+
+/// The same as [`contacts`], testing every triangle for every vertex (and exact everywhere in
+/// the band): the reference for tests.
 pub fn contacts_brute_force(
     upper: &Arch,
     lower: &Arch,
     maxilla_scan_from_mandible_scan: &Pose,
     settings: &ContactSettings,
 ) -> Contacts {
-    let reach = settings.reach_mm();
-    let within = |n: Option<Nearest>| n.filter(|n| n.distance.abs() <= reach);
+    let (lo, hi) = (-settings.max_depth_mm, settings.above_mm());
+    let within = |n: Option<Nearest>| match n {
+        Some(n) if (lo..=hi).contains(&n.distance) => Lookup::Exact(n),
+        _ => Lookup::Far,
+    };
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
     let d_upper = distances(upper, &to_lower, |p| within(nearest_brute_force(lower.index.surface(), p)));
@@ -215,7 +253,7 @@ fn arch_regions(
     settings: &ContactSettings,
 ) -> Vec<Region> {
     let t = settings.threshold_mm;
-    let reach = settings.reach_mm();
+    let reach = settings.above_mm();
     let in_contact = |v: usize| d.0[v] as f64 <= t; // NaN compares false
     let flagged: Vec<usize> = (0..d.0.len()).filter(|&v| in_contact(v)).collect();
     if flagged.is_empty() {

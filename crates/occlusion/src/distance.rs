@@ -6,11 +6,14 @@
 //! meaningful near the surface, which is why every query has a reach, and a point off to the
 //! side of the scan's rim counts as outside.
 //!
-//! [`SurfaceIndex`] buckets triangles in a uniform grid: a cell lists every triangle that can
-//! be within the reach of some point in it, sorted by distance from the cell's centre, so a
-//! query stops as soon as no remaining triangle can beat the best so far. It returns exactly
-//! what [`nearest_brute_force`] returns (same triangle, same distance) for every point within
-//! the reach; points farther away cost one array look-up.
+//! [`SurfaceIndex`] is a narrow-band signed-distance grid (sparse 8³ blocks) whose nodes hold
+//! their exact signed distance and nearest triangle. A query interpolates the eight nodes
+//! around the point to decide cheaply whether it is in range (most vertices of an arch are
+//! not), and only then finds the exact nearest point: the corner nodes' nearest triangles,
+//! then a descent over neighbouring triangles until none is nearer. That is the brute-force
+//! answer ([`nearest_brute_force`]) wherever the nearest triangle is reachable by descent
+//! from the nodes' ones, which the tests check on every test scene; it is not a proof for
+//! arbitrary meshes.
 
 use crate::mesh::Mesh;
 use nalgebra::{Point3, Vector3};
@@ -54,6 +57,9 @@ enum Feature {
 #[derive(Debug, Clone)]
 pub struct Surface {
     tris: Vec<Tri>,
+    /// Per triangle, the triangles sharing a corner with it (CSR).
+    neighbour_starts: Vec<u32>,
+    neighbours: Vec<u32>,
 }
 
 impl Surface {
@@ -103,7 +109,13 @@ impl Surface {
                 }
             })
             .collect();
-        Surface { tris }
+        let (neighbour_starts, neighbours) = corner_neighbours(mesh);
+        Surface { tris, neighbour_starts, neighbours }
+    }
+
+    /// The triangles sharing a corner with triangle `t`.
+    fn neighbours(&self, t: usize) -> &[u32] {
+        &self.neighbours[self.neighbour_starts[t] as usize..self.neighbour_starts[t + 1] as usize]
     }
 
     /// Triangles.
@@ -139,6 +151,32 @@ impl Surface {
         let sign = if along < 0.0 && !beside_rim { -1.0 } else { 1.0 };
         Nearest { distance: sign * d, point: c, triangle: t as u32, normal }
     }
+}
+
+/// Per triangle, the other triangles sharing a corner with it, as (starts, items).
+fn corner_neighbours(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
+    let mut around: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        tri.iter().for_each(|&v| around[v as usize].push(t as u32));
+    }
+    let (mut starts, mut items) = (vec![0u32], Vec::new());
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let begin = items.len();
+        for &v in tri {
+            items.extend(around[v as usize].iter().copied().filter(|&n| n != t as u32));
+        }
+        items[begin..].sort_unstable();
+        let mut unique = begin;
+        for k in begin..items.len() {
+            if unique == begin || items[k] != items[unique - 1] {
+                items[unique] = items[k];
+                unique += 1;
+            }
+        }
+        items.truncate(unique);
+        starts.push(items.len() as u32);
+    }
+    (starts, items)
 }
 
 /// The closest point of triangle `abc` to `p` and the feature it lies on (Ericson, Real-Time
@@ -206,73 +244,180 @@ pub fn nearest_brute_force(surface: &Surface, p: &Point3<f64>) -> Option<Nearest
     best.map(|(d2, t, c, f)| surface.signed(t, p, d2, c, f))
 }
 
-/// A grid over a surface answering signed-distance queries exactly within `reach`.
+/// Nodes per block edge of the sparse grid.
+const BLOCK: usize = 8;
+const NODES: usize = BLOCK * BLOCK * BLOCK;
+const NONE: u32 = u32::MAX;
+
+/// A block of grid nodes: signed distance and nearest triangle of each.
+#[derive(Debug, Clone)]
+struct Block {
+    /// Per node, its signed distance and nearest triangle, side by side for one cache line.
+    nodes: Box<[(f32, u32); NODES]>,
+}
+
+/// What a query found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Lookup {
+    /// Outside the band the index covers, or outside the asked-for range.
+    Far,
+    /// Beyond the refinement limit: the grid's interpolated signed distance (mm), good to
+    /// about a micron on smooth surfaces.
+    Approximate(f64),
+    /// The exact nearest surface point.
+    Exact(Nearest),
+}
+
+/// A narrow-band signed-distance grid over a surface: each node holds its exact signed
+/// distance and nearest triangle. A query interpolates the grid to decide whether the point
+/// is in the range asked for, then finds the exact nearest point from the corner nodes'
+/// nearest triangles and a descent over their neighbours.
 #[derive(Debug, Clone)]
 pub struct SurfaceIndex {
     surface: Surface,
-    reach: f64,
+    below: f64,
+    above: f64,
     cell: f64,
     origin: Vector3<f64>,
-    dims: [usize; 3],
-    /// Per cell, the range of `items` holding its triangles.
-    starts: Vec<u32>,
-    /// (triangle, distance from the cell centre to it), sorted by distance within a cell.
-    items: Vec<(u32, f32)>,
+    /// Nodes along each axis.
+    nodes: [usize; 3],
+    /// Blocks along each axis.
+    blocks: [usize; 3],
+    /// Per block position, its index in `data` or [`NONE`].
+    block_of: Vec<u32>,
+    data: Vec<Block>,
 }
 
 impl SurfaceIndex {
-    /// Indexes `mesh` for queries out to `reach` mm from the surface (on either side).
+    /// Indexes `mesh` for exact queries out to `reach` mm on either side of the surface.
     pub fn new(mesh: &Mesh, reach: f64) -> Self {
+        let cell = (reach / 10.0).clamp(0.05, 0.3);
+        Self::with_band(mesh, reach, reach, cell)
+    }
+
+    /// Indexes `mesh` for points from `below` mm behind the surface to `above` mm in front of
+    /// it, with grid nodes `cell` mm apart.
+    pub fn with_band(mesh: &Mesh, below: f64, above: f64, cell: f64) -> Self {
         let surface = Surface::new(mesh);
-        let reach = reach.max(1e-6);
-        // A cell near the reach keeps the lists short without making the grid huge.
-        let cell = reach.clamp(0.25, 2.0);
+        let (below, above, cell) = (below.max(0.0), above.max(0.0), cell.max(1e-3));
+        let margin = below.max(above) + 3.0 * cell;
         let [lo, hi] = mesh.bounds();
-        let origin = lo - Vector3::repeat(reach + cell);
-        let dims = ((hi + Vector3::repeat(reach + cell) - origin) / cell).map(|x| x.ceil().max(1.0) as usize);
-        let dims = [dims.x, dims.y, dims.z];
-        let half_diagonal = cell * 3f64.sqrt() / 2.0;
-        let mut pairs: Vec<(u32, u32, f32)> = Vec::new();
-        for t in 0..surface.len() {
-            let corners = &surface.tris[t].corners;
-            let (mut tlo, mut thi) = (corners[0].coords, corners[0].coords);
+        let origin = lo - Vector3::repeat(margin);
+        let span = (hi - lo + Vector3::repeat(2.0 * margin)) / cell;
+        let nodes = [0, 1, 2].map(|k| span[k].ceil().max(1.0) as usize + 2);
+        let blocks = nodes.map(|n| n.div_ceil(BLOCK));
+        let mut index = SurfaceIndex {
+            surface,
+            below,
+            above,
+            cell,
+            origin,
+            nodes,
+            blocks,
+            block_of: vec![NONE; blocks[0] * blocks[1] * blocks[2]],
+            data: Vec::new(),
+        };
+        index.fill();
+        index
+    }
+
+    /// Computes the nodes: exactly near each triangle, then spread outward through the band,
+    /// each node trying its neighbours' nearest triangles.
+    fn fill(&mut self) {
+        let mut queue = std::collections::VecDeque::new();
+        let seed = 1.5 * self.cell;
+        for t in 0..self.surface.len() {
+            let corners = self.surface.tris[t].corners;
+            let (mut lo, mut hi) = (corners[0].coords, corners[0].coords);
             for c in &corners[1..] {
-                tlo = tlo.inf(&c.coords);
-                thi = thi.sup(&c.coords);
+                lo = lo.inf(&c.coords);
+                hi = hi.sup(&c.coords);
             }
-            let first = ((tlo - Vector3::repeat(reach) - origin) / cell).map(|x| x.floor().max(0.0) as usize);
-            let last = ((thi + Vector3::repeat(reach) - origin) / cell).map(|x| x.floor() as usize);
-            for z in first.z..=last.z.min(dims[2] - 1) {
-                for y in first.y..=last.y.min(dims[1] - 1) {
-                    for x in first.x..=last.x.min(dims[0] - 1) {
-                        let centre =
-                            Point3::from(origin + Vector3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * cell);
-                        let d = surface.closest(t, &centre).0.sqrt();
-                        // Some point of the cell may be within reach of the triangle.
-                        if d <= reach + half_diagonal {
-                            let id = (z * dims[1] + y) * dims[0] + x;
-                            // Rounded down so that the bound stays a lower bound in f32.
-                            pairs.push((id as u32, t as u32, next_down(d as f32)));
+            let first = ((lo - Vector3::repeat(seed) - self.origin) / self.cell).map(|x| x.ceil().max(0.0) as usize);
+            let last = ((hi + Vector3::repeat(seed) - self.origin) / self.cell).map(|x| x.floor().max(0.0) as usize);
+            for z in first.z..=last.z.min(self.nodes[2] - 1) {
+                for y in first.y..=last.y.min(self.nodes[1] - 1) {
+                    for x in first.x..=last.x.min(self.nodes[0] - 1) {
+                        if self.offer([x, y, z], t as u32) {
+                            queue.push_back([x, y, z]);
                         }
                     }
                 }
             }
         }
-        pairs.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.2.total_cmp(&b.2)).then(a.1.cmp(&b.1)));
-        let mut starts = vec![0u32; dims[0] * dims[1] * dims[2] + 1];
-        for &(id, _, _) in &pairs {
-            starts[id as usize + 1] += 1;
+        while let Some(node) = queue.pop_front() {
+            let Some((_, t)) = self.node(node) else { continue };
+            for (axis, step) in [(0, -1i64), (0, 1), (1, -1), (1, 1), (2, -1), (2, 1)] {
+                let next = node[axis] as i64 + step;
+                if next < 0 || next >= self.nodes[axis] as i64 {
+                    continue;
+                }
+                let mut m = node;
+                m[axis] = next as usize;
+                if self.offer(m, t) {
+                    queue.push_back(m);
+                }
+            }
         }
-        for i in 1..starts.len() {
-            starts[i] += starts[i - 1];
-        }
-        let items = pairs.into_iter().map(|(_, t, d)| (t, d)).collect();
-        SurfaceIndex { surface, reach, cell, origin, dims, starts, items }
     }
 
-    /// How far from the surface queries are answered (mm).
+    /// Stores triangle `t` at `node` if it is nearer than what the node holds and the node is
+    /// in the band; says whether it did.
+    fn offer(&mut self, node: [usize; 3], t: u32) -> bool {
+        let p = self.position(node);
+        let (d2, c, f) = self.surface.closest(t as usize, &p);
+        let held = self.node(node);
+        // Only a clear improvement replaces a node's triangle: equally near triangles (on a
+        // shared edge) would otherwise trade places forever through the f32 rounding.
+        if held.is_some_and(|(d, held_t)| held_t == t || d2.sqrt() >= (d as f64).abs() - 1e-6) {
+            return false;
+        }
+        // The band is tested on the unsigned distance: a neighbour's triangle may give the
+        // other sign (on an open scan) and must not leave a hole where the node's own
+        // triangle, found later, is in band.
+        if d2.sqrt() > self.below.max(self.above) + 2.0 * self.cell {
+            return false;
+        }
+        let signed = self.surface.signed(t as usize, &p, d2, c, f).distance;
+        let (b, local) = self.locate(node);
+        let block = match self.block_of[b] {
+            NONE => {
+                self.block_of[b] = self.data.len() as u32;
+                self.data.push(Block { nodes: Box::new([(f32::NAN, NONE); NODES]) });
+                self.data.len() - 1
+            }
+            k => k as usize,
+        };
+        self.data[block].nodes[local] = (signed as f32, t);
+        true
+    }
+
+    fn position(&self, [x, y, z]: [usize; 3]) -> Point3<f64> {
+        Point3::from(self.origin + Vector3::new(x as f64, y as f64, z as f64) * self.cell)
+    }
+
+    fn locate(&self, [x, y, z]: [usize; 3]) -> (usize, usize) {
+        let b = ((z / BLOCK) * self.blocks[1] + y / BLOCK) * self.blocks[0] + x / BLOCK;
+        let local = ((z % BLOCK) * BLOCK + y % BLOCK) * BLOCK + x % BLOCK;
+        (b, local)
+    }
+
+    /// A node's signed distance and nearest triangle, if it is in the band.
+    fn node(&self, node: [usize; 3]) -> Option<(f32, u32)> {
+        let (b, local) = self.locate(node);
+        let block = self.data.get(*self.block_of.get(b)? as usize)?;
+        let (d, t) = block.nodes[local];
+        (t != NONE).then_some((d, t))
+    }
+
+    /// How far behind and in front of the surface queries are answered (mm).
+    pub fn band(&self) -> (f64, f64) {
+        (self.below, self.above)
+    }
+
+    /// The larger side of the band (mm).
     pub fn reach(&self) -> f64 {
-        self.reach
+        self.below.max(self.above)
     }
 
     /// The indexed surface.
@@ -280,47 +425,82 @@ impl SurfaceIndex {
         &self.surface
     }
 
-    /// The nearest surface point to `p` if it is within the reach (`None` beyond it).
+    /// Bytes held by the grid.
+    pub fn grid_bytes(&self) -> usize {
+        self.data.len() * NODES * 8 + self.block_of.len() * 4
+    }
+
+    /// The nearest surface point to `p` if its signed distance is within the band.
     pub fn nearest(&self, p: &Point3<f64>) -> Option<Nearest> {
+        match self.lookup(p, -self.below, self.above, self.above) {
+            Lookup::Exact(n) => Some(n),
+            _ => None,
+        }
+    }
+
+    /// The signed distance of `p` if it lies in `lo..=hi` (mm, within the band): exact up to
+    /// `exact_up_to`, the grid's interpolation above it.
+    pub fn lookup(&self, p: &Point3<f64>, lo: f64, hi: f64, exact_up_to: f64) -> Lookup {
         let g = (p.coords - self.origin) / self.cell;
         if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0) {
-            return None;
+            return Lookup::Far;
         }
-        let [x, y, z] = [g.x as usize, g.y as usize, g.z as usize];
-        if x >= self.dims[0] || y >= self.dims[1] || z >= self.dims[2] {
-            return None;
+        let i = [g.x as usize, g.y as usize, g.z as usize];
+        if i[0] + 1 >= self.nodes[0] || i[1] + 1 >= self.nodes[1] || i[2] + 1 >= self.nodes[2] {
+            return Lookup::Far;
         }
-        let id = (z * self.dims[1] + y) * self.dims[0] + x;
-        let (start, end) = (self.starts[id] as usize, self.starts[id + 1] as usize);
-        if start == end {
-            return None;
+        let f = Vector3::new(g.x - i[0] as f64, g.y - i[1] as f64, g.z - i[2] as f64);
+        let mut interpolated = 0.0;
+        let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut candidates = [NONE; 8];
+        for (k, candidate) in candidates.iter_mut().enumerate() {
+            let (dx, dy, dz) = (k & 1, (k >> 1) & 1, (k >> 2) & 1);
+            let Some((d, t)) = self.node([i[0] + dx, i[1] + dy, i[2] + dz]) else { return Lookup::Far };
+            let w = (if dx == 1 { f.x } else { 1.0 - f.x })
+                * (if dy == 1 { f.y } else { 1.0 - f.y })
+                * (if dz == 1 { f.z } else { 1.0 - f.z });
+            interpolated += w * d as f64;
+            (min, max) = (min.min(d as f64), max.max(d as f64));
+            *candidate = t;
         }
-        let centre = self.origin + Vector3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * self.cell;
-        let offset = (p.coords - centre).norm();
-        let mut best: Option<(f64, usize, Point3<f64>, Feature)> = None;
-        let mut best_d = self.reach;
-        for &(t, from_centre) in &self.items[start..end] {
-            // |p - T| >= |c - T| - |p - c|, and the list is sorted by |c - T|.
-            if from_centre as f64 - offset > best_d {
+        // A distance field changes by at most the cell's diagonal across a cell; more means the
+        // sign jumps there (beside an open scan's rim), where interpolating would be wrong.
+        let continuous = max - min <= 2.0 * self.cell;
+        // The interpolation is only used to decide; a margin keeps borderline points exact.
+        let margin = 0.25 * self.cell;
+        if continuous && (interpolated < lo - margin || interpolated > hi + margin) {
+            return Lookup::Far;
+        }
+        if continuous && interpolated > exact_up_to + margin {
+            return Lookup::Approximate(interpolated);
+        }
+        let mut best = (f64::INFINITY, NONE);
+        for &t in &candidates {
+            if t != best.1 {
+                let d2 = self.surface.closest(t as usize, p).0;
+                if d2 < best.0 || (d2 == best.0 && t < best.1) {
+                    best = (d2, t);
+                }
+            }
+        }
+        // Descend over neighbouring triangles until none is nearer.
+        loop {
+            let mut improved = false;
+            for &t in self.surface.neighbours(best.1 as usize) {
+                let d2 = self.surface.closest(t as usize, p).0;
+                if d2 < best.0 || (d2 == best.0 && t < best.1) {
+                    best = (d2, t);
+                    improved = true;
+                }
+            }
+            if !improved {
                 break;
             }
-            let (d2, c, f) = self.surface.closest(t as usize, p);
-            let better = match best {
-                None => d2 <= best_d * best_d,
-                Some(b) => d2 < b.0 || (d2 == b.0 && (t as usize) < b.1),
-            };
-            if better {
-                best = Some((d2, t as usize, c, f));
-                best_d = d2.sqrt();
-            }
         }
-        best.map(|(d2, t, c, f)| self.surface.signed(t, p, d2, c, f))
+        let (d2, c, feature) = self.surface.closest(best.1 as usize, p);
+        let n = self.surface.signed(best.1 as usize, p, d2, c, feature);
+        if n.distance < lo || n.distance > hi { Lookup::Far } else { Lookup::Exact(n) }
     }
-}
-
-/// The largest f32 below `x` (for a lower bound that survives rounding).
-fn next_down(x: f32) -> f32 {
-    if x <= 0.0 { 0.0 } else { f32::from_bits(x.to_bits() - 1) }
 }
 
 #[cfg(test)]

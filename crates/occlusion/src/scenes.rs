@@ -49,29 +49,31 @@ pub fn sphere(centre: Point3<f64>, r: f64, n: usize) -> Mesh {
 }
 
 /// A synthetic upper and lower arch of about `triangles` triangles each, in occlusion: the
-/// upper occlusal surface faces down, the lower faces up and follows it with a wavy offset
-/// of -0.10..+0.15 mm, so parts penetrate and parts stay near.
+/// upper occlusal surface (cusps 0.8 mm high) faces down and the lower one faces up,
+/// following it at a gap that varies smoothly from 1.6 mm to a 0.1 mm interpenetration at
+/// a few contacts along the arch.
 pub fn arch_pair(triangles: usize) -> (Mesh, Mesh) {
-    // A horseshoe 50 mm wide and 45 mm deep, 10 mm across, with cusps about 0.8 mm high.
+    // A horseshoe about 50 mm wide and 45 mm deep, 10 mm across.
     let across = ((triangles as f64 / 2.0 / 7.5).sqrt()).round().max(2.0) as usize;
     let along = (triangles / 2 / across).max(2);
-    let place = |i: usize, j: usize, offset: f64| {
+    let place = |i: usize, j: usize| {
         let s = i as f64 / along as f64;
         let v = 10.0 * (j as f64 / across as f64 - 0.5);
+        // Half an ellipse (radii 25 and 45 mm, radius of curvature at least 13.9 mm, so the
+        // 5 mm offset to either side never folds the surface).
         let angle = std::f64::consts::PI * (s - 0.5) * 1.1;
-        let (cx, cy) = (25.0 * angle.sin(), -45.0 * angle.cos().powi(2) + 20.0);
-        let (nx, ny) = (angle.sin(), -angle.cos());
+        let (cx, cy) = (25.0 * angle.sin(), 45.0 * angle.cos() - 25.0);
+        let normal = nalgebra::Vector2::new(45.0 * angle.sin(), 25.0 * angle.cos()).normalize();
+        let (nx, ny) = (normal.x, normal.y);
         let arc = s * 120.0;
-        let cusps = 0.8 * (arc * 0.9).sin() * (v * 0.6).cos();
-        let wave = offset * (0.6 + (arc * 0.37).sin() * (v * 0.45).cos() * 1.0 + 0.4 * (arc * 1.3).cos());
-        Point3::new(cx + nx * v, cy + ny * v, cusps + wave)
+        let cusp = 0.8 * (arc * 0.9).sin() * (v * 0.6).cos();
+        let closeness = (arc * 0.2 + 1.0).sin() * (v * 0.25).cos();
+        (Point3::new(cx + nx * v, cy + ny * v, cusp), 0.75 - 0.85 * closeness)
     };
-    let upper = grid(along, across, true, |i, j| place(i, j, 0.0));
+    let upper = grid(along, across, true, |i, j| place(i, j).0);
     let lower = grid(along, across, false, |i, j| {
-        let p = place(i, j, 0.0);
-        let q = place(i, j, 0.125);
-        // Lower surface: below the upper by 0.075 - wave, i.e. between 0.10 mm deep and 0.15 mm away.
-        Point3::new(p.x, p.y, p.z - 0.15 + (q.z - p.z))
+        let (p, gap) = place(i, j);
+        Point3::new(p.x, p.y, p.z - gap)
     });
     (upper, lower)
 }

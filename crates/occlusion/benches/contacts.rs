@@ -1,0 +1,93 @@
+//! The kinematic contact query on two synthetic arches of about 150k triangles each, side by
+//! side with parry's capped point projection (`project_point_with_max_dist` for every vertex
+//! of both arches), in the same run, on one core.
+//!
+//! `cargo bench -p jawtrack-occlusion --bench contacts [-- --triangles N --frames N]`
+
+use jawtrack_occlusion::contacts::{Arch, ContactSettings, contacts};
+use jawtrack_occlusion::scenes;
+use jawtrack_pose::Pose;
+use nalgebra::Vector3;
+use parry3d_f64::math::Vector as V;
+use parry3d_f64::query::PointQuery;
+use std::time::Instant;
+
+fn arg(name: &str, default: usize) -> usize {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let triangles = arg("--triangles", 150_000);
+    let frames = arg("--frames", 40);
+    let settings = ContactSettings::default();
+    let (u, l) = scenes::arch_pair(triangles);
+    let start = Instant::now();
+    let upper = Arch::new(vec![("upper".into(), u.clone())], &settings);
+    let lower = Arch::new(vec![("lower".into(), l.clone())], &settings);
+    let build_s = start.elapsed().as_secs_f64();
+    // Small jaw movements about intercuspation: the worst case, with most of both occlusal
+    // surfaces within reach.
+    let poses: Vec<Pose> = (0..frames)
+        .map(|k| {
+            let s = k as f64 / frames as f64;
+            Pose::from_axis_angle(Vector3::new(0.0, 0.002 * s, 0.0), Vector3::new(0.05 * s, 0.0, -0.1 * s))
+        })
+        .collect();
+    let to_parry = |m: &jawtrack_occlusion::Mesh| {
+        parry3d_f64::shape::TriMesh::new(
+            m.vertices.iter().map(|p| V::new(p.x, p.y, p.z)).collect(),
+            m.triangles.clone(),
+        )
+        .expect("valid mesh")
+    };
+    let (pu, pl) = (to_parry(&u), to_parry(&l));
+    let reach = settings.max_depth_mm;
+    let (mut ours, mut parry, mut near, mut found) = (Vec::new(), Vec::new(), 0usize, 0usize);
+    for pose in &poses {
+        let t = Instant::now();
+        let c = contacts(&upper, &lower, pose, &settings);
+        ours.push(t.elapsed().as_secs_f64() * 1e3);
+        near = c.distances.iter().map(|d| d.0.iter().filter(|x| **x as f64 <= settings.threshold_mm).count()).sum();
+        let inverse = pose.inverse();
+        let t = Instant::now();
+        found = 0;
+        for v in &l.vertices {
+            let p = pose.transform_point(v);
+            found += usize::from(pu.project_local_point_with_max_dist(V::new(p.x, p.y, p.z), false, reach).is_some());
+        }
+        for v in &u.vertices {
+            let p = inverse.transform_point(v);
+            found += usize::from(pl.project_local_point_with_max_dist(V::new(p.x, p.y, p.z), false, reach).is_some());
+        }
+        parry.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let (ours, parry) = (median(ours), median(parry));
+    let c = contacts(&upper, &lower, &poses[0], &settings);
+    for (name, d) in ["upper", "lower"].iter().zip(&c.distances) {
+        let count = |lo: f64, hi: f64| d.0.iter().filter(|&&x| (x as f64) > lo && (x as f64) <= hi).count();
+        println!(
+            "  {name}: penetrating {}, 0-0.1 mm {}, 0.1-0.5 mm {}, NaN {}",
+            count(-9.0, 0.0),
+            count(0.0, 0.1),
+            count(0.1, 0.5),
+            d.0.iter().filter(|x| x.is_nan()).count()
+        );
+    }
+    println!(
+        "kinematic contact query, {} + {} triangles, {frames} frames, one core",
+        u.triangles.len(),
+        l.triangles.len()
+    );
+    println!("  vertices within the threshold or penetrating: {near} of {}", u.vertices.len() + l.vertices.len());
+    println!("  index build (both arches): {:.0} ms", build_s * 1e3);
+    println!("  jawtrack contacts (distances, regions, areas): median {ours:.2} ms/frame");
+    println!("  (parry found {found} vertices within {reach:.2} mm)");
+    println!("  parry project_point_with_max_dist, distances only: median {parry:.2} ms/frame");
+    println!("  ratio: {:.2}x", parry / ours);
+}
