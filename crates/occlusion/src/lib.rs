@@ -11,7 +11,9 @@
 
 pub mod contacts;
 pub mod distance;
+pub mod dynamics;
 pub mod mesh;
+pub mod register;
 pub mod scenes;
 
 pub use distance::{Nearest, Surface, SurfaceIndex, nearest_brute_force};
