@@ -15,6 +15,7 @@ macro_rules! say {
 mod accuracy;
 mod bench;
 mod calibrate;
+mod contacts;
 mod demo;
 mod detect;
 mod export;
@@ -24,7 +25,9 @@ mod linkbench;
 mod live;
 mod metrics;
 mod motion;
+mod occlusal;
 mod plot;
+mod register;
 mod track;
 
 use anyhow::{Context, Result, bail};
@@ -69,6 +72,9 @@ enum Command {
     /// Calibrate the marker from frames of it turned in front of the camera: finds tags glued
     /// turned or on the wrong face, refines every tag's place, writes a marker file.
     CalibrateMarker(calibrate::CalibrateArgs),
+    /// Register a marker to the scan of its printed harness (ICP of the dodecahedron from an
+    /// initial guess), writing its entry of the registration file `track` reads.
+    Register(register::RegisterArgs),
     /// Make a pairing key for the phone link (prints it; keep it secret).
     Keygen,
     /// Receive the phone's pose stream: record it, count losses, acknowledge, and optionally
@@ -88,6 +94,11 @@ enum Command {
     /// excursion, protrusion and retrusion, and the envelope of motion (convex hull area) in
     /// the sagittal and frontal planes; optionally plot the envelopes.
     Metrics(metrics::MetricsArgs),
+    /// Occlusal contacts over a recording: places the lower scan by each frame's pose, finds
+    /// where the arches penetrate or come within a threshold, groups them into regions
+    /// (centroid, area, depth, tooth), and writes contacts.jsonl, contact-frequency and depth
+    /// PLYs and occlusal PNG views.
+    Contacts(contacts::ContactsArgs),
 }
 
 #[derive(Args)]
@@ -190,6 +201,7 @@ fn main() {
         Command::Track(a) => track::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::CalibrateMarker(a) => calibrate::run(&a),
+        Command::Register(a) => register::run(&a),
         Command::Keygen => {
             link::keygen();
             Ok(())
@@ -200,6 +212,7 @@ fn main() {
         Command::Export(a) => export::export(&a),
         Command::Plot(a) => export::plot(&a),
         Command::Metrics(a) => metrics::run(&a),
+        Command::Contacts(a) => contacts::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -39,7 +39,7 @@ pub struct ContactSettings {
 
 impl Default for ContactSettings {
     fn default() -> Self {
-        ContactSettings { threshold_mm: 0.1, max_depth_mm: 1.0 }
+        ContactSettings { threshold_mm: 0.1, max_depth_mm: 0.5 }
     }
 }
 
