@@ -80,6 +80,8 @@ pub struct Arch {
     /// Per vertex, the triangles around it (CSR).
     vertex_triangle_starts: Vec<u32>,
     vertex_triangles: Vec<u32>,
+    /// The vertices in the order they are queried: spatially coherent.
+    query_order: Vec<u32>,
 }
 
 impl Arch {
@@ -105,7 +107,8 @@ impl Arch {
                 fill[v as usize] += 1;
             }
         }
-        Arch { mesh, index, teeth, tooth_of_triangle, vertex_triangle_starts: counts, vertex_triangles }
+        let query_order = mesh.spatial_order(1.0);
+        Arch { mesh, index, teeth, tooth_of_triangle, vertex_triangle_starts: counts, vertex_triangles, query_order }
     }
 
     fn triangles_around(&self, v: usize) -> &[u32] {
@@ -155,17 +158,15 @@ impl Contacts {
 
 /// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to `to`.
 fn distances(from: &Arch, other_from_from: &Pose, lookup: impl Fn(&Point3<f64>) -> Lookup) -> VertexDistances {
-    VertexDistances(
-        from.mesh
-            .vertices
-            .iter()
-            .map(|v| match lookup(&other_from_from.transform_point(v)) {
-                Lookup::Far => f32::NAN,
-                Lookup::Approximate(d) => d as f32,
-                Lookup::Exact(n) => n.distance as f32,
-            })
-            .collect(),
-    )
+    let mut d = vec![f32::NAN; from.mesh.vertices.len()];
+    for &v in &from.query_order {
+        d[v as usize] = match lookup(&other_from_from.transform_point(&from.mesh.vertices[v as usize])) {
+            Lookup::Far => f32::NAN,
+            Lookup::Approximate(x) => x as f32,
+            Lookup::Exact(n) => n.distance as f32,
+        };
+    }
+    VertexDistances(d)
 }
 
 /// The contacts between `upper` and `lower` with the lower scan at `maxilla_scan_from_mandible_scan`.
@@ -195,11 +196,12 @@ fn exact_around_contacts(
     lookup: impl Fn(&Point3<f64>) -> Lookup,
 ) {
     let flagged: Vec<usize> = (0..d.0.len()).filter(|&v| d.0[v] as f64 <= threshold).collect();
+    let mut done = vec![false; d.0.len()];
     for v in flagged {
         for &tri in arch.triangles_around(v) {
             for &corner in &arch.mesh.triangles[tri as usize] {
                 let c = corner as usize;
-                if d.0[c] as f64 > threshold {
+                if d.0[c] as f64 > threshold && !std::mem::replace(&mut done[c], true) {
                     d.0[c] = match lookup(&arch.mesh.vertices[c]) {
                         Lookup::Exact(n) => n.distance as f32,
                         Lookup::Approximate(x) => x as f32,
@@ -260,11 +262,11 @@ fn arch_regions(
         return Vec::new();
     }
     let mut sets = DisjointSets::new(arch.mesh.vertices.len());
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = vec![false; arch.mesh.triangles.len()];
     let mut triangles = Vec::new();
     for &v in &flagged {
         for &tri in arch.triangles_around(v) {
-            if seen.insert(tri) {
+            if !std::mem::replace(&mut seen[tri as usize], true) {
                 triangles.push(tri as usize);
                 let ids = arch.mesh.triangles[tri as usize];
                 for k in 0..3 {
@@ -283,15 +285,22 @@ fn arch_regions(
         vertices: usize,
         tooth_area: Vec<(u16, f64)>,
     }
-    let mut by_root: std::collections::BTreeMap<usize, Acc> = std::collections::BTreeMap::new();
+    // Per region root, its accumulator's place, in order of first appearance.
+    let mut slot_of = vec![u32::MAX; arch.mesh.vertices.len()];
+    let mut accs: Vec<Acc> = Vec::new();
     for &v in &flagged {
-        let acc = by_root.entry(sets.find(v)).or_insert(Acc {
-            area: 0.0,
-            moment: Vector3::zeros(),
-            depth: f64::NEG_INFINITY,
-            vertices: 0,
-            tooth_area: Vec::new(),
-        });
+        let root = sets.find(v);
+        if slot_of[root] == u32::MAX {
+            slot_of[root] = accs.len() as u32;
+            accs.push(Acc {
+                area: 0.0,
+                moment: Vector3::zeros(),
+                depth: f64::NEG_INFINITY,
+                vertices: 0,
+                tooth_area: Vec::new(),
+            });
+        }
+        let acc = &mut accs[slot_of[root] as usize];
         acc.depth = acc.depth.max(-(d.0[v] as f64));
         acc.vertices += 1;
     }
@@ -303,19 +312,16 @@ fn arch_regions(
             if x.is_nan() { reach } else { x }
         });
         let (area, centroid) = clipped_area(&arch.mesh.corners(tri), &values, t);
-        let root = sets.find(v as usize);
-        if let Some(acc) = by_root.get_mut(&root) {
-            acc.area += area;
-            acc.moment += centroid.coords * area;
-            let tooth = arch.tooth_of_triangle[tri];
-            match acc.tooth_area.iter_mut().find(|x| x.0 == tooth) {
-                Some(x) => x.1 += area,
-                None => acc.tooth_area.push((tooth, area)),
-            }
+        let acc = &mut accs[slot_of[sets.find(v as usize)] as usize];
+        acc.area += area;
+        acc.moment += centroid.coords * area;
+        let tooth = arch.tooth_of_triangle[tri];
+        match acc.tooth_area.iter_mut().find(|x| x.0 == tooth) {
+            Some(x) => x.1 += area,
+            None => acc.tooth_area.push((tooth, area)),
         }
     }
-    by_root
-        .into_values()
+    accs.into_iter()
         .map(|acc| {
             let local = if acc.area > 0.0 { Point3::from(acc.moment / acc.area) } else { Point3::origin() };
             let c = to_upper.transform_point(&local);
@@ -339,18 +345,22 @@ fn arch_regions(
 /// The area and centroid of the part of triangle `p` where the linear interpolation of
 /// `values` is at most `t`.
 pub fn clipped_area(p: &[Point3<f64>; 3], values: &[f64; 3], t: f64) -> (f64, Point3<f64>) {
-    let mut poly: Vec<Point3<f64>> = Vec::with_capacity(4);
+    // A triangle cut by a plane keeps at most four corners.
+    let (mut poly, mut n) = ([p[0]; 4], 0);
     for k in 0..3 {
         let (a, b) = (k, (k + 1) % 3);
         let (fa, fb) = (values[a] - t, values[b] - t);
         if fa <= 0.0 {
-            poly.push(p[a]);
+            poly[n] = p[a];
+            n += 1;
         }
         if (fa <= 0.0) != (fb <= 0.0) {
             let s = fa / (fa - fb);
-            poly.push(p[a] + (p[b] - p[a]) * s);
+            poly[n] = p[a] + (p[b] - p[a]) * s;
+            n += 1;
         }
     }
+    let poly = &poly[..n];
     if poly.len() < 3 {
         return (0.0, p[0]);
     }

@@ -31,11 +31,9 @@ pub struct Nearest {
     pub normal: Vector3<f64>,
 }
 
-/// Per-triangle data for distance queries: corners and the pseudo-normals of its face, edges
-/// and corners.
+/// Per-triangle data for the sign: the pseudo-normals of its face, edges and corners.
 #[derive(Debug, Clone)]
 struct Tri {
-    corners: [Point3<f64>; 3],
     face: Vector3<f64>,
     /// Edges ab, bc, ca.
     edges: [Vector3<f64>; 3],
@@ -56,15 +54,35 @@ enum Feature {
 /// Precomputed triangles with their pseudo-normals.
 #[derive(Debug, Clone)]
 pub struct Surface {
+    /// Per triangle, its corners: apart from the normals, which only the final answer needs.
+    corners: Vec<[Point3<f64>; 3]>,
+    /// Per triangle, a bounding sphere (centre, radius) to skip triangles cheaply.
+    spheres: Vec<(Point3<f64>, f64)>,
     tris: Vec<Tri>,
     /// Per triangle, the triangles sharing a corner with it (CSR).
     neighbour_starts: Vec<u32>,
     neighbours: Vec<u32>,
+    /// Per held triangle, its index in the mesh.
+    original: Vec<u32>,
 }
 
 impl Surface {
     /// Prepares `mesh` for distance queries.
     pub fn new(mesh: &Mesh) -> Self {
+        // Triangles are held in Z-order of their centres, so that a query's candidates, and
+        // successive queries', sit together in memory; answers give the mesh's own indices.
+        let centres: Vec<Point3<f64>> = (0..mesh.triangles.len())
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t);
+                Point3::from((a.coords + b.coords + c.coords) / 3.0)
+            })
+            .collect();
+        let original = crate::mesh::z_order(&centres, 0.5);
+        let reordered = Mesh {
+            vertices: mesh.vertices.clone(),
+            triangles: original.iter().map(|&t| mesh.triangles[t as usize]).collect(),
+        };
+        let mesh = &reordered;
         let n = mesh.triangles.len();
         let faces: Vec<Vector3<f64>> =
             (0..n).map(|t| mesh.area_normal(t).try_normalize(0.0).unwrap_or_else(Vector3::zeros)).collect();
@@ -100,7 +118,6 @@ impl Surface {
                     edge_normals.get(&(a.min(b), a.max(b))).copied().unwrap_or((faces[t], 1))
                 };
                 Tri {
-                    corners: mesh.corners(t),
                     face: faces[t],
                     edges: [0, 1, 2].map(|k| unit(edge(k).0, faces[t])),
                     vertices: tri.map(|v| unit(vertex_normals[v as usize], faces[t])),
@@ -110,7 +127,15 @@ impl Surface {
             })
             .collect();
         let (neighbour_starts, neighbours) = corner_neighbours(mesh);
-        Surface { tris, neighbour_starts, neighbours }
+        let corners: Vec<[Point3<f64>; 3]> = (0..n).map(|t| mesh.corners(t)).collect();
+        let spheres = corners
+            .iter()
+            .map(|c| {
+                let centre = Point3::from((c[0].coords + c[1].coords + c[2].coords) / 3.0);
+                (centre, c.iter().map(|x| (x - centre).norm()).fold(0.0, f64::max))
+            })
+            .collect();
+        Surface { corners, spheres, tris, neighbour_starts, neighbours, original }
     }
 
     /// The triangles sharing a corner with triangle `t`.
@@ -130,8 +155,16 @@ impl Surface {
 
     /// Squared unsigned distance from `p` to triangle `t`, its closest point and feature.
     fn closest(&self, t: usize, p: &Point3<f64>) -> (f64, Point3<f64>, Feature) {
-        let (c, f) = closest_on_triangle(p, &self.tris[t].corners);
+        let (c, f) = closest_on_triangle(p, &self.corners[t]);
         ((p - c).norm_squared(), c, f)
+    }
+
+    /// Whether triangle `t` is certainly farther from `p` than `d2` (squared), judged by its
+    /// bounding sphere.
+    fn beyond(&self, t: usize, p: &Point3<f64>, d2: f64) -> bool {
+        let (centre, radius) = self.spheres[t];
+        let gap = (p - centre).norm() - radius;
+        gap > 0.0 && gap * gap > d2
     }
 
     /// The signed result for triangle `t` given its closest point and feature.
@@ -149,7 +182,7 @@ impl Surface {
         // is on the rim and lies off to the side of it is outside.
         let beside_rim = on_rim && (offset - normal * along).norm() > 1e-9;
         let sign = if along < 0.0 && !beside_rim { -1.0 } else { 1.0 };
-        Nearest { distance: sign * d, point: c, triangle: t as u32, normal }
+        Nearest { distance: sign * d, point: c, triangle: self.original[t], normal }
     }
 }
 
@@ -232,7 +265,7 @@ fn closest_on_triangle(p: &Point3<f64>, [a, b, c]: &[Point3<f64>; 3]) -> (Point3
 }
 
 /// The nearest surface point to `p` by testing every triangle: the reference the index is
-/// checked against. Ties go to the lowest triangle index.
+/// checked against. Ties go to the triangle held first.
 pub fn nearest_brute_force(surface: &Surface, p: &Point3<f64>) -> Option<Nearest> {
     let mut best: Option<(f64, usize, Point3<f64>, Feature)> = None;
     for t in 0..surface.len() {
@@ -248,13 +281,9 @@ pub fn nearest_brute_force(surface: &Surface, p: &Point3<f64>) -> Option<Nearest
 const BLOCK: usize = 8;
 const NODES: usize = BLOCK * BLOCK * BLOCK;
 const NONE: u32 = u32::MAX;
-
-/// A block of grid nodes: signed distance and nearest triangle of each.
-#[derive(Debug, Clone)]
-struct Block {
-    /// Per node, its signed distance and nearest triangle, side by side for one cache line.
-    nodes: Box<[(f32, u32); NODES]>,
-}
+/// Offsets of a cell's eight corners from its lowest one within a block, x fastest.
+const CORNER_OFFSETS: [usize; 8] =
+    [0, 1, BLOCK, BLOCK + 1, BLOCK * BLOCK, BLOCK * BLOCK + 1, BLOCK * BLOCK + BLOCK, BLOCK * BLOCK + BLOCK + 1];
 
 /// What a query found.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -283,9 +312,13 @@ pub struct SurfaceIndex {
     nodes: [usize; 3],
     /// Blocks along each axis.
     blocks: [usize; 3],
-    /// Per block position, its index in `data` or [`NONE`].
+    /// Per block position, its index among the stored blocks or [`NONE`].
     block_of: Vec<u32>,
-    data: Vec<Block>,
+    /// Per node of the stored blocks (block `k`'s nodes at `k * NODES..`), its signed
+    /// distance: apart from the triangles because most queries read only these.
+    node_distances: Vec<f32>,
+    /// Per node of the stored blocks, its nearest triangle or [`NONE`].
+    node_triangles: Vec<u32>,
 }
 
 impl SurfaceIndex {
@@ -315,7 +348,8 @@ impl SurfaceIndex {
             nodes,
             blocks,
             block_of: vec![NONE; blocks[0] * blocks[1] * blocks[2]],
-            data: Vec::new(),
+            node_distances: Vec::new(),
+            node_triangles: Vec::new(),
         };
         index.fill();
         index
@@ -327,7 +361,7 @@ impl SurfaceIndex {
         let mut queue = std::collections::VecDeque::new();
         let seed = 1.5 * self.cell;
         for t in 0..self.surface.len() {
-            let corners = self.surface.tris[t].corners;
+            let corners = self.surface.corners[t];
             let (mut lo, mut hi) = (corners[0].coords, corners[0].coords);
             for c in &corners[1..] {
                 lo = lo.inf(&c.coords);
@@ -382,13 +416,16 @@ impl SurfaceIndex {
         let (b, local) = self.locate(node);
         let block = match self.block_of[b] {
             NONE => {
-                self.block_of[b] = self.data.len() as u32;
-                self.data.push(Block { nodes: Box::new([(f32::NAN, NONE); NODES]) });
-                self.data.len() - 1
+                let k = self.node_triangles.len() / NODES;
+                self.block_of[b] = k as u32;
+                self.node_distances.resize((k + 1) * NODES, f32::NAN);
+                self.node_triangles.resize((k + 1) * NODES, NONE);
+                k
             }
             k => k as usize,
         };
-        self.data[block].nodes[local] = (signed as f32, t);
+        self.node_distances[block * NODES + local] = signed as f32;
+        self.node_triangles[block * NODES + local] = t;
         true
     }
 
@@ -404,10 +441,18 @@ impl SurfaceIndex {
 
     /// A node's signed distance and nearest triangle, if it is in the band.
     fn node(&self, node: [usize; 3]) -> Option<(f32, u32)> {
+        let k = self.stored(node)?;
+        let t = self.node_triangles[k];
+        (t != NONE).then_some((self.node_distances[k], t))
+    }
+
+    /// Where `node`'s values are stored, if its block is.
+    fn stored(&self, node: [usize; 3]) -> Option<usize> {
         let (b, local) = self.locate(node);
-        let block = self.data.get(*self.block_of.get(b)? as usize)?;
-        let (d, t) = block.nodes[local];
-        (t != NONE).then_some((d, t))
+        match *self.block_of.get(b)? {
+            NONE => None,
+            k => Some(k as usize * NODES + local),
+        }
     }
 
     /// How far behind and in front of the surface queries are answered (mm).
@@ -427,7 +472,7 @@ impl SurfaceIndex {
 
     /// Bytes held by the grid.
     pub fn grid_bytes(&self) -> usize {
-        self.data.len() * NODES * 8 + self.block_of.len() * 4
+        self.node_triangles.len() * 8 + self.block_of.len() * 4
     }
 
     /// The nearest surface point to `p` if its signed distance is within the band.
@@ -450,19 +495,33 @@ impl SurfaceIndex {
             return Lookup::Far;
         }
         let f = Vector3::new(g.x - i[0] as f64, g.y - i[1] as f64, g.z - i[2] as f64);
-        let mut interpolated = 0.0;
-        let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut candidates = [NONE; 8];
-        for (k, candidate) in candidates.iter_mut().enumerate() {
-            let (dx, dy, dz) = (k & 1, (k >> 1) & 1, (k >> 2) & 1);
-            let Some((d, t)) = self.node([i[0] + dx, i[1] + dy, i[2] + dz]) else { return Lookup::Far };
-            let w = (if dx == 1 { f.x } else { 1.0 - f.x })
-                * (if dy == 1 { f.y } else { 1.0 - f.y })
-                * (if dz == 1 { f.z } else { 1.0 - f.z });
-            interpolated += w * d as f64;
-            (min, max) = (min.min(d as f64), max.max(d as f64));
-            *candidate = t;
+        // The cell's corners, x fastest; stored side by side unless the cell straddles blocks.
+        let mut at = [0usize; 8];
+        if i.iter().all(|&x| x % BLOCK < BLOCK - 1) {
+            let Some(base) = self.stored(i) else { return Lookup::Far };
+            for (slot, offset) in at.iter_mut().zip(CORNER_OFFSETS) {
+                *slot = base + offset;
+            }
+        } else {
+            for (k, slot) in at.iter_mut().enumerate() {
+                let Some(s) = self.stored([i[0] + (k & 1), i[1] + ((k >> 1) & 1), i[2] + ((k >> 2) & 1)]) else {
+                    return Lookup::Far;
+                };
+                *slot = s;
+            }
         }
+        let mut d = [0.0f64; 8];
+        for (slot, &k) in d.iter_mut().zip(&at) {
+            *slot = self.node_distances[k] as f64;
+        }
+        // Nodes outside the band hold NaN.
+        if d.iter().any(|x| x.is_nan()) {
+            return Lookup::Far;
+        }
+        let (x0, y0, z0) = (1.0 - f.x, 1.0 - f.y, 1.0 - f.z);
+        let interpolated = z0 * (y0 * (x0 * d[0] + f.x * d[1]) + f.y * (x0 * d[2] + f.x * d[3]))
+            + f.z * (y0 * (x0 * d[4] + f.x * d[5]) + f.y * (x0 * d[6] + f.x * d[7]));
+        let (min, max) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
         // A distance field changes by at most the cell's diagonal across a cell; more means the
         // sign jumps there (beside an open scan's rim), where interpolating would be wrong.
         let continuous = max - min <= 2.0 * self.cell;
@@ -474,22 +533,33 @@ impl SurfaceIndex {
         if continuous && interpolated > exact_up_to + margin {
             return Lookup::Approximate(interpolated);
         }
-        let mut best = (f64::INFINITY, NONE);
-        for &t in &candidates {
-            if t != best.1 {
-                let d2 = self.surface.closest(t as usize, p).0;
+        let mut best = (f64::INFINITY, NONE, *p);
+        let mut candidates = [NONE; 8];
+        for (slot, &k) in candidates.iter_mut().zip(&at) {
+            *slot = self.node_triangles[k];
+        }
+        for (k, &t) in candidates.iter().enumerate() {
+            // Neighbouring nodes mostly share their nearest triangle: test each once.
+            if !candidates[..k].contains(&t) && !self.surface.beyond(t as usize, p, best.0) {
+                let (d2, q, _) = self.surface.closest(t as usize, p);
                 if d2 < best.0 || (d2 == best.0 && t < best.1) {
-                    best = (d2, t);
+                    best = (d2, t, q);
                 }
             }
         }
-        // Descend over neighbouring triangles until none is nearer.
+        // Descend over neighbouring triangles until none is nearer. The open ball about `p`
+        // through the nearest point so far lies wholly on `p`'s side of the plane through that
+        // point square to `p`: a triangle with no corner on that side cannot be nearer.
         loop {
             let mut improved = false;
             for &t in self.surface.neighbours(best.1 as usize) {
-                let d2 = self.surface.closest(t as usize, p).0;
+                let towards = p - best.2;
+                if self.surface.corners[t as usize].iter().all(|c| (c - best.2).dot(&towards) <= 0.0) {
+                    continue;
+                }
+                let (d2, q, _) = self.surface.closest(t as usize, p);
                 if d2 < best.0 || (d2 == best.0 && t < best.1) {
-                    best = (d2, t);
+                    best = (d2, t, q);
                     improved = true;
                 }
             }

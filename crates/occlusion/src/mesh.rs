@@ -157,6 +157,13 @@ impl Mesh {
         [lo, hi]
     }
 
+    /// The vertex indices in Z-order of `cell`-mm cells: consecutive vertices in this order
+    /// are near each other, so queries made in it reuse what the cache already holds
+    /// whatever order the scanner wrote them in.
+    pub fn spatial_order(&self, cell: f64) -> Vec<u32> {
+        z_order(&self.vertices, cell)
+    }
+
     /// The three corners of triangle `t`.
     pub fn corners(&self, t: usize) -> [Point3<f64>; 3] {
         self.triangles[t].map(|i| self.vertices[i as usize])
@@ -420,6 +427,27 @@ fn read_ply(bytes: &[u8]) -> ParseResult {
 }
 
 /// Union–find over indices, for loops and components.
+/// The indices of `points` in Z-order (Morton order) of `cell`-mm cells.
+pub fn z_order(points: &[Point3<f64>], cell: f64) -> Vec<u32> {
+    let lo = points.iter().fold(Vector3::repeat(f64::INFINITY), |lo, p| lo.inf(&p.coords));
+    let spread = |x: u64| {
+        // Interleave the low 21 bits with two zero bits each.
+        let mut x = x & 0x1f_ffff;
+        x = (x | x << 32) & 0x1f_0000_0000_ffff;
+        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        (x | x << 2) & 0x1249_2492_4924_9249
+    };
+    let code = |p: &Point3<f64>| {
+        let q = ((p.coords - lo) / cell.max(1e-9)).map(|x| x.max(0.0) as u64);
+        spread(q.x) | spread(q.y) << 1 | spread(q.z) << 2
+    };
+    let mut keyed: Vec<(u64, u32)> = points.iter().enumerate().map(|(i, p)| (code(p), i as u32)).collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
 pub(crate) struct DisjointSets(Vec<usize>);
 
 impl DisjointSets {

@@ -3,8 +3,8 @@
 //! - a flat square patch and a sphere pressed into it: the penetration depth, the cap area on
 //!   the sphere and the disc area on the patch are known in closed form;
 //! - a pair of horseshoe "arches" with cusps, the lower one a wavy copy of the upper, so that
-//!   much of their surface is within a fraction of a millimetre: a worst case for the
-//!   contact query.
+//!   much of their occlusal surfaces is within a fraction of a millimetre: alone, a worst
+//!   case for the contact query; on crowns with buccal and lingual walls, closer to a scan.
 
 use crate::mesh::Mesh;
 use nalgebra::Point3;
@@ -51,14 +51,29 @@ pub fn sphere(centre: Point3<f64>, r: f64, n: usize) -> Mesh {
 /// A synthetic upper and lower arch of about `triangles` triangles each, in occlusion: the
 /// upper occlusal surface (cusps 0.8 mm high) faces down and the lower one faces up,
 /// following it at a gap that varies smoothly from 1.6 mm to a 0.1 mm interpenetration at
-/// a few contacts along the arch.
+/// a few contacts along the arch. Only the occlusal surfaces: a worst case, with most of
+/// both surfaces within reach of the other.
 pub fn arch_pair(triangles: usize) -> (Mesh, Mesh) {
-    // A horseshoe about 50 mm wide and 45 mm deep, 10 mm across.
-    let across = ((triangles as f64 / 2.0 / 7.5).sqrt()).round().max(2.0) as usize;
+    arch_pair_with_walls(triangles, 0.0)
+}
+
+/// The same occlusal surfaces carried on crowns: buccal and lingual walls `wall_mm` high
+/// run from the occlusal edges away from the other arch (up for the upper, down for the
+/// lower), as on an intra-oral scan, where most of the surface is far from the other arch.
+/// The triangles are spread evenly over the whole surface.
+pub fn arch_pair_with_walls(triangles: usize, wall_mm: f64) -> (Mesh, Mesh) {
+    // A horseshoe about 50 mm wide and 45 mm deep, 10 mm across its occlusal surface.
+    let section = 10.0 + 2.0 * wall_mm.max(0.0);
+    // Cells about twice as long along the arch as across.
+    let across = (triangles as f64 / 2.0 * section / 75.0).sqrt().round().max(2.0) as usize;
     let along = (triangles / 2 / across).max(2);
-    let place = |i: usize, j: usize| {
+    // `away` is +1 for the upper arch (its walls rise) and -1 for the lower.
+    let place = |i: usize, j: usize, away: f64| {
         let s = i as f64 / along as f64;
-        let v = 10.0 * (j as f64 / across as f64 - 0.5);
+        // Across the section: the occlusal surface for |u| <= 5, the walls beyond.
+        let u = section * (j as f64 / across as f64 - 0.5);
+        let v = u.clamp(-5.0, 5.0);
+        let up = u.abs() - 5.0;
         // Half an ellipse (radii 25 and 45 mm, radius of curvature at least 13.9 mm, so the
         // 5 mm offset to either side never folds the surface).
         let angle = std::f64::consts::PI * (s - 0.5) * 1.1;
@@ -68,13 +83,13 @@ pub fn arch_pair(triangles: usize) -> (Mesh, Mesh) {
         let arc = s * 120.0;
         let cusp = 0.8 * (arc * 0.9).sin() * (v * 0.6).cos();
         let closeness = (arc * 0.2 + 1.0).sin() * (v * 0.25).cos();
-        (Point3::new(cx + nx * v, cy + ny * v, cusp), 0.75 - 0.85 * closeness)
+        let gap = 0.75 - 0.85 * closeness;
+        let (lateral, height) = if up > 0.0 { (v + v.signum() * 0.15 * up, away * up) } else { (v, 0.0) };
+        let z = if away > 0.0 { cusp } else { cusp - gap };
+        Point3::new(cx + nx * lateral, cy + ny * lateral, z + height)
     };
-    let upper = grid(along, across, true, |i, j| place(i, j).0);
-    let lower = grid(along, across, false, |i, j| {
-        let (p, gap) = place(i, j);
-        Point3::new(p.x, p.y, p.z - gap)
-    });
+    let upper = grid(along, across, true, |i, j| place(i, j, 1.0));
+    let lower = grid(along, across, false, |i, j| place(i, j, -1.0));
     (upper, lower)
 }
 
@@ -124,5 +139,16 @@ mod tests {
             hi - lo
         };
         assert!(extent.x > 40.0 && extent.y > 30.0, "{extent}");
+        // With walls: as many triangles, still one consistently oriented sheet, 8 mm taller.
+        let (upper, lower) = arch_pair_with_walls(20_000, 8.0);
+        assert!(upper.triangles.len().abs_diff(20_000) < 1000, "{}", upper.triangles.len());
+        let r = upper.report();
+        assert_eq!((r.non_manifold_edges, r.components, r.boundary_loops), (0, 1, 1));
+        assert!(
+            upper.area_normal(upper.triangles.len() / 2).z < 0.0
+                && lower.area_normal(lower.triangles.len() / 2).z > 0.0
+        );
+        let [lo, hi] = upper.bounds();
+        assert!(hi.z - lo.z > 8.0, "{}", hi.z - lo.z);
     }
 }
