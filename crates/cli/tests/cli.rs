@@ -2,22 +2,9 @@
 //! that says what was wrong, never a panic.
 
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn jawtrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(args).output().expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn refused(o: &Output, needle: &str) {
-    assert!(!o.status.success(), "should fail");
-    let e = stderr(o);
-    assert!(e.contains(needle), "stderr lacks '{needle}': {e}");
-    assert!(!e.contains("panicked"), "panicked: {e}");
-}
+use std::process::Command;
+mod common;
+use common::{jawtrack, refused, stderr};
 
 #[test]
 fn marker_writes_a_valid_file_with_the_computed_tag_size() {

@@ -9,29 +9,12 @@ use nalgebra::Point3;
 use serde_json::{Value, json};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::{jawtrack, ok, refused, s};
 
 /// The height of the legend strip under each occlusal view (the binary's `LEGEND_PX`).
 const LEGEND_PX: u32 = 36;
 const R: f64 = 3.0;
-
-fn jawtrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(args).output().expect("the binary runs")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn refused(o: &Output, needle: &str) {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!o.status.success() && e.contains(needle) && !e.contains("panicked"), "wanted '{needle}': {e}");
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
 
 /// Writes `mesh` as OBJ (the library writes STL and PLY only).
 fn write_obj(mesh: &Mesh, path: &Path) {

@@ -2,16 +2,9 @@
 //! recording written out of order.
 
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn jawtrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(args).output().expect("the binary runs")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use std::process::Output;
+mod common;
+use common::{jawtrack, ok};
 
 fn tracked_hinge(dir: &Path) -> String {
     let out = dir.join("hinge.jsonl").to_str().expect("utf-8").to_owned();

@@ -7,24 +7,11 @@ use jawtrack_synth::scenes::{Glide, JawMotion, Rig};
 use nalgebra::{Point3, Vector3};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::{jawtrack, ok, refused};
 
 /// Noise-free poses only lose precision in the pose's JSON round trip and matrix→quaternion.
 const TOL_MM: f64 = 1e-6;
-
-fn jawtrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(args).output().expect("the binary runs")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn refused(o: &Output, needle: &str) {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!o.status.success() && e.contains(needle) && !e.contains("panicked"), "wanted '{needle}': {e}");
-}
 
 /// One frame with a jaw pose and the true displacement of the incisal point (head frame, mm).
 struct Truth {

@@ -8,25 +8,8 @@ use jawtrack_pose::Pose;
 use jawtrack_tracker::Registration;
 use nalgebra::{Point3, Vector3};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn jawtrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(args).output().expect("the binary runs")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn refused(o: &Output, needle: &str) {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!o.status.success() && e.contains(needle) && !e.contains("panicked"), "wanted '{needle}': {e}");
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
-}
+mod common;
+use common::{jawtrack, ok, refused, s};
 
 /// Writes the harness files into `dir/harness`; returns (marker file, body mesh in the marker
 /// frame).

@@ -82,6 +82,23 @@ pub struct Arch {
     vertex_triangles: Vec<u32>,
     /// The vertices in the order they are queried: spatially coherent.
     query_order: Vec<u32>,
+    /// Their positions in that order, read one after another.
+    ordered_vertices: Vec<Point3<f64>>,
+    /// Runs of `query_order` within one [`CLUSTER_MM`] cube, and a sphere holding each, so
+    /// that runs far from the other arch are skipped whole.
+    clusters: Vec<Cluster>,
+}
+
+/// The side of the cubes whose vertices form a cluster (mm).
+const CLUSTER_MM: f64 = 1.0;
+
+/// A run of the query order and a sphere holding its vertices.
+#[derive(Debug, Clone)]
+struct Cluster {
+    centre: Point3<f64>,
+    radius: f64,
+    start: u32,
+    end: u32,
 }
 
 impl Arch {
@@ -107,8 +124,38 @@ impl Arch {
                 fill[v as usize] += 1;
             }
         }
-        let query_order = mesh.spatial_order(1.0);
-        Arch { mesh, index, teeth, tooth_of_triangle, vertex_triangle_starts: counts, vertex_triangles, query_order }
+        // Clusters are the vertices of one cube of the Z-order's cells.
+        let query_order = mesh.spatial_order(CLUSTER_MM);
+        let [lo, _] = mesh.bounds();
+        let cube = |v: u32| ((mesh.vertices[v as usize].coords - lo) / CLUSTER_MM).map(|x| x.floor() as i64);
+        let mut clusters = Vec::new();
+        let mut start = 0;
+        while start < query_order.len() {
+            let key = cube(query_order[start]);
+            let end = (start..query_order.len()).find(|&k| cube(query_order[k]) != key).unwrap_or(query_order.len());
+            let points = query_order[start..end].iter().map(|&v| mesh.vertices[v as usize].coords);
+            let (lo, hi) = points
+                .clone()
+                .fold((Vector3::repeat(f64::INFINITY), -Vector3::repeat(f64::INFINITY)), |(lo, hi), p| {
+                    (lo.inf(&p), hi.sup(&p))
+                });
+            let centre = Point3::from((lo + hi) / 2.0);
+            let radius = points.map(|p| (p - centre.coords).norm()).fold(0.0, f64::max);
+            clusters.push(Cluster { centre, radius, start: start as u32, end: end as u32 });
+            start = end;
+        }
+        let ordered_vertices = query_order.iter().map(|&v| mesh.vertices[v as usize]).collect();
+        Arch {
+            ordered_vertices,
+            mesh,
+            index,
+            teeth,
+            tooth_of_triangle,
+            vertex_triangle_starts: counts,
+            vertex_triangles,
+            query_order,
+            clusters,
+        }
     }
 
     fn triangles_around(&self, v: usize) -> &[u32] {
@@ -156,15 +203,30 @@ impl Contacts {
     }
 }
 
-/// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to `to`.
-fn distances(from: &Arch, other_from_from: &Pose, lookup: impl Fn(&Point3<f64>) -> Lookup) -> VertexDistances {
+/// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to the
+/// other arch; clusters that `far` says are out of its band are skipped whole.
+fn distances(
+    from: &Arch,
+    other_from_from: &Pose,
+    far: impl Fn(&Point3<f64>, f64) -> bool,
+    lookup: impl Fn(&Point3<f64>) -> Lookup,
+) -> VertexDistances {
     let mut d = vec![f32::NAN; from.mesh.vertices.len()];
-    for &v in &from.query_order {
-        d[v as usize] = match lookup(&other_from_from.transform_point(&from.mesh.vertices[v as usize])) {
-            Lookup::Far => f32::NAN,
-            Lookup::Approximate(x) => x as f32,
-            Lookup::Exact(n) => n.distance as f32,
-        };
+    // A matrix transforms points faster than the pose's quaternion.
+    let (r, t) = (other_from_from.rotation_matrix(), other_from_from.translation());
+    for cluster in &from.clusters {
+        if far(&Point3::from(r * cluster.centre.coords + t), cluster.radius) {
+            continue;
+        }
+        let run = cluster.start as usize..cluster.end as usize;
+        for (&v, q) in from.query_order[run.clone()].iter().zip(&from.ordered_vertices[run]) {
+            let p = Point3::from(r * q.coords + t);
+            d[v as usize] = match lookup(&p) {
+                Lookup::Far => f32::NAN,
+                Lookup::Approximate(x) => x as f32,
+                Lookup::Exact(n) => n.distance as f32,
+            };
+        }
     }
     VertexDistances(d)
 }
@@ -179,8 +241,10 @@ pub fn contacts(
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
     let (lo, hi, t) = (-settings.max_depth_mm, settings.above_mm(), settings.threshold_mm);
-    let mut d_upper = distances(upper, &to_lower, |p| lower.index.lookup(p, lo, hi, t));
-    let mut d_lower = distances(lower, &to_upper, |p| upper.index.lookup(p, lo, hi, t));
+    let mut d_upper =
+        distances(upper, &to_lower, |c, r| lower.index.far_from(c, r), |p| lower.index.lookup(p, lo, hi, t));
+    let mut d_lower =
+        distances(lower, &to_upper, |c, r| upper.index.far_from(c, r), |p| upper.index.lookup(p, lo, hi, t));
     // The corners of triangles in contact set the areas: make theirs exact too.
     exact_around_contacts(upper, &mut d_upper, t, |p| lower.index.lookup(&to_lower.transform_point(p), lo, hi, hi));
     exact_around_contacts(lower, &mut d_lower, t, |p| upper.index.lookup(&to_upper.transform_point(p), lo, hi, hi));
@@ -228,8 +292,9 @@ pub fn contacts_brute_force(
     };
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
-    let d_upper = distances(upper, &to_lower, |p| within(nearest_brute_force(lower.index.surface(), p)));
-    let d_lower = distances(lower, &to_upper, |p| within(nearest_brute_force(upper.index.surface(), p)));
+    let never = |_: &Point3<f64>, _: f64| false;
+    let d_upper = distances(upper, &to_lower, never, |p| within(nearest_brute_force(lower.index.surface(), p)));
+    let d_lower = distances(lower, &to_upper, never, |p| within(nearest_brute_force(upper.index.surface(), p)));
     regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
 }
 

@@ -281,6 +281,8 @@ pub fn nearest_brute_force(surface: &Surface, p: &Point3<f64>) -> Option<Nearest
 const BLOCK: usize = 8;
 const NODES: usize = BLOCK * BLOCK * BLOCK;
 const NONE: u32 = u32::MAX;
+/// A node outside the band.
+const OUT_OF_BAND: i16 = i16::MIN;
 /// Offsets of a cell's eight corners from its lowest one within a block, x fastest.
 const CORNER_OFFSETS: [usize; 8] =
     [0, 1, BLOCK, BLOCK + 1, BLOCK * BLOCK, BLOCK * BLOCK + 1, BLOCK * BLOCK + BLOCK, BLOCK * BLOCK + BLOCK + 1];
@@ -315,10 +317,17 @@ pub struct SurfaceIndex {
     /// Per block position, its index among the stored blocks or [`NONE`].
     block_of: Vec<u32>,
     /// Per node of the stored blocks (block `k`'s nodes at `k * NODES..`), its signed
-    /// distance: apart from the triangles because most queries read only these.
-    node_distances: Vec<f32>,
+    /// distance in units of `quantum` ([`OUT_OF_BAND`] outside the band): apart from the
+    /// triangles, and small, because most queries read only these and memory is their cost.
+    node_distances: Vec<i16>,
+    /// Millimetres per unit of `node_distances`: the band over the range of an `i16`, some
+    /// tens of nanometres.
+    quantum: f64,
     /// Per node of the stored blocks, its nearest triangle or [`NONE`].
     node_triangles: Vec<u32>,
+    /// Per block position, how many blocks away (Chebyshev, at most 255) the nearest stored
+    /// block is: 0 for a stored one. Rejects whole clusters of far points at once.
+    clearance: Vec<u8>,
 }
 
 impl SurfaceIndex {
@@ -349,10 +358,69 @@ impl SurfaceIndex {
             blocks,
             block_of: vec![NONE; blocks[0] * blocks[1] * blocks[2]],
             node_distances: Vec::new(),
+            quantum: (below.max(above) + 3.0 * cell) / f64::from(i16::MAX - 1),
             node_triangles: Vec::new(),
+            clearance: Vec::new(),
         };
         index.fill();
+        index.clearance = index.block_clearance();
         index
+    }
+
+    /// The Chebyshev distance, in blocks, from each block position to the nearest stored
+    /// block, by a breadth-first sweep outward from the stored ones.
+    fn block_clearance(&self) -> Vec<u8> {
+        let [bx, by, bz] = self.blocks;
+        let mut clearance: Vec<u8> = self.block_of.iter().map(|&k| if k == NONE { u8::MAX } else { 0 }).collect();
+        let mut frontier: Vec<usize> = (0..clearance.len()).filter(|&b| clearance[b] == 0).collect();
+        let mut level = 0u8;
+        while !frontier.is_empty() && level < u8::MAX - 1 {
+            level += 1;
+            let mut next = Vec::new();
+            for b in frontier {
+                let (x, y, z) = (b % bx, (b / bx) % by, b / (bx * by));
+                for dz in z.saturating_sub(1)..=(z + 1).min(bz - 1) {
+                    for dy in y.saturating_sub(1)..=(y + 1).min(by - 1) {
+                        for dx in x.saturating_sub(1)..=(x + 1).min(bx - 1) {
+                            let n = (dz * by + dy) * bx + dx;
+                            if clearance[n] > level {
+                                clearance[n] = level;
+                                next.push(n);
+                            }
+                        }
+                    }
+                }
+            }
+            frontier = next;
+        }
+        clearance
+    }
+
+    /// Whether every point within `radius` mm of `centre` is certainly out of the band, so
+    /// that [`SurfaceIndex::lookup`] would answer [`Lookup::Far`] for each: all of them lie
+    /// outside the grid or in blocks with no node in the band.
+    pub fn far_from(&self, centre: &Point3<f64>, radius: f64) -> bool {
+        let g = (centre.coords - self.origin) / self.cell;
+        let r = radius / self.cell;
+        let mut reach = 0usize;
+        for k in 0..3 {
+            // Wholly before or past the grid on one axis: every lookup there answers Far.
+            if g[k] + r < 0.0 || g[k] - r >= (self.nodes[k] - 1) as f64 {
+                return true;
+            }
+            if !(g[k] >= 0.0 && g[k] < self.nodes[k] as f64) {
+                return false;
+            }
+            // A point's cell is named by its lowest node, whose block is at most this many
+            // blocks from the centre's.
+            let centre_block = g[k] as usize / BLOCK;
+            let low = (g[k] - r).max(0.0) as usize / BLOCK;
+            let high = (g[k] + r) as usize / BLOCK;
+            reach = reach.max(centre_block - low).max(high - centre_block);
+        }
+        let b =
+            ((g.z as usize / BLOCK) * self.blocks[1] + g.y as usize / BLOCK) * self.blocks[0] + g.x as usize / BLOCK;
+        self.clearance.get(b).is_some_and(|&c| c as usize > reach)
     }
 
     /// Computes the nodes: exactly near each triangle, then spread outward through the band,
@@ -401,9 +469,10 @@ impl SurfaceIndex {
         let p = self.position(node);
         let (d2, c, f) = self.surface.closest(t as usize, &p);
         let held = self.node(node);
-        // Only a clear improvement replaces a node's triangle: equally near triangles (on a
-        // shared edge) would otherwise trade places forever through the f32 rounding.
-        if held.is_some_and(|(d, held_t)| held_t == t || d2.sqrt() >= (d as f64).abs() - 1e-6) {
+        // Only a clear improvement, by more than the stored value's rounding, replaces a
+        // node's triangle: equally near triangles (on a shared edge) would otherwise trade
+        // places forever through it.
+        if held.is_some_and(|(d, held_t)| held_t == t || d2.sqrt() >= d.abs() - self.quantum - 1e-6) {
             return false;
         }
         // The band is tested on the unsigned distance: a neighbour's triangle may give the
@@ -418,13 +487,13 @@ impl SurfaceIndex {
             NONE => {
                 let k = self.node_triangles.len() / NODES;
                 self.block_of[b] = k as u32;
-                self.node_distances.resize((k + 1) * NODES, f32::NAN);
+                self.node_distances.resize((k + 1) * NODES, OUT_OF_BAND);
                 self.node_triangles.resize((k + 1) * NODES, NONE);
                 k
             }
             k => k as usize,
         };
-        self.node_distances[block * NODES + local] = signed as f32;
+        self.node_distances[block * NODES + local] = (signed / self.quantum).round() as i16;
         self.node_triangles[block * NODES + local] = t;
         true
     }
@@ -440,10 +509,18 @@ impl SurfaceIndex {
     }
 
     /// A node's signed distance and nearest triangle, if it is in the band.
-    fn node(&self, node: [usize; 3]) -> Option<(f32, u32)> {
+    fn node(&self, node: [usize; 3]) -> Option<(f64, u32)> {
         let k = self.stored(node)?;
         let t = self.node_triangles[k];
-        (t != NONE).then_some((self.node_distances[k], t))
+        (t != NONE).then_some((self.distance_at(k), t))
+    }
+
+    /// The signed distance stored at `k`, NaN outside the band.
+    fn distance_at(&self, k: usize) -> f64 {
+        match self.node_distances[k] {
+            OUT_OF_BAND => f64::NAN,
+            q => f64::from(q) * self.quantum,
+        }
     }
 
     /// Where `node`'s values are stored, if its block is.
@@ -472,7 +549,7 @@ impl SurfaceIndex {
 
     /// Bytes held by the grid.
     pub fn grid_bytes(&self) -> usize {
-        self.node_triangles.len() * 8 + self.block_of.len() * 4
+        self.node_triangles.len() * 6 + self.block_of.len() * 5
     }
 
     /// The nearest surface point to `p` if its signed distance is within the band.
@@ -512,7 +589,7 @@ impl SurfaceIndex {
         }
         let mut d = [0.0f64; 8];
         for (slot, &k) in d.iter_mut().zip(&at) {
-            *slot = self.node_distances[k] as f64;
+            *slot = self.distance_at(k);
         }
         // Nodes outside the band hold NaN.
         if d.iter().any(|x| x.is_nan()) {
@@ -623,6 +700,35 @@ mod tests {
             }
         }
         assert!(within > 2000 && beyond > 2000, "{within} {beyond}");
+    }
+
+    #[test]
+    fn a_region_said_to_be_far_holds_no_point_the_lookup_would_answer() {
+        let mesh = bumpy(30);
+        let index = SurfaceIndex::new(&mesh, 0.5);
+        let mut state = 777u64;
+        let mut rnd = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut far, mut near) = (0, 0);
+        for _ in 0..4000 {
+            let centre = Point3::new(rnd() * 16.0 - 3.0, rnd() * 16.0 - 3.0, rnd() * 10.0 - 5.0);
+            let radius = rnd() * 1.5;
+            if !index.far_from(&centre, radius) {
+                near += 1;
+                continue;
+            }
+            far += 1;
+            for _ in 0..20 {
+                let offset = Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+                let p = centre + offset.normalize() * radius * rnd().cbrt();
+                assert_eq!(index.lookup(&p, -0.5, 0.5, 0.5), Lookup::Far, "{p} within {radius} of {centre}");
+                let reference = nearest_brute_force(index.surface(), &p).expect("non-empty");
+                assert!(reference.distance.abs() > 0.5, "{p}: {reference:?}");
+            }
+        }
+        assert!(far > 500 && near > 500, "{far} {near}");
     }
 
     #[test]

@@ -83,12 +83,19 @@ fn two_flat_patches_overlapping_give_the_overlap_area() {
 fn the_indexed_query_equals_brute_force_on_test_scenes() {
     let settings = ContactSettings { threshold_mm: 0.2, ..Default::default() };
     let (u, l) = scenes::arch_pair(4000);
-    let scenes = [(arch(u, &settings), arch(l, &settings), Pose::identity()), {
-        let upper = arch(scenes::patch(10.0, 60, 0.0, true), &settings);
-        let lower = arch(scenes::sphere(Point3::new(0.0, 0.0, 0.3 - 3.0), 3.0, 40), &settings);
-        let tilted = Pose::from_axis_angle(Vector3::new(0.05, -0.03, 0.4), Vector3::new(0.3, -0.2, 0.05));
-        (upper, lower, tilted)
-    }];
+    // On crowns, whole clusters of wall vertices are skipped as far from the other arch.
+    let (cu, cl) = scenes::arch_pair_with_walls(4000, 8.0);
+    let slid = Pose::from_axis_angle(Vector3::new(0.0, 0.01, 0.0), Vector3::new(0.1, 0.0, -0.05));
+    let scenes = [
+        (arch(u, &settings), arch(l, &settings), Pose::identity()),
+        (arch(cu, &settings), arch(cl, &settings), slid),
+        {
+            let upper = arch(scenes::patch(10.0, 60, 0.0, true), &settings);
+            let lower = arch(scenes::sphere(Point3::new(0.0, 0.0, 0.3 - 3.0), 3.0, 40), &settings);
+            let tilted = Pose::from_axis_angle(Vector3::new(0.05, -0.03, 0.4), Vector3::new(0.3, -0.2, 0.05));
+            (upper, lower, tilted)
+        },
+    ];
     for (upper, lower, pose) in &scenes {
         let fast = contacts(upper, lower, pose, &settings);
         let slow = contacts_brute_force(upper, lower, pose, &settings);
