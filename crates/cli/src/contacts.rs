@@ -376,9 +376,20 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     let upper_in = load_arch(Side::Maxilla, &a.maxilla, a.quiet)?;
     let lower_in = load_arch(Side::Mandible, &a.mandible, a.quiet)?;
     let (upper_reports, lower_reports) = (upper_in.reports, lower_in.reports);
-    let upper = Arch::new(upper_in.parts, &settings);
-    let lower = Arch::new(lower_in.parts, &settings);
+    if !a.quiet {
+        say!("indexing both arches for distance queries (a few seconds per 100k triangles)…");
+    }
+    // The two indexes are independent: build them side by side.
+    let (upper, lower) = std::thread::scope(|scope| {
+        let upper = scope.spawn(|| Arch::new(upper_in.parts, &settings));
+        let lower = Arch::new(lower_in.parts, &settings);
+        (upper.join(), lower)
+    });
+    let upper = upper.map_err(|_| anyhow::anyhow!("indexing the upper arch failed"))?;
     let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
+    if !a.quiet {
+        say!("indexed in {:.1} s", setup_ms / 1e3);
+    }
 
     let (frames, extras, dynamics_summary) = match a.mode {
         Mode::Kinematic => (posed, None, Value::Null),
