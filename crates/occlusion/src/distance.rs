@@ -674,15 +674,21 @@ mod tests {
         Mesh { vertices, triangles }
     }
 
+    /// A seeded generator of uniform numbers in 0..1 (a linear congruential one: enough to
+    /// scatter test points).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     #[test]
     fn the_index_returns_exactly_what_brute_force_returns_within_its_reach() {
         let mesh = bumpy(30);
         let index = SurfaceIndex::new(&mesh, 0.6);
-        let mut state = 12345u64;
-        let mut rnd = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(12345);
         let (mut within, mut beyond) = (0, 0);
         for _ in 0..20000 {
             let p = Point3::new(rnd() * 12.0 - 1.0, rnd() * 12.0 - 1.0, rnd() * 4.0 - 2.0);
@@ -706,11 +712,7 @@ mod tests {
     fn a_region_said_to_be_far_holds_no_point_the_lookup_would_answer() {
         let mesh = bumpy(30);
         let index = SurfaceIndex::new(&mesh, 0.5);
-        let mut state = 777u64;
-        let mut rnd = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(777);
         let (mut far, mut near) = (0, 0);
         for _ in 0..4000 {
             let centre = Point3::new(rnd() * 16.0 - 3.0, rnd() * 16.0 - 3.0, rnd() * 10.0 - 5.0);
