@@ -58,6 +58,9 @@ pub struct Surface {
     corners: Vec<[Point3<f64>; 3]>,
     /// Per triangle, a bounding sphere (centre, radius) to skip triangles cheaply.
     spheres: Vec<(Point3<f64>, f64)>,
+    /// Per triangle, its plane (unit normal, offset along it): no point of the triangle is
+    /// nearer to a point than the plane is, which rules out most neighbours in a descent.
+    planes: Vec<[f64; 4]>,
     tris: Vec<Tri>,
     /// Per triangle, the triangles sharing a corner with it (CSR).
     neighbour_starts: Vec<u32>,
@@ -135,7 +138,8 @@ impl Surface {
                 (centre, c.iter().map(|x| (x - centre).norm()).fold(0.0, f64::max))
             })
             .collect();
-        Surface { corners, spheres, tris, neighbour_starts, neighbours, original }
+        let planes = corners.iter().zip(&faces).map(|(c, n)| [n.x, n.y, n.z, n.dot(&c[0].coords)]).collect();
+        Surface { corners, spheres, planes, tris, neighbour_starts, neighbours, original }
     }
 
     /// The triangles sharing a corner with triangle `t`.
@@ -165,6 +169,14 @@ impl Surface {
         let (centre, radius) = self.spheres[t];
         let gap = (p - centre).norm() - radius;
         gap > 0.0 && gap * gap > d2
+    }
+
+    /// Whether triangle `t` is certainly farther from `p` than `d2` (squared), judged by its
+    /// plane.
+    fn beyond_plane(&self, t: usize, p: &Point3<f64>, d2: f64) -> bool {
+        let [x, y, z, offset] = self.planes[t];
+        let s = x * p.x + y * p.y + z * p.z - offset;
+        s * s > d2
     }
 
     /// The signed result for triangle `t` given its closest point and feature.
@@ -610,33 +622,44 @@ impl SurfaceIndex {
         if continuous && interpolated > exact_up_to + margin {
             return Lookup::Approximate(interpolated);
         }
-        let mut best = (f64::INFINITY, NONE, *p);
+        let mut best = (f64::INFINITY, NONE, *p, Feature::Face);
         let mut candidates = [NONE; 8];
         for (slot, &k) in candidates.iter_mut().zip(&at) {
             *slot = self.node_triangles[k];
         }
         for (k, &t) in candidates.iter().enumerate() {
             // Neighbouring nodes mostly share their nearest triangle: test each once.
-            if !candidates[..k].contains(&t) && !self.surface.beyond(t as usize, p, best.0) {
-                let (d2, q, _) = self.surface.closest(t as usize, p);
+            if !candidates[..k].contains(&t)
+                && !self.surface.beyond(t as usize, p, best.0)
+                && !self.surface.beyond_plane(t as usize, p, best.0)
+            {
+                let (d2, q, f) = self.surface.closest(t as usize, p);
                 if d2 < best.0 || (d2 == best.0 && t < best.1) {
-                    best = (d2, t, q);
+                    best = (d2, t, q, f);
                 }
             }
         }
-        // Descend over neighbouring triangles until none is nearer. The open ball about `p`
-        // through the nearest point so far lies wholly on `p`'s side of the plane through that
-        // point square to `p`: a triangle with no corner on that side cannot be nearer.
+        // Descend over neighbouring triangles until none is nearer. Two cheap tests rule out
+        // most neighbours without finding their closest point: a triangle whose own plane is
+        // farther than the nearest point so far (one bending towards `p`), and a triangle with
+        // no corner on `p`'s side of the plane through that point square to `p` (one bending
+        // away), since the open ball about `p` through that point lies wholly on that side.
         loop {
             let mut improved = false;
             for &t in self.surface.neighbours(best.1 as usize) {
-                let towards = p - best.2;
-                if self.surface.corners[t as usize].iter().all(|c| (c - best.2).dot(&towards) <= 0.0) {
+                if self.surface.beyond_plane(t as usize, p, best.0) {
                     continue;
                 }
-                let (d2, q, _) = self.surface.closest(t as usize, p);
+                let towards = p - best.2;
+                // Corners shared with the nearest triangle lie on the plane, up to rounding: a
+                // nanometre's slack lets them count as on it, and costs at most a nanometre.
+                let slack = 1e-9 * best.0.sqrt();
+                if self.surface.corners[t as usize].iter().all(|c| (c - best.2).dot(&towards) <= slack) {
+                    continue;
+                }
+                let (d2, q, f) = self.surface.closest(t as usize, p);
                 if d2 < best.0 || (d2 == best.0 && t < best.1) {
-                    best = (d2, t, q);
+                    best = (d2, t, q, f);
                     improved = true;
                 }
             }
@@ -644,8 +667,8 @@ impl SurfaceIndex {
                 break;
             }
         }
-        let (d2, c, feature) = self.surface.closest(best.1 as usize, p);
-        let n = self.surface.signed(best.1 as usize, p, d2, c, feature);
+        let (d2, t, c, feature) = best;
+        let n = self.surface.signed(t as usize, p, d2, c, feature);
         if n.distance < lo || n.distance > hi { Lookup::Far } else { Lookup::Exact(n) }
     }
 }
