@@ -79,7 +79,7 @@ fn run(name: &str, (u, l): (Mesh, Mesh), frames: usize) {
     for (arch, d) in ["upper", "lower"].iter().zip(&c.distances) {
         let count = |lo: f64, hi: f64| d.0.iter().filter(|&&x| (x as f64) > lo && (x as f64) <= hi).count();
         println!(
-            "  {arch} vertices: penetrating {}, gap 0-{} mm {}, beyond the threshold {}, out of reach {}",
+            "  {arch} vertices: penetrating {}, gap 0-{} mm {}, corners of triangles in contact beyond it {}, the rest {}",
             count(-9.0, 0.0),
             settings.threshold_mm,
             count(0.0, settings.threshold_mm),

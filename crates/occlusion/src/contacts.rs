@@ -107,8 +107,14 @@ impl Arch {
         let (names, meshes): (Vec<String>, Vec<Mesh>) = parts.into_iter().unzip();
         let (mesh, tooth_of_triangle) = Mesh::concat(&meshes);
         let teeth = if names.len() > 1 { names } else { Vec::new() };
-        let index =
-            SurfaceIndex::with_band(&mesh, settings.max_depth_mm, settings.above_mm(), ContactSettings::CELL_MM);
+        // Most lookups ask only whether a vertex is in contact: the index is focused on that.
+        let index = SurfaceIndex::with_focus(
+            &mesh,
+            settings.max_depth_mm,
+            settings.above_mm(),
+            ContactSettings::CELL_MM,
+            settings.threshold_mm,
+        );
         let mut counts = vec![0u32; mesh.vertices.len() + 1];
         for t in &mesh.triangles {
             t.iter().for_each(|&v| counts[v as usize + 1] += 1);
@@ -182,8 +188,9 @@ pub struct Region {
     pub vertices: usize,
 }
 
-/// The signed distance of each vertex of an arch to the other arch: exact within the
-/// threshold, interpolated from the grid beyond it, NaN outside the band.
+/// The signed distance of each vertex of an arch to the other arch: exact for the vertices in
+/// contact (within the threshold) and for the other corners of their triangles, NaN for the
+/// rest.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VertexDistances(pub Vec<f32>);
 
@@ -204,7 +211,8 @@ impl Contacts {
 }
 
 /// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to the
-/// other arch; clusters that `far` says are out of its band are skipped whole.
+/// other arch, where `lookup` finds them; clusters that `far` says it would not are skipped
+/// whole.
 fn distances(
     from: &Arch,
     other_from_from: &Pose,
@@ -241,18 +249,18 @@ pub fn contacts(
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
     let (lo, hi, t) = (-settings.max_depth_mm, settings.above_mm(), settings.threshold_mm);
+    // First the vertices in contact, then the other corners of their triangles, which set the
+    // areas.
     let mut d_upper =
-        distances(upper, &to_lower, |c, r| lower.index.far_from(c, r), |p| lower.index.lookup(p, lo, hi, t));
+        distances(upper, &to_lower, |c, r| lower.index.far_from(c, r, (lo, t)), |p| lower.index.lookup(p, lo, t, t));
     let mut d_lower =
-        distances(lower, &to_upper, |c, r| upper.index.far_from(c, r), |p| upper.index.lookup(p, lo, hi, t));
-    // The corners of triangles in contact set the areas: make theirs exact too.
+        distances(lower, &to_upper, |c, r| upper.index.far_from(c, r, (lo, t)), |p| upper.index.lookup(p, lo, t, t));
     exact_around_contacts(upper, &mut d_upper, t, |p| lower.index.lookup(&to_lower.transform_point(p), lo, hi, hi));
     exact_around_contacts(lower, &mut d_lower, t, |p| upper.index.lookup(&to_upper.transform_point(p), lo, hi, hi));
     regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
 }
 
-/// Replaces the interpolated distances of vertices sharing a triangle with a vertex in
-/// contact by exact ones.
+/// Finds the distances of the vertices sharing a triangle with a vertex in contact.
 fn exact_around_contacts(
     arch: &Arch,
     d: &mut VertexDistances,
@@ -265,7 +273,8 @@ fn exact_around_contacts(
         for &tri in arch.triangles_around(v) {
             for &corner in &arch.mesh.triangles[tri as usize] {
                 let c = corner as usize;
-                if d.0[c] as f64 > threshold && !std::mem::replace(&mut done[c], true) {
+                // Not yet known: every vertex with a value so far is in contact.
+                if d.0[c].is_nan() && !std::mem::replace(&mut done[c], true) {
                     d.0[c] = match lookup(&arch.mesh.vertices[c]) {
                         Lookup::Exact(n) => n.distance as f32,
                         Lookup::Approximate(x) => x as f32,
@@ -446,8 +455,9 @@ pub struct ContactMap {
     pub frames: u32,
     /// Per arch (upper, lower), per vertex: frames in contact.
     pub hits: [Vec<u32>; 2],
-    /// Per arch, per vertex: deepest penetration seen (mm; negative: closest gap; -inf: never
-    /// within reach).
+    /// Per arch, per vertex: deepest penetration seen (mm; negative: closest gap), counting
+    /// the frames where it was in contact or the corner of a triangle in contact; -inf if
+    /// never.
     pub max_depth: [Vec<f32>; 2],
 }
 

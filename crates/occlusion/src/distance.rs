@@ -7,10 +7,12 @@
 //! side of the scan's rim counts as outside.
 //!
 //! [`SurfaceIndex`] is a narrow-band signed-distance grid (sparse 8³ blocks) whose nodes hold
-//! their exact signed distance and nearest triangle. A query interpolates the eight nodes
-//! around the point to decide cheaply whether it is in range (most vertices of an arch are
-//! not), and only then finds the exact nearest point: the corner nodes' nearest triangles,
-//! then a descent over neighbouring triangles until none is nearer. That is the brute-force
+//! their exact signed distance and nearest triangle. Most vertices of an arch are out of
+//! range: a map of 4³-cell sub-blocks, made once, rejects most of those without reading the
+//! grid; for the rest, a query interpolates the eight nodes around the point to decide
+//! cheaply whether it is in range, and only then finds the exact nearest point: the corner
+//! nodes' nearest triangles, then a descent over neighbouring triangles until none is
+//! nearer. That is the brute-force
 //! answer ([`nearest_brute_force`]) wherever the nearest triangle is reachable by descent
 //! from the nodes' ones, which the tests check on every test scene; it is not a proof for
 //! arbitrary meshes.
@@ -291,6 +293,8 @@ pub fn nearest_brute_force(surface: &Surface, p: &Point3<f64>) -> Option<Nearest
 
 /// Nodes per block edge of the sparse grid.
 const BLOCK: usize = 8;
+/// Cells per sub-block edge: the grain at which far regions are known in advance.
+const SUB: usize = 4;
 const NODES: usize = BLOCK * BLOCK * BLOCK;
 const NONE: u32 = u32::MAX;
 /// A node outside the band.
@@ -298,6 +302,11 @@ const OUT_OF_BAND: i16 = i16::MIN;
 /// Offsets of a cell's eight corners from its lowest one within a block, x fastest.
 const CORNER_OFFSETS: [usize; 8] =
     [0, 1, BLOCK, BLOCK + 1, BLOCK * BLOCK, BLOCK * BLOCK + 1, BLOCK * BLOCK + BLOCK, BLOCK * BLOCK + BLOCK + 1];
+
+/// The least and greatest of `d`, passing over NaN.
+fn extent(d: &[f64; 8]) -> (f64, f64) {
+    d.iter().fold((d[0], d[0]), |(lo, hi), &x| (lo.min(x), hi.max(x)))
+}
 
 /// What a query found.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -320,6 +329,8 @@ pub struct SurfaceIndex {
     surface: Surface,
     below: f64,
     above: f64,
+    /// The top of the ranges that sub-blocks are judged for (mm, within the band).
+    focus: f64,
     cell: f64,
     origin: Vector3<f64>,
     /// Nodes along each axis.
@@ -337,8 +348,12 @@ pub struct SurfaceIndex {
     quantum: f64,
     /// Per node of the stored blocks, its nearest triangle or [`NONE`].
     node_triangles: Vec<u32>,
-    /// Per block position, how many blocks away (Chebyshev, at most 255) the nearest stored
-    /// block is: 0 for a stored one. Rejects whole clusters of far points at once.
+    /// Sub-blocks ([`SUB`]³ cells, named by their lowest node) along each axis.
+    subs: [usize; 3],
+    /// Per sub-block, how many sub-blocks away (Chebyshev, at most 255) the nearest live one
+    /// is: 0 for a live one, one holding a cell where a lookup within `-below..=focus` may
+    /// answer other than [`Lookup::Far`]. Rejects far points, and whole clusters of them, at
+    /// once.
     clearance: Vec<u8>,
 }
 
@@ -352,8 +367,16 @@ impl SurfaceIndex {
     /// Indexes `mesh` for points from `below` mm behind the surface to `above` mm in front of
     /// it, with grid nodes `cell` mm apart.
     pub fn with_band(mesh: &Mesh, below: f64, above: f64, cell: f64) -> Self {
+        Self::with_focus(mesh, below, above, cell, above)
+    }
+
+    /// The same, with lookups for ranges within `-below..=focus` made fastest: far points
+    /// for them, and clusters of such points ([`SurfaceIndex::far_from`]), are rejected
+    /// without reading the grid.
+    pub fn with_focus(mesh: &Mesh, below: f64, above: f64, cell: f64, focus: f64) -> Self {
         let surface = Surface::new(mesh);
         let (below, above, cell) = (below.max(0.0), above.max(0.0), cell.max(1e-3));
+        let focus = focus.clamp(-below, above);
         let margin = below.max(above) + 3.0 * cell;
         let [lo, hi] = mesh.bounds();
         let origin = lo - Vector3::repeat(margin);
@@ -364,6 +387,7 @@ impl SurfaceIndex {
             surface,
             below,
             above,
+            focus,
             cell,
             origin,
             nodes,
@@ -372,29 +396,60 @@ impl SurfaceIndex {
             node_distances: Vec::new(),
             quantum: (below.max(above) + 3.0 * cell) / f64::from(i16::MAX - 1),
             node_triangles: Vec::new(),
+            subs: nodes.map(|n| n.div_ceil(SUB)),
             clearance: Vec::new(),
         };
         index.fill();
-        index.clearance = index.block_clearance();
+        index.clearance = index.sub_block_clearance();
         index
     }
 
-    /// The Chebyshev distance, in blocks, from each block position to the nearest stored
-    /// block, by a breadth-first sweep outward from the stored ones.
-    fn block_clearance(&self) -> Vec<u8> {
-        let [bx, by, bz] = self.blocks;
-        let mut clearance: Vec<u8> = self.block_of.iter().map(|&k| if k == NONE { u8::MAX } else { 0 }).collect();
+    /// Which sub-blocks are live: hold a cell whose eight corners are in the band and which
+    /// [`SurfaceIndex::decides_far`] does not settle for `-below..=focus`.
+    fn live_sub_blocks(&self) -> Vec<bool> {
+        let mut live = vec![false; self.subs[0] * self.subs[1] * self.subs[2]];
+        let [bx, by, _] = self.blocks;
+        for (b, &k) in self.block_of.iter().enumerate() {
+            if k == NONE {
+                continue;
+            }
+            let first = [b % bx, (b / bx) % by, b / (bx * by)].map(|x| x * BLOCK);
+            for local in 0..NODES {
+                let i =
+                    [first[0] + local % BLOCK, first[1] + (local / BLOCK) % BLOCK, first[2] + local / (BLOCK * BLOCK)];
+                if (0..3).any(|a| i[a] + 1 >= self.nodes[a]) {
+                    continue;
+                }
+                let sub = self.sub_block(i);
+                if live[sub] {
+                    continue;
+                }
+                if let Some(d) = self.corner_distances(i) {
+                    // Interpolation stays between the corners' least and greatest values.
+                    let range = extent(&d);
+                    live[sub] = !self.decides_far(&d, Self::continuous(&d, self.cell), range, -self.below, self.focus);
+                }
+            }
+        }
+        live
+    }
+
+    /// The Chebyshev distance, in sub-blocks, from each sub-block to the nearest live one, by
+    /// a breadth-first sweep outward from the live ones.
+    fn sub_block_clearance(&self) -> Vec<u8> {
+        let [sx, sy, sz] = self.subs;
+        let mut clearance: Vec<u8> = self.live_sub_blocks().iter().map(|&l| if l { 0 } else { u8::MAX }).collect();
         let mut frontier: Vec<usize> = (0..clearance.len()).filter(|&b| clearance[b] == 0).collect();
         let mut level = 0u8;
         while !frontier.is_empty() && level < u8::MAX - 1 {
             level += 1;
             let mut next = Vec::new();
             for b in frontier {
-                let (x, y, z) = (b % bx, (b / bx) % by, b / (bx * by));
-                for dz in z.saturating_sub(1)..=(z + 1).min(bz - 1) {
-                    for dy in y.saturating_sub(1)..=(y + 1).min(by - 1) {
-                        for dx in x.saturating_sub(1)..=(x + 1).min(bx - 1) {
-                            let n = (dz * by + dy) * bx + dx;
+                let (x, y, z) = (b % sx, (b / sx) % sy, b / (sx * sy));
+                for dz in z.saturating_sub(1)..=(z + 1).min(sz - 1) {
+                    for dy in y.saturating_sub(1)..=(y + 1).min(sy - 1) {
+                        for dx in x.saturating_sub(1)..=(x + 1).min(sx - 1) {
+                            let n = (dz * sy + dy) * sx + dx;
                             if clearance[n] > level {
                                 clearance[n] = level;
                                 next.push(n);
@@ -408,10 +463,23 @@ impl SurfaceIndex {
         clearance
     }
 
-    /// Whether every point within `radius` mm of `centre` is certainly out of the band, so
-    /// that [`SurfaceIndex::lookup`] would answer [`Lookup::Far`] for each: all of them lie
-    /// outside the grid or in blocks with no node in the band.
-    pub fn far_from(&self, centre: &Point3<f64>, radius: f64) -> bool {
+    /// Whether the sub-blocks' liveness holds for lookups in `lo..=hi`.
+    fn focused_on(&self, lo: f64, hi: f64) -> bool {
+        lo >= -self.below && hi <= self.focus
+    }
+
+    /// The sub-block holding the cell whose lowest node is `i`.
+    fn sub_block(&self, i: [usize; 3]) -> usize {
+        ((i[2] / SUB) * self.subs[1] + i[1] / SUB) * self.subs[0] + i[0] / SUB
+    }
+
+    /// Whether [`SurfaceIndex::lookup`] for the range `lo..=hi` would answer [`Lookup::Far`]
+    /// at every point within `radius` mm of `centre`: the range is within the focus and all
+    /// those points lie outside the grid or in sub-blocks that are not live.
+    pub fn far_from(&self, centre: &Point3<f64>, radius: f64, (lo, hi): (f64, f64)) -> bool {
+        if !self.focused_on(lo, hi) {
+            return false;
+        }
         let g = (centre.coords - self.origin) / self.cell;
         let r = radius / self.cell;
         let mut reach = 0usize;
@@ -423,16 +491,15 @@ impl SurfaceIndex {
             if !(g[k] >= 0.0 && g[k] < self.nodes[k] as f64) {
                 return false;
             }
-            // A point's cell is named by its lowest node, whose block is at most this many
-            // blocks from the centre's.
-            let centre_block = g[k] as usize / BLOCK;
-            let low = (g[k] - r).max(0.0) as usize / BLOCK;
-            let high = (g[k] + r) as usize / BLOCK;
-            reach = reach.max(centre_block - low).max(high - centre_block);
+            // A point's cell is named by its lowest node, whose sub-block is at most this many
+            // sub-blocks from the centre's.
+            let centre_sub = g[k] as usize / SUB;
+            let low = (g[k] - r).max(0.0) as usize / SUB;
+            let high = (g[k] + r) as usize / SUB;
+            reach = reach.max(centre_sub - low).max(high - centre_sub);
         }
-        let b =
-            ((g.z as usize / BLOCK) * self.blocks[1] + g.y as usize / BLOCK) * self.blocks[0] + g.x as usize / BLOCK;
-        self.clearance.get(b).is_some_and(|&c| c as usize > reach)
+        let sub = self.sub_block([g.x as usize, g.y as usize, g.z as usize]);
+        self.clearance.get(sub).is_some_and(|&c| c as usize > reach)
     }
 
     /// Computes the nodes: exactly near each triangle, then spread outward through the band,
@@ -564,6 +631,47 @@ impl SurfaceIndex {
         self.node_triangles.len() * 6 + self.block_of.len() * 5
     }
 
+    /// Where the eight corners of the cell whose lowest node is `i` are stored, x fastest, if
+    /// all are; side by side unless the cell straddles blocks.
+    fn corners_at(&self, i: [usize; 3]) -> Option<[usize; 8]> {
+        if i.iter().all(|&x| x % BLOCK < BLOCK - 1) {
+            let base = self.stored(i)?;
+            return Some(CORNER_OFFSETS.map(|offset| base + offset));
+        }
+        let mut at = [0usize; 8];
+        for (k, slot) in at.iter_mut().enumerate() {
+            *slot = self.stored([i[0] + (k & 1), i[1] + ((k >> 1) & 1), i[2] + ((k >> 2) & 1)])?;
+        }
+        Some(at)
+    }
+
+    /// The signed distances at the corners of the cell whose lowest node is `i`, if all are
+    /// stored (NaN where out of the band).
+    fn corner_distances(&self, i: [usize; 3]) -> Option<[f64; 8]> {
+        self.corners_at(i).map(|at| at.map(|k| self.distance_at(k)))
+    }
+
+    /// Whether the distance field is continuous across a cell with corner distances `d`: it
+    /// changes by at most the cell's diagonal across a cell; more means the sign jumps there
+    /// (beside an open scan's rim), where interpolating would be wrong.
+    fn continuous(d: &[f64; 8], cell: f64) -> bool {
+        let (min, max) = extent(d);
+        max - min <= 2.0 * cell
+    }
+
+    /// How far past a range's ends the interpolation must reach before it alone decides:
+    /// borderline points are found exactly.
+    fn margin(&self) -> f64 {
+        0.25 * self.cell
+    }
+
+    /// Whether a cell with corner distances `d` settles a lookup in `lo..=hi` as far without
+    /// an exact search: a corner out of the band, or a continuous field whose interpolation,
+    /// known to lie in `low..=high`, is beyond the range.
+    fn decides_far(&self, d: &[f64; 8], continuous: bool, (low, high): (f64, f64), lo: f64, hi: f64) -> bool {
+        d.iter().any(|x| x.is_nan()) || (continuous && (high < lo - self.margin() || low > hi + self.margin()))
+    }
+
     /// The nearest surface point to `p` if its signed distance is within the band.
     pub fn nearest(&self, p: &Point3<f64>) -> Option<Nearest> {
         match self.lookup(p, -self.below, self.above, self.above) {
@@ -583,43 +691,20 @@ impl SurfaceIndex {
         if i[0] + 1 >= self.nodes[0] || i[1] + 1 >= self.nodes[1] || i[2] + 1 >= self.nodes[2] {
             return Lookup::Far;
         }
-        let f = Vector3::new(g.x - i[0] as f64, g.y - i[1] as f64, g.z - i[2] as f64);
-        // The cell's corners, x fastest; stored side by side unless the cell straddles blocks.
-        let mut at = [0usize; 8];
-        if i.iter().all(|&x| x % BLOCK < BLOCK - 1) {
-            let Some(base) = self.stored(i) else { return Lookup::Far };
-            for (slot, offset) in at.iter_mut().zip(CORNER_OFFSETS) {
-                *slot = base + offset;
-            }
-        } else {
-            for (k, slot) in at.iter_mut().enumerate() {
-                let Some(s) = self.stored([i[0] + (k & 1), i[1] + ((k >> 1) & 1), i[2] + ((k >> 2) & 1)]) else {
-                    return Lookup::Far;
-                };
-                *slot = s;
-            }
-        }
-        let mut d = [0.0f64; 8];
-        for (slot, &k) in d.iter_mut().zip(&at) {
-            *slot = self.distance_at(k);
-        }
-        // Nodes outside the band hold NaN.
-        if d.iter().any(|x| x.is_nan()) {
+        if self.focused_on(lo, hi) && self.clearance[self.sub_block(i)] != 0 {
             return Lookup::Far;
         }
+        let Some(at) = self.corners_at(i) else { return Lookup::Far };
+        let d = at.map(|k| self.distance_at(k));
+        let f = Vector3::new(g.x - i[0] as f64, g.y - i[1] as f64, g.z - i[2] as f64);
         let (x0, y0, z0) = (1.0 - f.x, 1.0 - f.y, 1.0 - f.z);
         let interpolated = z0 * (y0 * (x0 * d[0] + f.x * d[1]) + f.y * (x0 * d[2] + f.x * d[3]))
             + f.z * (y0 * (x0 * d[4] + f.x * d[5]) + f.y * (x0 * d[6] + f.x * d[7]));
-        let (min, max) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
-        // A distance field changes by at most the cell's diagonal across a cell; more means the
-        // sign jumps there (beside an open scan's rim), where interpolating would be wrong.
-        let continuous = max - min <= 2.0 * self.cell;
-        // The interpolation is only used to decide; a margin keeps borderline points exact.
-        let margin = 0.25 * self.cell;
-        if continuous && (interpolated < lo - margin || interpolated > hi + margin) {
+        let continuous = Self::continuous(&d, self.cell);
+        if self.decides_far(&d, continuous, (interpolated, interpolated), lo, hi) {
             return Lookup::Far;
         }
-        if continuous && interpolated > exact_up_to + margin {
+        if continuous && interpolated > exact_up_to + self.margin() {
             return Lookup::Approximate(interpolated);
         }
         let mut best = (f64::INFINITY, NONE, *p, Feature::Face);
@@ -734,26 +819,60 @@ mod tests {
     #[test]
     fn a_region_said_to_be_far_holds_no_point_the_lookup_would_answer() {
         let mesh = bumpy(30);
-        let index = SurfaceIndex::new(&mesh, 0.5);
-        let mut rnd = uniform(777);
-        let (mut far, mut near) = (0, 0);
-        for _ in 0..4000 {
-            let centre = Point3::new(rnd() * 16.0 - 3.0, rnd() * 16.0 - 3.0, rnd() * 10.0 - 5.0);
-            let radius = rnd() * 1.5;
-            if !index.far_from(&centre, radius) {
-                near += 1;
-                continue;
+        // The whole band, and a focus on contacts within 0.1 mm.
+        for (focus, min_far) in [(0.5, 500), (0.1, 900)] {
+            let index = SurfaceIndex::with_focus(&mesh, 0.5, 0.5, 0.05, focus);
+            let range = (-0.5, focus);
+            let mut rnd = uniform(777);
+            let (mut far, mut near) = (0, 0);
+            for _ in 0..4000 {
+                let centre = Point3::new(rnd() * 16.0 - 3.0, rnd() * 16.0 - 3.0, rnd() * 10.0 - 5.0);
+                let radius = rnd() * 1.5;
+                if !index.far_from(&centre, radius, range) {
+                    near += 1;
+                    continue;
+                }
+                far += 1;
+                for _ in 0..20 {
+                    let offset = Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+                    let p = centre + offset.normalize() * radius * rnd().cbrt();
+                    assert_eq!(
+                        index.lookup(&p, range.0, range.1, range.1),
+                        Lookup::Far,
+                        "{p} within {radius} of {centre}"
+                    );
+                    let reference = nearest_brute_force(index.surface(), &p).expect("non-empty");
+                    assert!(!(range.0..=range.1).contains(&reference.distance), "{p}: {reference:?}");
+                }
             }
-            far += 1;
-            for _ in 0..20 {
-                let offset = Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
-                let p = centre + offset.normalize() * radius * rnd().cbrt();
-                assert_eq!(index.lookup(&p, -0.5, 0.5, 0.5), Lookup::Far, "{p} within {radius} of {centre}");
-                let reference = nearest_brute_force(index.surface(), &p).expect("non-empty");
-                assert!(reference.distance.abs() > 0.5, "{p}: {reference:?}");
+            assert!(far > min_far && near > 500, "focus {focus}: {far} {near}");
+            if focus < 0.5 {
+                // A range beyond the focus is never judged far in advance, even well off the grid.
+                assert!(!index.far_from(&Point3::new(5.0, 5.0, 8.0), 0.1, (-0.5, 0.5)));
             }
         }
-        assert!(far > 500 && near > 500, "{far} {near}");
+    }
+
+    #[test]
+    fn a_focused_index_answers_as_an_unfocused_one() {
+        let mesh = bumpy(30);
+        let plain = SurfaceIndex::with_band(&mesh, 0.5, 0.5, 0.05);
+        let focused = SurfaceIndex::with_focus(&mesh, 0.5, 0.5, 0.05, 0.1);
+        let mut rnd = uniform(31);
+        let mut answered = [0usize; 3];
+        for _ in 0..20000 {
+            let p = Point3::new(rnd() * 12.0 - 1.0, rnd() * 12.0 - 1.0, rnd() * 2.0 - 1.0);
+            for (lo, hi) in [(-0.5, 0.1), (-0.5, 0.5), (-0.2, 0.05)] {
+                let a = focused.lookup(&p, lo, hi, 0.05);
+                assert_eq!(a, plain.lookup(&p, lo, hi, 0.05), "{p} in {lo}..{hi}");
+                answered[match a {
+                    Lookup::Far => 0,
+                    Lookup::Approximate(_) => 1,
+                    Lookup::Exact(_) => 2,
+                }] += 1;
+            }
+        }
+        assert!(answered.iter().all(|&n| n > 1000), "{answered:?}");
     }
 
     #[test]
