@@ -53,16 +53,21 @@ enum Feature {
     Vertex(usize),
 }
 
+/// What a nearest-point search reads of a triangle, in two cache lines: its plane (unit
+/// normal, offset along it), since no point of the triangle is nearer to a point than the
+/// plane is, which rules out most neighbours in a descent; then its corners.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Geometry {
+    plane: [f64; 4],
+    corners: [Point3<f64>; 3],
+}
+
 /// Precomputed triangles with their pseudo-normals.
 #[derive(Debug, Clone)]
 pub struct Surface {
-    /// Per triangle, its corners: apart from the normals, which only the final answer needs.
-    corners: Vec<[Point3<f64>; 3]>,
-    /// Per triangle, a bounding sphere (centre, radius) to skip triangles cheaply.
-    spheres: Vec<(Point3<f64>, f64)>,
-    /// Per triangle, its plane (unit normal, offset along it): no point of the triangle is
-    /// nearer to a point than the plane is, which rules out most neighbours in a descent.
-    planes: Vec<[f64; 4]>,
+    /// Per triangle, what a search reads: its plane and corners, side by side.
+    geometry: Vec<Geometry>,
     tris: Vec<Tri>,
     /// Per triangle, the triangles sharing a corner with it (CSR).
     neighbour_starts: Vec<u32>,
@@ -132,16 +137,13 @@ impl Surface {
             })
             .collect();
         let (neighbour_starts, neighbours) = corner_neighbours(mesh);
-        let corners: Vec<[Point3<f64>; 3]> = (0..n).map(|t| mesh.corners(t)).collect();
-        let spheres = corners
-            .iter()
-            .map(|c| {
-                let centre = Point3::from((c[0].coords + c[1].coords + c[2].coords) / 3.0);
-                (centre, c.iter().map(|x| (x - centre).norm()).fold(0.0, f64::max))
+        let geometry = (0..n)
+            .map(|t| {
+                let (corners, face) = (mesh.corners(t), faces[t]);
+                Geometry { plane: [face.x, face.y, face.z, face.dot(&corners[0].coords)], corners }
             })
             .collect();
-        let planes = corners.iter().zip(&faces).map(|(c, n)| [n.x, n.y, n.z, n.dot(&c[0].coords)]).collect();
-        Surface { corners, spheres, planes, tris, neighbour_starts, neighbours, original }
+        Surface { geometry, tris, neighbour_starts, neighbours, original }
     }
 
     /// The triangles sharing a corner with triangle `t`.
@@ -161,22 +163,14 @@ impl Surface {
 
     /// Squared unsigned distance from `p` to triangle `t`, its closest point and feature.
     fn closest(&self, t: usize, p: &Point3<f64>) -> (f64, Point3<f64>, Feature) {
-        let (c, f) = closest_on_triangle(p, &self.corners[t]);
+        let (c, f) = closest_on_triangle(p, &self.geometry[t].corners);
         ((p - c).norm_squared(), c, f)
-    }
-
-    /// Whether triangle `t` is certainly farther from `p` than `d2` (squared), judged by its
-    /// bounding sphere.
-    fn beyond(&self, t: usize, p: &Point3<f64>, d2: f64) -> bool {
-        let (centre, radius) = self.spheres[t];
-        let gap = (p - centre).norm() - radius;
-        gap > 0.0 && gap * gap > d2
     }
 
     /// Whether triangle `t` is certainly farther from `p` than `d2` (squared), judged by its
     /// plane.
     fn beyond_plane(&self, t: usize, p: &Point3<f64>, d2: f64) -> bool {
-        let [x, y, z, offset] = self.planes[t];
+        let [x, y, z, offset] = self.geometry[t].plane;
         let s = x * p.x + y * p.y + z * p.z - offset;
         s * s > d2
     }
@@ -525,7 +519,7 @@ impl SurfaceIndex {
         let mut queue = std::collections::VecDeque::new();
         let seed = 1.5 * self.cell;
         for t in 0..self.surface.len() {
-            let corners = self.surface.corners[t];
+            let corners = self.surface.geometry[t].corners;
             let (mut lo, mut hi) = (corners[0].coords, corners[0].coords);
             for c in &corners[1..] {
                 lo = lo.inf(&c.coords);
@@ -737,10 +731,7 @@ impl SurfaceIndex {
         }
         for (k, &t) in candidates.iter().enumerate() {
             // Neighbouring nodes mostly share their nearest triangle: test each once.
-            if !candidates[..k].contains(&t)
-                && !self.surface.beyond(t as usize, p, best.0)
-                && !self.surface.beyond_plane(t as usize, p, best.0)
-            {
+            if !candidates[..k].contains(&t) && !self.surface.beyond_plane(t as usize, p, best.0) {
                 let (d2, q, f) = self.surface.closest(t as usize, p);
                 if d2 < best.0 || (d2 == best.0 && t < best.1) {
                     best = (d2, t, q, f);
@@ -762,7 +753,7 @@ impl SurfaceIndex {
                 // Corners shared with the nearest triangle lie on the plane, up to rounding: a
                 // nanometre's slack lets them count as on it, and costs at most a nanometre.
                 let slack = 1e-9 * best.0.sqrt();
-                if self.surface.corners[t as usize].iter().all(|c| (c - best.2).dot(&towards) <= slack) {
+                if self.surface.geometry[t as usize].corners.iter().all(|c| (c - best.2).dot(&towards) <= slack) {
                     continue;
                 }
                 let (d2, q, f) = self.surface.closest(t as usize, p);
