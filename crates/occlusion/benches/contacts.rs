@@ -69,11 +69,13 @@ fn run(name: &str, (u, l): (Mesh, Mesh), frames: usize) {
             found = 0;
             for v in &l.vertices {
                 let p = pose.transform_point(v);
-                found += usize::from(pu.project_local_point_with_max_dist(V::new(p.x, p.y, p.z), false, reach).is_some());
+                found +=
+                    usize::from(pu.project_local_point_with_max_dist(V::new(p.x, p.y, p.z), false, reach).is_some());
             }
             for v in &u.vertices {
                 let p = inverse.transform_point(v);
-                found += usize::from(pl.project_local_point_with_max_dist(V::new(p.x, p.y, p.z), false, reach).is_some());
+                found +=
+                    usize::from(pl.project_local_point_with_max_dist(V::new(p.x, p.y, p.z), false, reach).is_some());
             }
             parry.push(t.elapsed().as_secs_f64() * 1e3);
         }
