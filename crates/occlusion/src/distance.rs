@@ -61,6 +61,11 @@ enum Feature {
 struct Geometry {
     plane: [f64; 4],
     corners: [Point3<f64>; 3],
+    /// Per side of the plane (front, behind), whether every corner of the triangles around
+    /// lies on the plane or beyond it from that side: the surface there is convex as seen from
+    /// that side, so no neighbour is nearer to a point on that side whose nearest point is
+    /// inside this triangle. Fits in the padding of the second cache line.
+    convex: [bool; 2],
 }
 
 /// Precomputed triangles with their pseudo-normals.
@@ -140,7 +145,21 @@ impl Surface {
         let geometry = (0..n)
             .map(|t| {
                 let (corners, face) = (mesh.corners(t), faces[t]);
-                Geometry { plane: [face.x, face.y, face.z, face.dot(&corners[0].coords)], corners }
+                let offset = face.dot(&corners[0].coords);
+                let own = mesh.triangles[t];
+                let heights = neighbours[neighbour_starts[t] as usize..neighbour_starts[t + 1] as usize]
+                    .iter()
+                    .flat_map(|&k| mesh.triangles[k as usize])
+                    .filter(|v| !own.contains(v))
+                    .map(|v| face.dot(&mesh.vertices[v as usize].coords) - offset);
+                let (low, high) = heights.fold((0.0f64, 0.0f64), |(lo, hi), h| (lo.min(h), hi.max(h)));
+                // A degenerate triangle has no plane to judge by.
+                let flat = face == Vector3::zeros();
+                Geometry {
+                    plane: [face.x, face.y, face.z, offset],
+                    corners,
+                    convex: [high <= 0.0 && !flat, low >= 0.0 && !flat],
+                }
             })
             .collect();
         Surface { geometry, tris, neighbour_starts, neighbours, original }
@@ -173,6 +192,18 @@ impl Surface {
         let [x, y, z, offset] = self.geometry[t].plane;
         let s = x * p.x + y * p.y + z * p.z - offset;
         s * s > d2
+    }
+
+    /// Whether no triangle sharing a corner with `t` can be nearer to `p` than `t` is, when
+    /// `p`'s closest point on `t` is on `feature`: inside the face, on the side from which
+    /// the surface around is convex, the ball about `p` reaching `t` lies on that side of
+    /// `t`'s plane, and every neighbour on the other (the descent's tangent test for each,
+    /// made once in advance).
+    fn certainly_nearest(&self, t: usize, p: &Point3<f64>, feature: Feature) -> bool {
+        let g = &self.geometry[t];
+        let [x, y, z, offset] = g.plane;
+        let front = x * p.x + y * p.y + z * p.z - offset >= 0.0;
+        matches!(feature, Feature::Face) && g.convex[usize::from(!front)]
     }
 
     /// The signed result for triangle `t` given its closest point and feature.
@@ -743,7 +774,9 @@ impl SurfaceIndex {
         // farther than the nearest point so far (one bending towards `p`), and a triangle with
         // no corner on `p`'s side of the plane through that point square to `p` (one bending
         // away), since the open ball about `p` through that point lies wholly on that side.
-        loop {
+        // There is no descent at all where that nearest point is inside a face, on the side
+        // from which the surface around it is convex: every neighbour would fail the second.
+        while !self.surface.certainly_nearest(best.1 as usize, p, best.3) {
             let mut improved = false;
             for &t in self.surface.neighbours(best.1 as usize) {
                 if self.surface.beyond_plane(t as usize, p, best.0) {
