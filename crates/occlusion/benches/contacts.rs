@@ -89,15 +89,15 @@ fn run(name: &str, (u, l): (Mesh, Mesh), frames: usize) {
         u.vertices.len(),
         l.vertices.len()
     );
-    for (arch, d) in ["upper", "lower"].iter().zip(&c.distances) {
-        let count = |lo: f64, hi: f64| d.0.iter().filter(|&&x| (x as f64) > lo && (x as f64) <= hi).count();
+    for ((arch, d), n) in ["upper", "lower"].iter().zip(&c.distances).zip([u.vertices.len(), l.vertices.len()]) {
+        let count = |lo: f64, hi: f64| d.0.iter().filter(|&&(_, x)| (x as f64) > lo && (x as f64) <= hi).count();
         println!(
             "  {arch} vertices: penetrating {}, gap 0-{} mm {}, corners of triangles in contact beyond it {}, the rest {}",
             count(-9.0, 0.0),
             settings.threshold_mm,
             count(0.0, settings.threshold_mm),
             count(settings.threshold_mm, 9.0),
-            d.0.iter().filter(|x| x.is_nan()).count()
+            n - d.0.len()
         );
     }
     println!("  index build (both arches): {:.0} ms", build_s * 1e3);

@@ -1,8 +1,10 @@
-//! Kinematic contacts: with the lower scan placed by `maxilla_scan_from_mandible_scan`, every
-//! vertex of each arch gets its signed distance to the other arch; vertices that penetrate or
-//! come within the threshold are grouped into connected regions, and each region gets its
-//! area, centroid, deepest penetration (or smallest gap) and tooth. [`ContactMap`] accumulates
-//! how often and how deep each vertex was in contact over a motion.
+//! Kinematic contacts: with the lower scan placed by `maxilla_scan_from_mandible_scan`, the
+//! vertices of each arch that penetrate the other arch or come within the threshold of it are
+//! found with their exact signed distances, and grouped into connected regions; each region
+//! gets its area, centroid, deepest penetration (or smallest gap) and tooth. [`ContactMap`]
+//! accumulates how often and how deep each vertex was in contact over a motion. A frame's
+//! work grows with its contacts, not with the arches' size: far vertices are rejected in
+//! clusters, and nothing per vertex of the arch is cleared or scanned.
 //!
 //! Depth is positive for penetration and negative for a gap (mm). Areas count the part of
 //! each triangle where the distance, interpolated linearly between its corners, is within
@@ -188,18 +190,34 @@ pub struct Region {
     pub vertices: usize,
 }
 
-/// The signed distance of each vertex of an arch to the other arch: exact for the vertices in
-/// contact (within the threshold) and for the other corners of their triangles, NaN for the
-/// rest.
-#[derive(Debug, Clone, PartialEq)]
-pub struct VertexDistances(pub Vec<f32>);
+/// The signed distances (mm) that one frame found for vertices of one arch, as (vertex,
+/// distance): every vertex in contact (within the threshold) and the other corners of their
+/// triangles, exact (those beyond the band left out), and some other vertices just beyond the
+/// threshold found on the way. Only these are listed, in no
+/// particular order, so that a frame costs what its contacts do and not what the arch's size
+/// does. [`contacts_brute_force`] lists every vertex within the band.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct VertexDistances(pub Vec<(u32, f32)>);
+
+impl VertexDistances {
+    /// The distance of each of an arch's `n` vertices, NaN where none was found.
+    pub fn dense(&self, n: usize) -> Vec<f32> {
+        let mut d = vec![f32::NAN; n];
+        for &(v, x) in &self.0 {
+            if let Some(slot) = d.get_mut(v as usize) {
+                *slot = x;
+            }
+        }
+        d
+    }
+}
 
 /// The contacts at one pose.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Contacts {
     /// Regions on both arches, largest first.
     pub regions: Vec<Region>,
-    /// Per-vertex signed distances (mm) of the upper and the lower arch.
+    /// The signed distances (mm) found on the upper and the lower arch.
     pub distances: [VertexDistances; 2],
 }
 
@@ -210,16 +228,85 @@ impl Contacts {
     }
 }
 
-/// Per-vertex signed distances of `from`'s vertices (moved by `other_from_from`) to the
-/// other arch, where `lookup` finds them; clusters that `far` says it would not are skipped
-/// whole.
+/// The vertices of one arch that a frame looked up, with their signed distances (NaN: out of
+/// the band), and where each vertex is in the list.
+struct Found<'a> {
+    vertices: Vec<u32>,
+    values: Vec<f32>,
+    slots: &'a mut Slots,
+}
+
+impl Found<'_> {
+    fn push(&mut self, v: u32, value: f32) {
+        self.slots.set(v as usize, self.vertices.len());
+        self.vertices.push(v);
+        self.values.push(value);
+    }
+
+    /// The distance found for vertex `v`, if it was looked up.
+    fn value(&self, v: u32) -> Option<f32> {
+        self.slots.get(v as usize).map(|k| self.values[k])
+    }
+
+    fn into_distances(self) -> VertexDistances {
+        VertexDistances(self.vertices.into_iter().zip(self.values).filter(|(_, d)| !d.is_nan()).collect())
+    }
+}
+
+/// Per vertex of an arch, where a frame's [`Found`] lists it; an entry holds only where its
+/// stamp is the current epoch, so nothing of the arch's size is cleared per frame. One is
+/// kept per thread and reused.
+#[derive(Default)]
+struct Slots {
+    /// Per vertex: (stamp, place in the list).
+    entries: Vec<(u32, u32)>,
+    epoch: u32,
+}
+
+impl Slots {
+    /// Starts a new list over `n` vertices.
+    fn begin(&mut self, n: usize) {
+        if self.entries.len() < n {
+            self.entries.resize(n, (0, 0));
+        }
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.entries.fill((0, 0));
+            self.epoch = 1;
+        }
+    }
+
+    fn get(&self, v: usize) -> Option<usize> {
+        let (stamp, k) = self.entries[v];
+        (stamp == self.epoch).then_some(k as usize)
+    }
+
+    fn set(&mut self, v: usize, k: usize) {
+        self.entries[v] = (self.epoch, k as u32);
+    }
+}
+
+thread_local! {
+    static SLOTS: std::cell::RefCell<Slots> = std::cell::RefCell::default();
+}
+
+/// Runs `f` with this thread's [`Slots`], begun over `n` vertices.
+fn with_slots<R>(n: usize, f: impl FnOnce(&mut Slots) -> R) -> R {
+    SLOTS.with_borrow_mut(|slots| {
+        slots.begin(n);
+        f(slots)
+    })
+}
+
+/// Adds to `found` the vertices of `from` (moved by `other_from_from`) that `lookup` finds
+/// near the other arch; clusters that `far` says it would not are skipped whole.
 fn distances(
     from: &Arch,
     other_from_from: &Pose,
     far: impl Fn(&Point3<f64>, f64) -> bool,
     lookup: impl Fn(&Point3<f64>) -> Lookup,
-) -> VertexDistances {
-    let mut d = vec![f32::NAN; from.mesh.vertices.len()];
+    found: &mut Found,
+) {
     // A matrix transforms points faster than the pose's quaternion.
     let (r, t) = (other_from_from.rotation_matrix(), other_from_from.translation());
     for cluster in &from.clusters {
@@ -229,14 +316,13 @@ fn distances(
         let run = cluster.start as usize..cluster.end as usize;
         for (&v, q) in from.query_order[run.clone()].iter().zip(&from.ordered_vertices[run]) {
             let p = Point3::from(r * q.coords + t);
-            d[v as usize] = match lookup(&p) {
-                Lookup::Far => f32::NAN,
-                Lookup::Approximate(x) => x as f32,
-                Lookup::Exact(n) => n.distance as f32,
-            };
+            match lookup(&p) {
+                Lookup::Far => {}
+                Lookup::Approximate(x) => found.push(v, x as f32),
+                Lookup::Exact(n) => found.push(v, n.distance as f32),
+            }
         }
     }
-    VertexDistances(d)
 }
 
 /// The contacts between `upper` and `lower` with the lower scan at `maxilla_scan_from_mandible_scan`.
@@ -251,35 +337,59 @@ pub fn contacts(
     let (lo, hi, t) = (-settings.max_depth_mm, settings.above_mm(), settings.threshold_mm);
     // First the vertices in contact, then the other corners of their triangles, which set the
     // areas.
-    let mut d_upper =
-        distances(upper, &to_lower, |c, r| lower.index.far_from(c, r, (lo, t)), |p| lower.index.lookup(p, lo, t, t));
-    let mut d_lower =
-        distances(lower, &to_upper, |c, r| upper.index.far_from(c, r, (lo, t)), |p| upper.index.lookup(p, lo, t, t));
-    exact_around_contacts(upper, &mut d_upper, t, |p| lower.index.lookup(&to_lower.transform_point(p), lo, hi, hi));
-    exact_around_contacts(lower, &mut d_lower, t, |p| upper.index.lookup(&to_upper.transform_point(p), lo, hi, hi));
-    regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
+    let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
+        let far = |c: &Point3<f64>, r: f64| other.index.far_from(c, r, (lo, t));
+        // Vertices just beyond the threshold that were found exactly on the way are kept: some
+        // are corners of triangles in contact, which need not be found again.
+        distances(arch, other_from_arch, far, |p| other.index.find(p, lo, t, t), found);
+        exact_around_contacts(arch, found, t, |p| other.index.lookup(&other_from_arch.transform_point(p), lo, hi, hi));
+    };
+    both_arches(
+        arch_contacts(upper, Side::Maxilla, &Pose::identity(), settings, |f| find(upper, lower, &to_lower, f)),
+        arch_contacts(lower, Side::Mandible, &to_upper, settings, |f| find(lower, upper, &to_upper, f)),
+    )
 }
 
-/// Finds the distances of the vertices sharing a triangle with a vertex in contact.
-fn exact_around_contacts(
+/// The regions and distances of one arch, from the distances `find` adds to its list.
+fn arch_contacts(
     arch: &Arch,
-    d: &mut VertexDistances,
-    threshold: f64,
-    lookup: impl Fn(&Point3<f64>) -> Lookup,
-) {
-    let flagged: Vec<usize> = (0..d.0.len()).filter(|&v| d.0[v] as f64 <= threshold).collect();
-    let mut done = vec![false; d.0.len()];
-    for v in flagged {
-        for &tri in arch.triangles_around(v) {
-            for &corner in &arch.mesh.triangles[tri as usize] {
-                let c = corner as usize;
-                // Not yet known: every vertex with a value so far is in contact.
-                if d.0[c].is_nan() && !std::mem::replace(&mut done[c], true) {
-                    d.0[c] = match lookup(&arch.mesh.vertices[c]) {
+    side: Side,
+    upper_from_arch: &Pose,
+    settings: &ContactSettings,
+    find: impl FnOnce(&mut Found),
+) -> (Vec<Region>, VertexDistances) {
+    with_slots(arch.mesh.vertices.len(), |slots| {
+        let mut found = Found { vertices: Vec::new(), values: Vec::new(), slots };
+        find(&mut found);
+        let regions = arch_regions(arch, side, &found, upper_from_arch, settings);
+        (regions, found.into_distances())
+    })
+}
+
+/// Both arches' results together, regions largest first.
+fn both_arches(upper: (Vec<Region>, VertexDistances), lower: (Vec<Region>, VertexDistances)) -> Contacts {
+    let mut regions = upper.0;
+    regions.extend(lower.0);
+    regions.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
+    Contacts { regions, distances: [upper.1, lower.1] }
+}
+
+/// Adds to `found` the distances of the vertices sharing a triangle with a vertex in contact.
+fn exact_around_contacts(arch: &Arch, found: &mut Found, threshold: f64, lookup: impl Fn(&Point3<f64>) -> Lookup) {
+    for k in 0..found.vertices.len() {
+        // NaN (out of the band) is not in contact either.
+        if found.values[k].is_nan() || found.values[k] as f64 > threshold {
+            continue;
+        }
+        for &tri in arch.triangles_around(found.vertices[k] as usize) {
+            for &c in &arch.mesh.triangles[tri as usize] {
+                if found.slots.get(c as usize).is_none() {
+                    let d = match lookup(&arch.mesh.vertices[c as usize]) {
                         Lookup::Exact(n) => n.distance as f32,
                         Lookup::Approximate(x) => x as f32,
                         Lookup::Far => f32::NAN,
                     };
+                    found.push(c, d);
                 }
             }
         }
@@ -302,52 +412,43 @@ pub fn contacts_brute_force(
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
     let never = |_: &Point3<f64>, _: f64| false;
-    let d_upper = distances(upper, &to_lower, never, |p| within(nearest_brute_force(lower.index.surface(), p)));
-    let d_lower = distances(lower, &to_upper, never, |p| within(nearest_brute_force(upper.index.surface(), p)));
-    regions_from(upper, lower, &to_upper, [d_upper, d_lower], settings)
+    let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
+        let lookup = |p: &Point3<f64>| within(nearest_brute_force(other.index.surface(), p));
+        distances(arch, other_from_arch, never, lookup, found);
+    };
+    both_arches(
+        arch_contacts(upper, Side::Maxilla, &Pose::identity(), settings, |f| find(upper, lower, &to_lower, f)),
+        arch_contacts(lower, Side::Mandible, &to_upper, settings, |f| find(lower, upper, &to_upper, f)),
+    )
 }
 
-fn regions_from(
-    upper: &Arch,
-    lower: &Arch,
-    maxilla_scan_from_mandible_scan: &Pose,
-    distances: [VertexDistances; 2],
-    settings: &ContactSettings,
-) -> Contacts {
-    let mut regions = arch_regions(upper, Side::Maxilla, &distances[0], &Pose::identity(), settings);
-    regions.extend(arch_regions(lower, Side::Mandible, &distances[1], maxilla_scan_from_mandible_scan, settings));
-    regions.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
-    Contacts { regions, distances }
-}
-
-/// Regions of one arch from its per-vertex distances.
-fn arch_regions(
-    arch: &Arch,
-    side: Side,
-    d: &VertexDistances,
-    to_upper: &Pose,
-    settings: &ContactSettings,
-) -> Vec<Region> {
+/// Regions of one arch from the distances found on it.
+fn arch_regions(arch: &Arch, side: Side, found: &Found, to_upper: &Pose, settings: &ContactSettings) -> Vec<Region> {
     let t = settings.threshold_mm;
     let reach = settings.above_mm();
-    let in_contact = |v: usize| d.0[v] as f64 <= t; // NaN compares false
-    let flagged: Vec<usize> = (0..d.0.len()).filter(|&v| in_contact(v)).collect();
+    // NaN compares false.
+    let in_contact = |v: u32| found.value(v).is_some_and(|d| d as f64 <= t);
+    let flagged: Vec<usize> = (0..found.vertices.len()).filter(|&k| found.values[k] as f64 <= t).collect();
     if flagged.is_empty() {
         return Vec::new();
     }
-    let mut sets = DisjointSets::new(arch.mesh.vertices.len());
-    let mut seen = vec![false; arch.mesh.triangles.len()];
+    // Union-find over places in the list.
+    let mut sets = DisjointSets::new(found.vertices.len());
+    let place = |v: u32| found.slots.get(v as usize).unwrap_or(usize::MAX);
     let mut triangles = Vec::new();
-    for &v in &flagged {
-        for &tri in arch.triangles_around(v) {
-            if !std::mem::replace(&mut seen[tri as usize], true) {
-                triangles.push(tri as usize);
-                let ids = arch.mesh.triangles[tri as usize];
-                for k in 0..3 {
-                    let (a, b) = (ids[k] as usize, ids[(k + 1) % 3] as usize);
-                    if in_contact(a) && in_contact(b) {
-                        sets.union(a, b);
-                    }
+    for &k in &flagged {
+        let v = found.vertices[k];
+        for &tri in arch.triangles_around(v as usize) {
+            let ids = arch.mesh.triangles[tri as usize];
+            // Each triangle once: from its first corner in contact.
+            if ids.iter().find(|&&c| in_contact(c)) != Some(&v) {
+                continue;
+            }
+            triangles.push(tri as usize);
+            for k in 0..3 {
+                let (a, b) = (ids[k], ids[(k + 1) % 3]);
+                if in_contact(a) && in_contact(b) {
+                    sets.union(place(a), place(b));
                 }
             }
         }
@@ -360,10 +461,10 @@ fn arch_regions(
         tooth_area: Vec<(u16, f64)>,
     }
     // Per region root, its accumulator's place, in order of first appearance.
-    let mut slot_of = vec![u32::MAX; arch.mesh.vertices.len()];
+    let mut slot_of = vec![u32::MAX; found.vertices.len()];
     let mut accs: Vec<Acc> = Vec::new();
-    for &v in &flagged {
-        let root = sets.find(v);
+    for &k in &flagged {
+        let root = sets.find(k);
         if slot_of[root] == u32::MAX {
             slot_of[root] = accs.len() as u32;
             accs.push(Acc {
@@ -375,18 +476,18 @@ fn arch_regions(
             });
         }
         let acc = &mut accs[slot_of[root] as usize];
-        acc.depth = acc.depth.max(-(d.0[v] as f64));
+        acc.depth = acc.depth.max(-(found.values[k] as f64));
         acc.vertices += 1;
     }
     for tri in triangles {
         let ids = arch.mesh.triangles[tri];
-        let Some(&v) = ids.iter().find(|&&v| in_contact(v as usize)) else { continue };
-        let values = ids.map(|i| {
-            let x = d.0[i as usize] as f64;
-            if x.is_nan() { reach } else { x }
+        let Some(&v) = ids.iter().find(|&&v| in_contact(v)) else { continue };
+        let values = ids.map(|i| match found.value(i) {
+            Some(x) if !x.is_nan() => x as f64,
+            _ => reach,
         });
         let (area, centroid) = clipped_area(&arch.mesh.corners(tri), &values, t);
-        let acc = &mut accs[slot_of[sets.find(v as usize)] as usize];
+        let acc = &mut accs[slot_of[sets.find(place(v))] as usize];
         acc.area += area;
         acc.moment += centroid.coords * area;
         let tooth = arch.tooth_of_triangle[tri];
@@ -472,10 +573,8 @@ impl ContactMap {
     pub fn add(&mut self, contacts: &Contacts, settings: &ContactSettings) {
         self.frames += 1;
         for arch in 0..2 {
-            for (v, &d) in contacts.distances[arch].0.iter().enumerate() {
-                if d.is_nan() {
-                    continue;
-                }
+            for &(v, d) in &contacts.distances[arch].0 {
+                let v = v as usize;
                 if d as f64 <= settings.threshold_mm {
                     self.hits[arch][v] += 1;
                 }

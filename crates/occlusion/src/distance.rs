@@ -727,6 +727,16 @@ impl SurfaceIndex {
     /// The signed distance of `p` if it lies in `lo..=hi` (mm, within the band): exact up to
     /// `exact_up_to`, the grid's interpolation above it.
     pub fn lookup(&self, p: &Point3<f64>, lo: f64, hi: f64, exact_up_to: f64) -> Lookup {
+        match self.find(p, lo, hi, exact_up_to) {
+            Lookup::Exact(n) if n.distance < lo || n.distance > hi => Lookup::Far,
+            found => found,
+        }
+    }
+
+    /// The same as [`SurfaceIndex::lookup`], except that a point the grid could not rule out
+    /// is answered exactly even when it then lies outside `lo..=hi`: its distance costs
+    /// nothing more there, and a caller may need it.
+    pub fn find(&self, p: &Point3<f64>, lo: f64, hi: f64, exact_up_to: f64) -> Lookup {
         let g = self.grid_coordinates(p);
         if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0) {
             return Lookup::Far;
@@ -800,8 +810,7 @@ impl SurfaceIndex {
             }
         }
         let (d2, t, c, feature) = best;
-        let n = self.surface.signed(t as usize, p, d2, c, feature);
-        if n.distance < lo || n.distance > hi { Lookup::Far } else { Lookup::Exact(n) }
+        Lookup::Exact(self.surface.signed(t as usize, p, d2, c, feature))
     }
 }
 
