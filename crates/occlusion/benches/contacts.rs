@@ -92,7 +92,7 @@ fn run(name: &str, (u, l): (Mesh, Mesh), frames: usize) {
     for ((arch, d), n) in ["upper", "lower"].iter().zip(&c.distances).zip([u.vertices.len(), l.vertices.len()]) {
         let count = |lo: f64, hi: f64| d.0.iter().filter(|&&(_, x)| (x as f64) > lo && (x as f64) <= hi).count();
         println!(
-            "  {arch} vertices: penetrating {}, gap 0-{} mm {}, corners of triangles in contact beyond it {}, the rest {}",
+            "  {arch} vertices: penetrating {}, gap 0-{} mm {}, found beyond it {}, not listed {}",
             count(-9.0, 0.0),
             settings.threshold_mm,
             count(0.0, settings.threshold_mm),

@@ -786,22 +786,23 @@ impl SurfaceIndex {
         // away), since the open ball about `p` through that point lies wholly on that side.
         // There is no descent at all where that nearest point is inside a face, on the side
         // from which the surface around it is convex: every neighbour would fail the second.
+        // Corners shared with the nearest triangle lie on the plane, up to rounding: a
+        // nanometre's slack lets them count as on it, and costs at most a nanometre.
+        let tangent = |best: &(f64, u32, Point3<f64>, Feature)| (p - best.2, 1e-9 * best.0.sqrt());
         while !self.surface.certainly_nearest(best.1 as usize, p, best.3) {
             let mut improved = false;
+            let (mut towards, mut slack) = tangent(&best);
             for &t in self.surface.neighbours(best.1 as usize) {
                 if self.surface.beyond_plane(t as usize, p, best.0) {
                     continue;
                 }
-                let towards = p - best.2;
-                // Corners shared with the nearest triangle lie on the plane, up to rounding: a
-                // nanometre's slack lets them count as on it, and costs at most a nanometre.
-                let slack = 1e-9 * best.0.sqrt();
                 if self.surface.geometry[t as usize].corners.iter().all(|c| (c - best.2).dot(&towards) <= slack) {
                     continue;
                 }
                 let (d2, q, f) = self.surface.closest(t as usize, p);
                 if d2 < best.0 || (d2 == best.0 && t < best.1) {
                     best = (d2, t, q, f);
+                    (towards, slack) = tangent(&best);
                     improved = true;
                 }
             }
