@@ -523,7 +523,9 @@ impl SurfaceIndex {
             return false;
         }
         let g = self.grid_coordinates(centre);
-        let r = radius / self.cell;
+        // A millionth of a cell more covers the rounding of moving and gridding the points, so
+        // that a point on a sub-block's boundary is never counted on its nearer side.
+        let r = radius * self.per_cell + 1e-6;
         let mut reach = 0usize;
         for k in 0..3 {
             // Wholly before or past the grid on one axis: every lookup there answers Far.
