@@ -33,10 +33,10 @@ pub struct Nearest {
     pub normal: Vector3<f64>,
 }
 
-/// Per-triangle data for the sign: the pseudo-normals of its face, edges and corners.
+/// Per-triangle data for the sign where the nearest point is on an edge or a corner: their
+/// pseudo-normals (the face's normal is its plane's).
 #[derive(Debug, Clone)]
 struct Tri {
-    face: Vector3<f64>,
     /// Edges ab, bc, ca.
     edges: [Vector3<f64>; 3],
     vertices: [Vector3<f64>; 3],
@@ -68,7 +68,12 @@ struct Geometry {
     bend: [f32; 2],
     /// The inverse lengths of the edges ab, bc, ca, rounded down.
     inverse_edges: [f32; 3],
+    /// Its index in the mesh: answers name the mesh's own triangles.
+    original: u32,
 }
+
+// Two cache lines, no more.
+const _: () = assert!(std::mem::size_of::<Geometry>() == 128);
 
 /// Precomputed triangles with their pseudo-normals.
 #[derive(Debug, Clone)]
@@ -79,8 +84,6 @@ pub struct Surface {
     /// Per triangle, the triangles sharing a corner with it (CSR).
     neighbour_starts: Vec<u32>,
     neighbours: Vec<u32>,
-    /// Per held triangle, its index in the mesh.
-    original: Vec<u32>,
 }
 
 impl Surface {
@@ -135,7 +138,6 @@ impl Surface {
                     edge_normals.get(&(a.min(b), a.max(b))).copied().unwrap_or((faces[t], 1))
                 };
                 Tri {
-                    face: faces[t],
                     edges: [0, 1, 2].map(|k| unit(edge(k).0, faces[t])),
                     vertices: tri.map(|v| unit(vertex_normals[v as usize], faces[t])),
                     rim_edges: [0, 1, 2].map(|k| edge(k).1 == 1),
@@ -170,10 +172,11 @@ impl Surface {
                     corners,
                     bend: [bend(1.0), bend(-1.0)],
                     inverse_edges,
+                    original: original[t],
                 }
             })
             .collect();
-        Surface { geometry, tris, neighbour_starts, neighbours, original }
+        Surface { geometry, tris, neighbour_starts, neighbours }
     }
 
     /// The triangles sharing a corner with triangle `t`.
@@ -235,11 +238,12 @@ impl Surface {
 
     /// The signed result for triangle `t` given its closest point and feature.
     fn signed(&self, t: usize, p: &Point3<f64>, d2: f64, c: Point3<f64>, f: Feature) -> Nearest {
-        let tri = &self.tris[t];
+        // Most nearest points are inside a face, whose normal is at hand in its plane.
+        let g = &self.geometry[t];
         let (normal, on_rim) = match f {
-            Feature::Face => (tri.face, false),
-            Feature::Edge(k) => (tri.edges[k], tri.rim_edges[k]),
-            Feature::Vertex(k) => (tri.vertices[k], tri.rim_vertices[k]),
+            Feature::Face => (Vector3::new(g.plane[0], g.plane[1], g.plane[2]), false),
+            Feature::Edge(k) => (self.tris[t].edges[k], self.tris[t].rim_edges[k]),
+            Feature::Vertex(k) => (self.tris[t].vertices[k], self.tris[t].rim_vertices[k]),
         };
         let d = d2.sqrt();
         let offset = p - c;
@@ -248,7 +252,7 @@ impl Surface {
         // is on the rim and lies off to the side of it is outside.
         let beside_rim = on_rim && (offset - normal * along).norm() > 1e-9;
         let sign = if along < 0.0 && !beside_rim { -1.0 } else { 1.0 };
-        Nearest { distance: sign * d, point: c, triangle: self.original[t], normal }
+        Nearest { distance: sign * d, point: c, triangle: g.original, normal }
     }
 }
 
