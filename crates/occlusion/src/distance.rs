@@ -9,7 +9,8 @@
 //! [`SurfaceIndex`] is a narrow-band signed-distance grid (sparse 8³ blocks) whose nodes hold
 //! their exact signed distance and nearest triangle. Most vertices of an arch are out of
 //! range: a map of 4³-cell sub-blocks, made once, rejects most of those without reading the
-//! grid; for the rest, a query interpolates the eight nodes around the point to decide
+//! grid, and a bit per cell, one cache line per block, many of the rest; for the others, a
+//! query interpolates the eight nodes around the point to decide
 //! cheaply whether it is in range, and only then finds the exact nearest point: the corner
 //! nodes' nearest triangles, then a descent over neighbouring triangles until none is
 //! nearer. That is the brute-force
@@ -489,7 +490,15 @@ pub struct SurfaceIndex {
     /// Per sub-block, one bit: whether it is live (its clearance is 0), 64 to a word so that
     /// the test each lookup makes stays in cache.
     live: Vec<u64>,
+    /// Per stored block, one bit per cell named by its lowest node (a word per z-layer, x
+    /// fastest): whether the cell is live. In one cache line per block, it rejects the points
+    /// in dead cells of live sub-blocks, half of those the grid is read for, without reading
+    /// it.
+    live_cells: Vec<[u64; BLOCK]>,
 }
+
+// A word of `live_cells` per z-layer of a block.
+const _: () = assert!(NODES == 64 * BLOCK);
 
 impl SurfaceIndex {
     /// Indexes `mesh` for exact queries out to `reach` mm on either side of the surface.
@@ -534,8 +543,10 @@ impl SurfaceIndex {
             subs: nodes.map(|n| n.div_ceil(SUB)),
             clearance: Vec::new(),
             live: Vec::new(),
+            live_cells: Vec::new(),
         };
         index.fill();
+        index.live_cells = index.live_cells();
         index.clearance = index.sub_block_clearance();
         index.live = vec![0; index.clearance.len().div_ceil(64)];
         for (k, _) in index.clearance.iter().enumerate().filter(|(_, c)| **c == 0) {
@@ -544,31 +555,41 @@ impl SurfaceIndex {
         index
     }
 
-    /// Which sub-blocks are live: hold a cell whose eight corners are in the band and which
-    /// [`SurfaceIndex::decides_far`] does not settle for `-below..=focus`.
-    fn live_sub_blocks(&self) -> Vec<bool> {
-        let mut live = vec![false; self.subs[0] * self.subs[1] * self.subs[2]];
-        let [bx, by, _] = self.blocks;
-        for (b, &k) in self.block_of.iter().enumerate() {
-            if k == NONE {
-                continue;
+    /// Per stored block, which cells are live: their eight corners are in the band and
+    /// [`SurfaceIndex::decides_far`] does not settle them for `-below..=focus`.
+    fn live_cells(&self) -> Vec<[u64; BLOCK]> {
+        let mut cells = vec![[0u64; BLOCK]; self.node_triangles.len() / NODES];
+        for (i, k, local) in self.stored_cells() {
+            if let Some(d) = self.corner_distances(i) {
+                // Interpolation stays between the corners' least and greatest values.
+                if !self.decides_far(&d, Self::continuous(&d, self.cell), extent(&d), -self.below, self.focus) {
+                    cells[k][local / 64] |= 1 << (local % 64);
+                }
             }
+        }
+        cells
+    }
+
+    /// Every cell named by a node of a stored block: its lowest node, the block's place
+    /// among the stored ones and the node's within the block.
+    fn stored_cells(&self) -> impl Iterator<Item = ([usize; 3], usize, usize)> + '_ {
+        let [bx, by, _] = self.blocks;
+        self.block_of.iter().enumerate().filter(|(_, k)| **k != NONE).flat_map(move |(b, &k)| {
             let first = [b % bx, (b / bx) % by, b / (bx * by)].map(|x| x * BLOCK);
-            for local in 0..NODES {
+            (0..NODES).filter_map(move |local| {
                 let i =
                     [first[0] + local % BLOCK, first[1] + (local / BLOCK) % BLOCK, first[2] + local / (BLOCK * BLOCK)];
-                if (0..3).any(|a| i[a] + 1 >= self.nodes[a]) {
-                    continue;
-                }
-                let sub = self.sub_block(i);
-                if live[sub] {
-                    continue;
-                }
-                if let Some(d) = self.corner_distances(i) {
-                    // Interpolation stays between the corners' least and greatest values.
-                    let range = extent(&d);
-                    live[sub] = !self.decides_far(&d, Self::continuous(&d, self.cell), range, -self.below, self.focus);
-                }
+                (0..3).all(|a| i[a] + 1 < self.nodes[a]).then_some((i, k as usize, local))
+            })
+        })
+    }
+
+    /// Which sub-blocks are live: hold a live cell.
+    fn live_sub_blocks(&self) -> Vec<bool> {
+        let mut live = vec![false; self.subs[0] * self.subs[1] * self.subs[2]];
+        for (i, k, local) in self.stored_cells() {
+            if self.live_cells[k][local / 64] & (1 << (local % 64)) != 0 {
+                live[self.sub_block(i)] = true;
             }
         }
         live
@@ -776,7 +797,7 @@ impl SurfaceIndex {
 
     /// Bytes held by the grid.
     pub fn grid_bytes(&self) -> usize {
-        self.node_triangles.len() * 6 + self.block_of.len() * 5
+        self.node_triangles.len() * 6 + self.block_of.len() * 5 + self.live_cells.len() * NODES / 8
     }
 
     /// Where the eight corners of the cell whose lowest node is `i` are stored, x fastest, if
@@ -852,7 +873,13 @@ impl SurfaceIndex {
             return Lookup::Far;
         }
         let sub = self.sub_block(i);
-        if self.focused_on(lo, hi) && self.live[sub / 64] & (1 << (sub % 64)) == 0 {
+        let focused = self.focused_on(lo, hi);
+        if focused && self.live[sub / 64] & (1 << (sub % 64)) == 0 {
+            return Lookup::Far;
+        }
+        let (b, local) = self.locate(i);
+        let Some(&k) = self.block_of.get(b) else { return Lookup::Far };
+        if k == NONE || (focused && self.live_cells[k as usize][local / 64] & (1 << (local % 64)) == 0) {
             return Lookup::Far;
         }
         let Some(at) = self.corners_at(i) else { return Lookup::Far };
