@@ -71,23 +71,26 @@ impl ContactSettings {
 /// One arch: its mesh (optionally one part per tooth) indexed for distance queries.
 #[derive(Debug, Clone)]
 pub struct Arch {
-    /// The mesh (mm, in the arch's scan frame).
+    /// The mesh (mm, in the arch's scan frame), as given: results name its vertices.
     pub mesh: Mesh,
     /// Distance queries against it.
     pub index: SurfaceIndex,
     /// Tooth names, when the arch was given one mesh per tooth.
     pub teeth: Vec<String>,
-    /// Per triangle, its tooth (index into `teeth`).
+    /// The same mesh renumbered for a frame's walks: vertices in the order they are queried
+    /// (1 mm cubes in Z-order) and triangles by their first vertex, so that a patch of
+    /// contact reads its vertices, triangles and bookkeeping from a few places in memory
+    /// rather than from all over the arch.
+    walk: Mesh,
+    /// Per vertex of `walk`, its index in `mesh`.
+    given_vertex: Vec<u32>,
+    /// Per triangle of `walk`, its tooth (index into `teeth`).
     tooth_of_triangle: Vec<u16>,
-    /// Per vertex, the triangles around it (CSR).
+    /// Per vertex of `walk`, the triangles around it (CSR).
     vertex_triangle_starts: Vec<u32>,
     vertex_triangles: Vec<u32>,
-    /// The vertices in the order they are queried: spatially coherent.
-    query_order: Vec<u32>,
-    /// Their positions in that order, read one after another.
-    ordered_vertices: Vec<Point3<f64>>,
-    /// Runs of `query_order` within one [`CLUSTER_MM`] cube, and a sphere holding each, so
-    /// that runs far from the other arch are skipped whole.
+    /// Runs of `walk`'s vertices within one [`CLUSTER_MM`] cube, and a sphere holding each,
+    /// so that runs far from the other arch are skipped whole.
     clusters: Vec<Cluster>,
 }
 
@@ -107,7 +110,7 @@ impl Arch {
     /// An arch from one mesh per named part; with more than one part, the parts are teeth.
     pub fn new(parts: Vec<(String, Mesh)>, settings: &ContactSettings) -> Arch {
         let (names, meshes): (Vec<String>, Vec<Mesh>) = parts.into_iter().unzip();
-        let (mesh, tooth_of_triangle) = Mesh::concat(&meshes);
+        let (mesh, given_tooth) = Mesh::concat(&meshes);
         let teeth = if names.len() > 1 { names } else { Vec::new() };
         // Most lookups ask only whether a vertex is in contact: the index is focused on that.
         let index = SurfaceIndex::with_focus(
@@ -117,31 +120,44 @@ impl Arch {
             ContactSettings::CELL_MM,
             settings.threshold_mm,
         );
-        let mut counts = vec![0u32; mesh.vertices.len() + 1];
-        for t in &mesh.triangles {
+        let given_vertex = mesh.spatial_order(CLUSTER_MM);
+        let mut walk_vertex = vec![0u32; mesh.vertices.len()];
+        for (k, &v) in given_vertex.iter().enumerate() {
+            walk_vertex[v as usize] = k as u32;
+        }
+        let mut triangles: Vec<([u32; 3], u16)> = mesh
+            .triangles
+            .iter()
+            .zip(&given_tooth)
+            .map(|(t, &tooth)| (t.map(|v| walk_vertex[v as usize]), tooth))
+            .collect();
+        triangles.sort_by_key(|(t, _)| t.iter().copied().min());
+        let (triangles, tooth_of_triangle): (Vec<[u32; 3]>, Vec<u16>) = triangles.into_iter().unzip();
+        let walk = Mesh { vertices: given_vertex.iter().map(|&v| mesh.vertices[v as usize]).collect(), triangles };
+        let mut counts = vec![0u32; walk.vertices.len() + 1];
+        for t in &walk.triangles {
             t.iter().for_each(|&v| counts[v as usize + 1] += 1);
         }
         for i in 1..counts.len() {
             counts[i] += counts[i - 1];
         }
         let mut fill = counts.clone();
-        let mut vertex_triangles = vec![0u32; counts[mesh.vertices.len()] as usize];
-        for (k, t) in mesh.triangles.iter().enumerate() {
+        let mut vertex_triangles = vec![0u32; counts[walk.vertices.len()] as usize];
+        for (k, t) in walk.triangles.iter().enumerate() {
             for &v in t {
                 vertex_triangles[fill[v as usize] as usize] = k as u32;
                 fill[v as usize] += 1;
             }
         }
         // Clusters are the vertices of one cube of the Z-order's cells.
-        let query_order = mesh.spatial_order(CLUSTER_MM);
-        let [lo, _] = mesh.bounds();
-        let cube = |v: u32| ((mesh.vertices[v as usize].coords - lo) / CLUSTER_MM).map(|x| x.floor() as i64);
+        let [lo, _] = walk.bounds();
+        let cube = |v: usize| ((walk.vertices[v].coords - lo) / CLUSTER_MM).map(|x| x.floor() as i64);
         let mut clusters = Vec::new();
         let mut start = 0;
-        while start < query_order.len() {
-            let key = cube(query_order[start]);
-            let end = (start..query_order.len()).find(|&k| cube(query_order[k]) != key).unwrap_or(query_order.len());
-            let points = query_order[start..end].iter().map(|&v| mesh.vertices[v as usize].coords);
+        while start < walk.vertices.len() {
+            let key = cube(start);
+            let end = (start..walk.vertices.len()).find(|&k| cube(k) != key).unwrap_or(walk.vertices.len());
+            let points = walk.vertices[start..end].iter().map(|p| p.coords);
             let (lo, hi) = points
                 .clone()
                 .fold((Vector3::repeat(f64::INFINITY), -Vector3::repeat(f64::INFINITY)), |(lo, hi), p| {
@@ -152,20 +168,20 @@ impl Arch {
             clusters.push(Cluster { centre, radius, start: start as u32, end: end as u32 });
             start = end;
         }
-        let ordered_vertices = query_order.iter().map(|&v| mesh.vertices[v as usize]).collect();
         Arch {
-            ordered_vertices,
             mesh,
             index,
             teeth,
+            walk,
+            given_vertex,
             tooth_of_triangle,
             vertex_triangle_starts: counts,
             vertex_triangles,
-            query_order,
             clusters,
         }
     }
 
+    /// The triangles of `walk` around its vertex `v`.
     fn triangles_around(&self, v: usize) -> &[u32] {
         &self.vertex_triangles[self.vertex_triangle_starts[v] as usize..self.vertex_triangle_starts[v + 1] as usize]
     }
@@ -243,13 +259,16 @@ impl Found<'_> {
         self.values.push(value);
     }
 
-    /// The distance found for vertex `v`, if it was looked up.
-    fn value(&self, v: u32) -> Option<f32> {
-        self.slots.get(v as usize).map(|k| self.values[k])
-    }
-
-    fn into_distances(self) -> VertexDistances {
-        VertexDistances(self.vertices.into_iter().zip(self.values).filter(|(_, d)| !d.is_nan()).collect())
+    /// The distances found, naming the vertices of the mesh as given (`given_vertex`).
+    fn into_distances(self, given_vertex: &[u32]) -> VertexDistances {
+        VertexDistances(
+            self.vertices
+                .into_iter()
+                .zip(self.values)
+                .filter(|(_, d)| !d.is_nan())
+                .map(|(v, d)| (given_vertex[v as usize], d))
+                .collect(),
+        )
     }
 }
 
@@ -313,8 +332,9 @@ fn distances(
         if far(&Point3::from(r * cluster.centre.coords + t), cluster.radius) {
             continue;
         }
-        let run = cluster.start as usize..cluster.end as usize;
-        for (&v, q) in from.query_order[run.clone()].iter().zip(&from.ordered_vertices[run]) {
+        for (v, q) in
+            (cluster.start..cluster.end).zip(&from.walk.vertices[cluster.start as usize..cluster.end as usize])
+        {
             let p = Point3::from(r * q.coords + t);
             match lookup(&p) {
                 Lookup::Far => {}
@@ -335,34 +355,52 @@ pub fn contacts(
     let to_upper = *maxilla_scan_from_mandible_scan;
     let to_lower = to_upper.inverse();
     let (lo, hi, t) = (-settings.max_depth_mm, settings.above_mm(), settings.threshold_mm);
-    // First the vertices in contact, then the other corners of their triangles, which set the
-    // areas.
+    // Vertices just beyond the threshold that were found exactly on the way are kept: some
+    // are corners of triangles in contact, which need not be found again.
     let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
         let far = |c: &Point3<f64>, r: f64| other.index.far_from(c, r, (lo, t));
-        // Vertices just beyond the threshold that were found exactly on the way are kept: some
-        // are corners of triangles in contact, which need not be found again.
         distances(arch, other_from_arch, far, |p| other.index.find(p, lo, t, t), found);
-        exact_around_contacts(arch, found, t, |p| other.index.lookup(&other_from_arch.transform_point(p), lo, hi, hi));
+    };
+    // The other corners of triangles in contact are looked up over the whole band, since
+    // they set the areas.
+    let corner = |other: &Arch, other_from_arch: &Pose, p: &Point3<f64>| {
+        other.index.lookup(&other_from_arch.transform_point(p), lo, hi, hi)
     };
     both_arches(
-        arch_contacts(upper, Side::Maxilla, &Pose::identity(), settings, |f| find(upper, lower, &to_lower, f)),
-        arch_contacts(lower, Side::Mandible, &to_upper, settings, |f| find(lower, upper, &to_upper, f)),
+        arch_contacts(
+            upper,
+            Side::Maxilla,
+            &Pose::identity(),
+            settings,
+            |f| find(upper, lower, &to_lower, f),
+            |p| corner(lower, &to_lower, p),
+        ),
+        arch_contacts(
+            lower,
+            Side::Mandible,
+            &to_upper,
+            settings,
+            |f| find(lower, upper, &to_upper, f),
+            |p| corner(upper, &to_upper, p),
+        ),
     )
 }
 
-/// The regions and distances of one arch, from the distances `find` adds to its list.
+/// The regions and distances of one arch, from the distances `find` adds to its list and
+/// those `lookup` gives for the other corners of triangles in contact.
 fn arch_contacts(
     arch: &Arch,
     side: Side,
     upper_from_arch: &Pose,
     settings: &ContactSettings,
     find: impl FnOnce(&mut Found),
+    lookup: impl Fn(&Point3<f64>) -> Lookup,
 ) -> (Vec<Region>, VertexDistances) {
-    with_slots(arch.mesh.vertices.len(), |slots| {
+    with_slots(arch.walk.vertices.len(), |slots| {
         let mut found = Found { vertices: Vec::new(), values: Vec::new(), slots };
         find(&mut found);
-        let regions = arch_regions(arch, side, &found, upper_from_arch, settings);
-        (regions, found.into_distances())
+        let regions = arch_regions(arch, side, &mut found, upper_from_arch, settings, lookup);
+        (regions, found.into_distances(&arch.given_vertex))
     })
 }
 
@@ -372,28 +410,6 @@ fn both_arches(upper: (Vec<Region>, VertexDistances), lower: (Vec<Region>, Verte
     regions.extend(lower.0);
     regions.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
     Contacts { regions, distances: [upper.1, lower.1] }
-}
-
-/// Adds to `found` the distances of the vertices sharing a triangle with a vertex in contact.
-fn exact_around_contacts(arch: &Arch, found: &mut Found, threshold: f64, lookup: impl Fn(&Point3<f64>) -> Lookup) {
-    for k in 0..found.vertices.len() {
-        // NaN (out of the band) is not in contact either.
-        if found.values[k].is_nan() || found.values[k] as f64 > threshold {
-            continue;
-        }
-        for &tri in arch.triangles_around(found.vertices[k] as usize) {
-            for &c in &arch.mesh.triangles[tri as usize] {
-                if found.slots.get(c as usize).is_none() {
-                    let d = match lookup(&arch.mesh.vertices[c as usize]) {
-                        Lookup::Exact(n) => n.distance as f32,
-                        Lookup::Approximate(x) => x as f32,
-                        Lookup::Far => f32::NAN,
-                    };
-                    found.push(c, d);
-                }
-            }
-        }
-    }
 }
 
 /// The same as [`contacts`], testing every triangle for every vertex (and exact everywhere in
@@ -416,43 +432,86 @@ pub fn contacts_brute_force(
         let lookup = |p: &Point3<f64>| within(nearest_brute_force(other.index.surface(), p));
         distances(arch, other_from_arch, never, lookup, found);
     };
+    // Everything in the band was found: other corners are out of it.
+    let out_of_band = |_: &Point3<f64>| Lookup::Far;
     both_arches(
-        arch_contacts(upper, Side::Maxilla, &Pose::identity(), settings, |f| find(upper, lower, &to_lower, f)),
-        arch_contacts(lower, Side::Mandible, &to_upper, settings, |f| find(lower, upper, &to_upper, f)),
+        arch_contacts(
+            upper,
+            Side::Maxilla,
+            &Pose::identity(),
+            settings,
+            |f| find(upper, lower, &to_lower, f),
+            out_of_band,
+        ),
+        arch_contacts(lower, Side::Mandible, &to_upper, settings, |f| find(lower, upper, &to_upper, f), out_of_band),
     )
 }
 
-/// Regions of one arch from the distances found on it.
-fn arch_regions(arch: &Arch, side: Side, found: &Found, to_upper: &Pose, settings: &ContactSettings) -> Vec<Region> {
+/// Regions of one arch from the distances found on it. The corners of triangles in contact
+/// that were not found are looked up with `lookup` (in the arch's own frame) and added to
+/// `found` on the way.
+fn arch_regions(
+    arch: &Arch,
+    side: Side,
+    found: &mut Found,
+    to_upper: &Pose,
+    settings: &ContactSettings,
+    lookup: impl Fn(&Point3<f64>) -> Lookup,
+) -> Vec<Region> {
     let t = settings.threshold_mm;
     let reach = settings.above_mm();
-    // NaN compares false.
-    let in_contact = |v: u32| found.value(v).is_some_and(|d| d as f64 <= t);
-    let flagged: Vec<usize> = (0..found.vertices.len()).filter(|&k| found.values[k] as f64 <= t).collect();
+    // NaN (out of the band) compares false: not in contact.
+    let in_contact = |x: f32| x as f64 <= t;
+    // One walk over the triangles around the vertices in contact, including any that the
+    // lookups add: each triangle is kept once, with its corners' places in the list, and
+    // the edges joining two vertices in contact are noted for the union-find.
+    let (mut triangles, mut joins) = (Vec::new(), Vec::new());
+    let mut k = 0;
+    while k < found.vertices.len() {
+        if !in_contact(found.values[k]) {
+            k += 1;
+            continue;
+        }
+        let v = found.vertices[k];
+        for &tri in arch.triangles_around(v as usize) {
+            let ids = arch.walk.triangles[tri as usize];
+            let mut places = [0usize; 3];
+            for (place, &c) in places.iter_mut().zip(&ids) {
+                *place = match found.slots.get(c as usize) {
+                    Some(at) => at,
+                    None => {
+                        let d = match lookup(&arch.walk.vertices[c as usize]) {
+                            Lookup::Exact(n) => n.distance as f32,
+                            Lookup::Approximate(x) => x as f32,
+                            Lookup::Far => f32::NAN,
+                        };
+                        found.push(c, d);
+                        found.vertices.len() - 1
+                    }
+                };
+            }
+            let contact = places.map(|at| in_contact(found.values[at]));
+            // Each triangle once: from its first corner in contact.
+            if contact.iter().position(|&c| c).map(|i| ids[i]) != Some(v) {
+                continue;
+            }
+            triangles.push((tri as usize, places));
+            for a in 0..3 {
+                let b = (a + 1) % 3;
+                if contact[a] && contact[b] {
+                    joins.push((places[a], places[b]));
+                }
+            }
+        }
+        k += 1;
+    }
+    let flagged: Vec<usize> = (0..found.vertices.len()).filter(|&k| in_contact(found.values[k])).collect();
     if flagged.is_empty() {
         return Vec::new();
     }
     // Union-find over places in the list.
     let mut sets = DisjointSets::new(found.vertices.len());
-    let place = |v: u32| found.slots.get(v as usize).unwrap_or(usize::MAX);
-    let mut triangles = Vec::new();
-    for &k in &flagged {
-        let v = found.vertices[k];
-        for &tri in arch.triangles_around(v as usize) {
-            let ids = arch.mesh.triangles[tri as usize];
-            // Each triangle once: from its first corner in contact.
-            if ids.iter().find(|&&c| in_contact(c)) != Some(&v) {
-                continue;
-            }
-            triangles.push(tri as usize);
-            for k in 0..3 {
-                let (a, b) = (ids[k], ids[(k + 1) % 3]);
-                if in_contact(a) && in_contact(b) {
-                    sets.union(place(a), place(b));
-                }
-            }
-        }
-    }
+    joins.into_iter().for_each(|(a, b)| sets.union(a, b));
     struct Acc {
         area: f64,
         moment: Vector3<f64>,
@@ -479,15 +538,14 @@ fn arch_regions(arch: &Arch, side: Side, found: &Found, to_upper: &Pose, setting
         acc.depth = acc.depth.max(-(found.values[k] as f64));
         acc.vertices += 1;
     }
-    for tri in triangles {
-        let ids = arch.mesh.triangles[tri];
-        let Some(&v) = ids.iter().find(|&&v| in_contact(v)) else { continue };
-        let values = ids.map(|i| match found.value(i) {
-            Some(x) if !x.is_nan() => x as f64,
-            _ => reach,
+    for (tri, places) in triangles {
+        let Some(&first) = places.iter().find(|&&at| in_contact(found.values[at])) else { continue };
+        let values = places.map(|at| match found.values[at] {
+            x if x.is_nan() => reach,
+            x => x as f64,
         });
-        let (area, centroid) = clipped_area(&arch.mesh.corners(tri), &values, t);
-        let acc = &mut accs[slot_of[sets.find(place(v))] as usize];
+        let (area, centroid) = clipped_area(&arch.walk.corners(tri), &values, t);
+        let acc = &mut accs[slot_of[sets.find(first)] as usize];
         acc.area += area;
         acc.moment += centroid.coords * area;
         let tooth = arch.tooth_of_triangle[tri];
