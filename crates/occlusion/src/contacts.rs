@@ -259,16 +259,21 @@ impl Found<'_> {
         self.values.push(value);
     }
 
-    /// The distances found, naming the vertices of the mesh as given (`given_vertex`).
-    fn into_distances(self, given_vertex: &[u32]) -> VertexDistances {
-        VertexDistances(
+    /// The distances found, naming the vertices of the mesh as given (`given_vertex`); the
+    /// list's buffers go back to the slots for the next frame.
+    fn finish(mut self, given_vertex: &[u32]) -> VertexDistances {
+        let distances = VertexDistances(
             self.vertices
-                .into_iter()
-                .zip(self.values)
+                .iter()
+                .zip(&self.values)
                 .filter(|(_, d)| !d.is_nan())
-                .map(|(v, d)| (given_vertex[v as usize], d))
+                .map(|(&v, &d)| (given_vertex[v as usize], d))
                 .collect(),
-        )
+        );
+        self.vertices.clear();
+        self.values.clear();
+        self.slots.buffers = (self.vertices, self.values);
+        distances
     }
 }
 
@@ -279,20 +284,35 @@ impl Found<'_> {
 struct Slots {
     /// Per vertex: (stamp, place in the list).
     entries: Vec<(u32, u32)>,
+    /// Per triangle: the stamp of the last list that walked it.
+    walked: Vec<u32>,
     epoch: u32,
+    /// A list's vertices and values, kept between frames so that they are not grown anew.
+    buffers: (Vec<u32>, Vec<f32>),
 }
 
 impl Slots {
-    /// Starts a new list over `n` vertices.
-    fn begin(&mut self, n: usize) {
+    /// Starts a new list over `n` vertices and `m` triangles.
+    fn begin(&mut self, n: usize, m: usize) {
         if self.entries.len() < n {
             self.entries.resize(n, (0, 0));
+        }
+        if self.walked.len() < m {
+            self.walked.resize(m, 0);
         }
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
             self.entries.fill((0, 0));
+            self.walked.fill(0);
             self.epoch = 1;
         }
+    }
+
+    /// Whether triangle `t` is walked for the first time in this list; marks it walked.
+    fn first_walk(&mut self, t: usize) -> bool {
+        let first = self.walked[t] != self.epoch;
+        self.walked[t] = self.epoch;
+        first
     }
 
     fn get(&self, v: usize) -> Option<usize> {
@@ -309,10 +329,10 @@ thread_local! {
     static SLOTS: std::cell::RefCell<Slots> = std::cell::RefCell::default();
 }
 
-/// Runs `f` with this thread's [`Slots`], begun over `n` vertices.
-fn with_slots<R>(n: usize, f: impl FnOnce(&mut Slots) -> R) -> R {
+/// Runs `f` with this thread's [`Slots`], begun over `n` vertices and `m` triangles.
+fn with_slots<R>(n: usize, m: usize, f: impl FnOnce(&mut Slots) -> R) -> R {
     SLOTS.with_borrow_mut(|slots| {
-        slots.begin(n);
+        slots.begin(n, m);
         f(slots)
     })
 }
@@ -396,11 +416,12 @@ fn arch_contacts(
     find: impl FnOnce(&mut Found),
     lookup: impl Fn(&Point3<f64>) -> Lookup,
 ) -> (Vec<Region>, VertexDistances) {
-    with_slots(arch.walk.vertices.len(), |slots| {
-        let mut found = Found { vertices: Vec::new(), values: Vec::new(), slots };
+    with_slots(arch.walk.vertices.len(), arch.walk.triangles.len(), |slots| {
+        let (vertices, values) = std::mem::take(&mut slots.buffers);
+        let mut found = Found { vertices, values, slots };
         find(&mut found);
         let regions = arch_regions(arch, side, &mut found, upper_from_arch, settings, lookup);
-        (regions, found.into_distances(&arch.given_vertex))
+        (regions, found.finish(&arch.given_vertex))
     })
 }
 
@@ -474,6 +495,10 @@ fn arch_regions(
         }
         let v = found.vertices[k];
         for &tri in arch.triangles_around(v as usize) {
+            // Each triangle once.
+            if !found.slots.first_walk(tri as usize) {
+                continue;
+            }
             let ids = arch.walk.triangles[tri as usize];
             let mut places = [0usize; 3];
             for (place, &c) in places.iter_mut().zip(&ids) {
@@ -491,10 +516,6 @@ fn arch_regions(
                 };
             }
             let contact = places.map(|at| in_contact(found.values[at]));
-            // Each triangle once: from its first corner in contact.
-            if contact.iter().position(|&c| c).map(|i| ids[i]) != Some(v) {
-                continue;
-            }
             triangles.push((tri as usize, places));
             for a in 0..3 {
                 let b = (a + 1) % 3;
