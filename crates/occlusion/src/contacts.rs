@@ -10,7 +10,7 @@
 //! each triangle where the distance, interpolated linearly between its corners, is within
 //! the threshold, so a region's area does not jump with the mesh's resolution.
 
-use crate::distance::{Lookup, Nearest, SurfaceIndex, nearest_brute_force};
+use crate::distance::{Lookup, Nearest, Screen, Search, SurfaceIndex, nearest_brute_force};
 use crate::mesh::{DisjointSets, Mesh};
 use jawtrack_pose::Pose;
 use nalgebra::{Point3, Vector3};
@@ -337,15 +337,26 @@ fn with_slots<R>(n: usize, m: usize, f: impl FnOnce(&mut Slots) -> R) -> R {
     })
 }
 
-/// Adds to `found` the vertices of `from` (moved by `other_from_from`) that `lookup` finds
-/// near the other arch; clusters that `far` says it would not are skipped whole.
+/// Adds to `found` the vertices of `from` (moved by `other_from_from`) that `screen` finds
+/// near the other arch, `index`; clusters that `far` says it would not are skipped whole.
 fn distances(
     from: &Arch,
     other_from_from: &Pose,
     far: impl Fn(&Point3<f64>, f64) -> bool,
-    lookup: impl Fn(&Point3<f64>) -> Lookup,
+    screen: impl Fn(&Point3<f64>) -> Screen,
+    index: &SurfaceIndex,
     found: &mut Found,
 ) {
+    // Exact searches wait in batches, each holding its place in the list: see
+    // `SurfaceIndex::warm`.
+    const BATCH: usize = 32;
+    let mut waiting: Vec<(usize, Search)> = Vec::with_capacity(BATCH);
+    let search = |waiting: &mut Vec<(usize, Search)>, found: &mut Found| {
+        std::hint::black_box(waiting.iter().map(|(_, s)| index.warm(s)).sum::<f64>());
+        for (at, s) in waiting.drain(..) {
+            found.values[at] = index.search(&s).distance as f32;
+        }
+    };
     // A matrix transforms points faster than the pose's quaternion.
     let (r, t) = (other_from_from.rotation_matrix(), other_from_from.translation());
     for cluster in &from.clusters {
@@ -356,13 +367,21 @@ fn distances(
             (cluster.start..cluster.end).zip(&from.walk.vertices[cluster.start as usize..cluster.end as usize])
         {
             let p = Point3::from(r * q.coords + t);
-            match lookup(&p) {
-                Lookup::Far => {}
-                Lookup::Approximate(x) => found.push(v, x as f32),
-                Lookup::Exact(n) => found.push(v, n.distance as f32),
+            match screen(&p) {
+                Screen::Answered(Lookup::Far) => {}
+                Screen::Answered(Lookup::Approximate(x)) => found.push(v, x as f32),
+                Screen::Answered(Lookup::Exact(n)) => found.push(v, n.distance as f32),
+                Screen::Search(s) => {
+                    found.push(v, f32::NAN);
+                    waiting.push((found.vertices.len() - 1, s));
+                    if waiting.len() == BATCH {
+                        search(&mut waiting, found);
+                    }
+                }
             }
         }
     }
+    search(&mut waiting, found);
 }
 
 /// The contacts between `upper` and `lower` with the lower scan at `maxilla_scan_from_mandible_scan`.
@@ -379,7 +398,7 @@ pub fn contacts(
     // are corners of triangles in contact, which need not be found again.
     let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
         let far = |c: &Point3<f64>, r: f64| other.index.far_from(c, r, (lo, t));
-        distances(arch, other_from_arch, far, |p| other.index.find(p, lo, t, t), found);
+        distances(arch, other_from_arch, far, |p| other.index.screen(p, lo, t, t), &other.index, found);
     };
     // The other corners of triangles in contact are looked up over the whole band, since
     // they set the areas.
@@ -450,8 +469,8 @@ pub fn contacts_brute_force(
     let to_lower = to_upper.inverse();
     let never = |_: &Point3<f64>, _: f64| false;
     let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
-        let lookup = |p: &Point3<f64>| within(nearest_brute_force(other.index.surface(), p));
-        distances(arch, other_from_arch, never, lookup, found);
+        let screen = |p: &Point3<f64>| Screen::Answered(within(nearest_brute_force(other.index.surface(), p)));
+        distances(arch, other_from_arch, never, screen, &other.index, found);
     };
     // Everything in the band was found: other corners are out of it.
     let out_of_band = |_: &Point3<f64>| Lookup::Far;

@@ -450,6 +450,23 @@ pub enum Lookup {
     Exact(Nearest),
 }
 
+/// What [`SurfaceIndex::screen`] found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Screen {
+    /// Settled by the grid alone: far or approximate.
+    Answered(Lookup),
+    /// An exact search is needed.
+    Search(Search),
+}
+
+/// An exact search still to do: the point and the nearest triangles of the grid nodes
+/// around it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Search {
+    point: Point3<f64>,
+    candidates: [u32; 8],
+}
+
 /// A narrow-band signed-distance grid over a surface: each node holds its exact signed
 /// distance and nearest triangle. A query interpolates the grid to decide whether the point
 /// is in the range asked for, then finds the exact nearest point from the corner nodes'
@@ -864,25 +881,36 @@ impl SurfaceIndex {
     /// is answered exactly even when it then lies outside `lo..=hi`: its distance costs
     /// nothing more there, and a caller may need it.
     pub fn find(&self, p: &Point3<f64>, lo: f64, hi: f64, exact_up_to: f64) -> Lookup {
+        match self.screen(p, lo, hi, exact_up_to) {
+            Screen::Answered(answer) => answer,
+            Screen::Search(search) => Lookup::Exact(self.search(&search)),
+        }
+    }
+
+    /// The first half of [`SurfaceIndex::find`]: what the grid alone settles, or the search
+    /// left to do. A batch of points screened first and searched after lets the memory the
+    /// searches read be fetched in parallel ([`SurfaceIndex::warm`]).
+    pub fn screen(&self, p: &Point3<f64>, lo: f64, hi: f64, exact_up_to: f64) -> Screen {
+        const FAR: Screen = Screen::Answered(Lookup::Far);
         let g = self.grid_coordinates(p);
         if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0) {
-            return Lookup::Far;
+            return FAR;
         }
         let i = [g.x as usize, g.y as usize, g.z as usize];
         if i[0] + 1 >= self.nodes[0] || i[1] + 1 >= self.nodes[1] || i[2] + 1 >= self.nodes[2] {
-            return Lookup::Far;
+            return FAR;
         }
         let sub = self.sub_block(i);
         let focused = self.focused_on(lo, hi);
         if focused && self.live[sub / 64] & (1 << (sub % 64)) == 0 {
-            return Lookup::Far;
+            return FAR;
         }
         let (b, local) = self.locate(i);
-        let Some(&k) = self.block_of.get(b) else { return Lookup::Far };
+        let Some(&k) = self.block_of.get(b) else { return FAR };
         if k == NONE || (focused && self.live_cells[k as usize][local / 64] & (1 << (local % 64)) == 0) {
-            return Lookup::Far;
+            return FAR;
         }
-        let Some(at) = self.corners_at(i) else { return Lookup::Far };
+        let Some(at) = self.corners_at(i) else { return FAR };
         let mut d = [0.0; 8];
         for (slot, &k) in d.iter_mut().zip(&at) {
             *slot = self.distance_at(k);
@@ -893,16 +921,31 @@ impl SurfaceIndex {
             + f.z * (y0 * (x0 * d[4] + f.x * d[5]) + f.y * (x0 * d[6] + f.x * d[7]));
         let continuous = Self::continuous(&d, self.cell);
         if self.decides_far(&d, continuous, (interpolated, interpolated), lo, hi) {
-            return Lookup::Far;
+            return FAR;
         }
         if continuous && interpolated > exact_up_to + self.margin() {
-            return Lookup::Approximate(interpolated);
+            return Screen::Answered(Lookup::Approximate(interpolated));
         }
-        let mut best = (f64::INFINITY, NONE, *p, Feature::Face);
         let mut candidates = [NONE; 8];
         for (slot, &k) in candidates.iter_mut().zip(&at) {
             *slot = self.node_triangles[k];
         }
+        Screen::Search(Search { point: *p, candidates })
+    }
+
+    /// Reads the first memory that searching `search` needs and returns a value from it:
+    /// done for every search of a batch before any is searched, so that the processor
+    /// fetches them side by side instead of each search waiting for its own in turn.
+    pub fn warm(&self, search: &Search) -> f64 {
+        let g = &self.surface.geometry[search.candidates[0] as usize];
+        g.plane[3] + g.corners[2].z
+    }
+
+    /// The second half of [`SurfaceIndex::find`]: the exact nearest point, from the corner
+    /// nodes' nearest triangles and a descent over their neighbours.
+    pub fn search(&self, search: &Search) -> Nearest {
+        let (p, candidates) = (&search.point, &search.candidates);
+        let mut best = (f64::INFINITY, NONE, *p, Feature::Face);
         for (k, &t) in candidates.iter().enumerate() {
             // Neighbouring nodes mostly share their nearest triangle: test each once.
             if !candidates[..k].contains(&t) && !self.surface.beyond_plane(t as usize, p, best.0) {
@@ -944,7 +987,7 @@ impl SurfaceIndex {
             }
         }
         let (d2, t, c, feature) = best;
-        Lookup::Exact(self.surface.signed(t as usize, p, d2, c, feature))
+        self.surface.signed(t as usize, p, d2, c, feature)
     }
 }
 
