@@ -896,7 +896,9 @@ impl SurfaceIndex {
         if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0) {
             return FAR;
         }
-        let i = [g.x as usize, g.y as usize, g.z as usize];
+        // Through u32, which converts from f64 in fewer instructions than usize; a point too
+        // far for it saturates, and is then past the grid's end.
+        let i = [g.x as u32 as usize, g.y as u32 as usize, g.z as u32 as usize];
         if i[0] + 1 >= self.nodes[0] || i[1] + 1 >= self.nodes[1] || i[2] + 1 >= self.nodes[2] {
             return FAR;
         }
