@@ -337,13 +337,13 @@ fn with_slots<R>(n: usize, m: usize, f: impl FnOnce(&mut Slots) -> R) -> R {
     })
 }
 
-/// Adds to `found` the vertices of `from` (moved by `other_from_from`) that `screen` finds
+/// Adds to `found` the vertices of `from` (moved by `other_from_from`) that `screen_many` finds
 /// near the other arch, `index`; clusters that `far` says it would not are skipped whole.
 fn distances(
     from: &Arch,
     other_from_from: &Pose,
     far: impl Fn(&Point3<f64>, f64) -> bool,
-    screen: impl Fn(&Point3<f64>) -> Screen,
+    screen_many: impl Fn(&[Point3<f64>], &mut dyn FnMut(usize, Screen)),
     index: &SurfaceIndex,
     found: &mut Found,
 ) {
@@ -359,15 +359,20 @@ fn distances(
     };
     // A matrix transforms points faster than the pose's quaternion.
     let (r, t) = (other_from_from.rotation_matrix(), other_from_from.translation());
+    let mut points = Vec::new();
     for cluster in &from.clusters {
         if far(&Point3::from(r * cluster.centre.coords + t), cluster.radius) {
             continue;
         }
-        for (v, q) in
-            (cluster.start..cluster.end).zip(&from.walk.vertices[cluster.start as usize..cluster.end as usize])
-        {
-            let p = Point3::from(r * q.coords + t);
-            match screen(&p) {
+        points.clear();
+        points.extend(
+            from.walk.vertices[cluster.start as usize..cluster.end as usize]
+                .iter()
+                .map(|q| Point3::from(r * q.coords + t)),
+        );
+        screen_many(&points, &mut |j, screened| {
+            let v = cluster.start + j as u32;
+            match screened {
                 Screen::Answered(Lookup::Far) => {}
                 Screen::Answered(Lookup::Approximate(x)) => found.push(v, x as f32),
                 Screen::Answered(Lookup::Exact(n)) => found.push(v, n.distance as f32),
@@ -379,7 +384,7 @@ fn distances(
                     }
                 }
             }
-        }
+        });
     }
     search(&mut waiting, found);
 }
@@ -398,7 +403,16 @@ pub fn contacts(
     // are corners of triangles in contact, which need not be found again.
     let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
         let far = |c: &Point3<f64>, r: f64| other.index.far_from(c, r, (lo, t));
-        distances(arch, other_from_arch, far, |p| other.index.screen(p, lo, t, t), &other.index, found);
+        distances(
+            arch,
+            other_from_arch,
+            far,
+            |points: &[Point3<f64>], answer: &mut dyn FnMut(usize, Screen)| {
+                other.index.screen_many(points, lo, t, t, answer)
+            },
+            &other.index,
+            found,
+        );
     };
     // The other corners of triangles in contact are looked up over the whole band, since
     // they set the areas.
@@ -470,7 +484,10 @@ pub fn contacts_brute_force(
     let never = |_: &Point3<f64>, _: f64| false;
     let find = |arch: &Arch, other: &Arch, other_from_arch: &Pose, found: &mut Found| {
         let screen = |p: &Point3<f64>| Screen::Answered(within(nearest_brute_force(other.index.surface(), p)));
-        distances(arch, other_from_arch, never, screen, &other.index, found);
+        let screen_many = |points: &[Point3<f64>], answer: &mut dyn FnMut(usize, Screen)| {
+            points.iter().enumerate().for_each(|(j, p)| answer(j, screen(p)))
+        };
+        distances(arch, other_from_arch, never, screen_many, &other.index, found);
     };
     // Everything in the band was found: other corners are out of it.
     let out_of_band = |_: &Point3<f64>| Lookup::Far;
