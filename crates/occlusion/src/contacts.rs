@@ -359,19 +359,13 @@ fn distances(
     };
     // A matrix transforms points faster than the pose's quaternion.
     let (r, t) = (other_from_from.rotation_matrix(), other_from_from.translation());
-    let mut points = Vec::new();
-    for cluster in &from.clusters {
-        if far(&Point3::from(r * cluster.centre.coords + t), cluster.radius) {
-            continue;
-        }
-        points.clear();
-        points.extend(
-            from.walk.vertices[cluster.start as usize..cluster.end as usize]
-                .iter()
-                .map(|q| Point3::from(r * q.coords + t)),
-        );
-        screen_many(&points, &mut |j, screened| {
-            let v = cluster.start + j as u32;
+    // Points of several clusters are screened together, so that more of their reads overlap:
+    // see `SurfaceIndex::screen_many`.
+    const GATHER: usize = 64;
+    let (mut points, mut ids) = (Vec::with_capacity(2 * GATHER), Vec::with_capacity(2 * GATHER));
+    let mut screen = |points: &mut Vec<Point3<f64>>, ids: &mut Vec<u32>, waiting: &mut Vec<(usize, Search)>| {
+        screen_many(points, &mut |j, screened| {
+            let v = ids[j];
             match screened {
                 Screen::Answered(Lookup::Far) => {}
                 Screen::Answered(Lookup::Approximate(x)) => found.push(v, x as f32),
@@ -380,12 +374,26 @@ fn distances(
                     found.push(v, f32::NAN);
                     waiting.push((found.vertices.len() - 1, s));
                     if waiting.len() == BATCH {
-                        search(&mut waiting, found);
+                        search(waiting, found);
                     }
                 }
             }
         });
+        points.clear();
+        ids.clear();
+    };
+    for cluster in &from.clusters {
+        if far(&Point3::from(r * cluster.centre.coords + t), cluster.radius) {
+            continue;
+        }
+        let (start, end) = (cluster.start as usize, cluster.end as usize);
+        points.extend(from.walk.vertices[start..end].iter().map(|q| Point3::from(r * q.coords + t)));
+        ids.extend(cluster.start..cluster.end);
+        if points.len() >= GATHER {
+            screen(&mut points, &mut ids, &mut waiting);
+        }
     }
+    screen(&mut points, &mut ids, &mut waiting);
     search(&mut waiting, found);
 }
 
