@@ -957,6 +957,7 @@ impl SurfaceIndex {
                     m += 1;
                 }
             }
+            // A cell's corners lie in two z-layers of its block, the second a layer up.
             let warm: i64 = waiting[..m]
                 .iter()
                 .map(|&(_, k, local)| {
