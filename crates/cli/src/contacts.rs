@@ -35,7 +35,9 @@ use std::time::Instant;
 pub(crate) enum Mode {
     /// Where the recording puts it: the scans may interpenetrate, and the depth says how far.
     Kinematic,
-    /// Slid over the maxillary teeth as a rigid body until it rests on them (not built yet).
+    /// Slid over the maxillary teeth as a rigid body: pulled towards the recorded pose by a
+    /// spring-damper, pushed out by contact forces, after the smallest correction that removes
+    /// the interpenetration of the first frame.
     Dynamic,
 }
 
