@@ -22,7 +22,7 @@ use jawtrack_occlusion::Mesh;
 use jawtrack_occlusion::contacts::{Arch, ContactMap, ContactSettings, Side, THRESHOLD_RANGE_MM, contacts};
 use jawtrack_occlusion::dynamics::{self, DynamicsOptions};
 use jawtrack_pose::Pose;
-use jawtrack_tracker::record::FrameRecord;
+use jawtrack_recording::FrameRecord;
 use jawtrack_tracker::registration::Registration;
 use nalgebra::{Point3, Vector3};
 use serde_json::{Value, json};

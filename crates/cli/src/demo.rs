@@ -9,9 +9,8 @@ use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_calibration::{CalibrationOptions, Finding, calibrate};
 use jawtrack_marker::Marker;
-use jawtrack_tracker::record::{RecordingHeader, frame_record};
+use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_tracker::{Tracker, TrackerConfig};
-use std::io::Write as _;
 
 use crate::plot::{self, Series, Style};
 use jawtrack_synth::scenes::Rig;
@@ -122,18 +121,18 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
     for (label, marker, file) in markers {
         let mut tracker = Tracker::new(marker, config)?;
         let poses = dir.join(file);
-        let mut out = std::io::BufWriter::new(std::fs::File::create(&poses)?);
         let mut header = RecordingHeader::new("jawtrack demo");
         header.intrinsics = Some(truth.intrinsics);
         header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
-        writeln!(out, "{}", header.to_line())?;
+        // The demo's own output folder: a second run replaces the first's files.
+        let mut out = RecordingWriter::create(&poses, header, Overwrite::Replace)?;
         let (mut dt, mut dr, mut ms, mut path) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (i, f) in truth.frames.iter().enumerate() {
             let img = image::open(dir.join(&f.file))?.to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
             let r = tracker.track(&ImageView::new(img.as_raw(), w, h, w)?, &truth.intrinsics, f.t)?;
             ms.push((r.timings.detection_s + r.timings.pose_s) * 1e3);
-            writeln!(out, "{}", frame_record(i, Some(&f.file), &r))?;
+            out.append(&r.to_record(i, Some(&f.file)))?;
             if let Some(m) = r.maxilla_from_mandible {
                 let (angle, dist) = m.distance_to(&f.maxilla_from_mandible);
                 dt.push(dist);
@@ -141,7 +140,6 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
                 path.push((f.t, rig.lower_incisor(&m)));
             }
         }
-        out.flush()?;
         for v in [&mut dt, &mut dr, &mut ms] {
             v.sort_by(f64::total_cmp);
         }

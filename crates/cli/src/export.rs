@@ -11,7 +11,7 @@ use crate::plot::{self, Series, Style};
 use anyhow::{Context, Result, bail};
 use clap::{ArgGroup, Args};
 use jawtrack_pose::Pose;
-use jawtrack_tracker::record::{FrameRecord, Recording, RecordingHeader, read_recording};
+use jawtrack_recording::{FrameRecord, Recording, RecordingHeader};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -52,13 +52,11 @@ pub(crate) struct PlotArgs {
 
 /// Reads a recording, warns about unreadable lines, orders the frames by sequence.
 pub(crate) fn load(path: &Path) -> Result<Recording> {
-    let file = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
-    let mut rec =
-        read_recording(std::io::BufReader::new(file)).with_context(|| format!("reading {}", path.display()))?;
+    let mut rec = jawtrack_recording::open(path)?;
     for (line, why) in &rec.skipped {
         eprintln!("warning: {} line {line} skipped: {why}", path.display());
     }
-    rec.frames.sort_by_key(|f| (f.seq.unwrap_or(f.frame), f.frame));
+    rec.sort_by_capture();
     Ok(rec)
 }
 

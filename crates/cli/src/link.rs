@@ -8,11 +8,10 @@
 use crate::live::{LiveServer, LiveState, ViewerOptions};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_tracker::record::{FrameRecord, RecordingHeader, read_recording};
+use jawtrack_recording::{FrameRecord, Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_wire::link::{Counters, Link, LinkConfig, Verdict};
 use jawtrack_wire::{Ack, Key, Message, PosePacket, Security, Session, decode, encode_ack, unix_ms};
 use rand::{Rng, SeedableRng};
-use std::io::Write;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -182,10 +181,11 @@ pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
     }
     socket.set_read_timeout(Some(Duration::from_millis(100)))?;
     let mut header = RecordingHeader::new("jawtrack receive");
+    // A receiver records whatever sessions arrive; each frame carries its phone's.
+    header.session = None;
     header.key_id = key_id(&security);
     header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
-    let mut out = std::fs::File::create(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    write_line(&mut out, &header.to_line()).with_context(|| format!("writing {}", a.out.display()))?;
+    let mut out = RecordingWriter::create(&a.out, header, Overwrite::Replace)?;
 
     let live = Arc::new(LiveState::new(&a.viewer, "live")?);
     let _server = match a.serve {
@@ -262,7 +262,7 @@ pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
         let now_ms = unix_ms();
         if let Verdict::Accept { .. } = link.check(&header, now_ms) {
             let record = packet.to_record(&header, now_ms as f64 / 1e3);
-            write_line(&mut out, &record.to_line()).with_context(|| format!("writing {}", a.out.display()))?;
+            out.append(&record)?;
             live.pose(&record, Some(header.seq));
         }
         // Acknowledge at most 10 times a second per phone: enough for a live link light.
@@ -298,14 +298,6 @@ pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
     }
     say!("{}", summary_json(&c, ack_seq, started.elapsed().as_secs_f64()));
     Ok(())
-}
-
-/// Writes a line in one call, so a killed process leaves at most that line cut short.
-fn write_line(out: &mut std::fs::File, line: &str) -> std::io::Result<()> {
-    let mut bytes = Vec::with_capacity(line.len() + 1);
-    bytes.extend_from_slice(line.as_bytes());
-    bytes.push(b'\n');
-    out.write_all(&bytes)
 }
 
 /// Arguments of `jawtrack send`.
@@ -350,9 +342,7 @@ pub(crate) fn send(a: &SendArgs) -> Result<()> {
     if !(a.rate.is_finite() && a.rate > 0.0) {
         bail!("--rate must be a positive number of datagrams per second, got {}", a.rate);
     }
-    let file = std::fs::File::open(&a.replay).with_context(|| format!("opening {}", a.replay.display()))?;
-    let recording =
-        read_recording(std::io::BufReader::new(file)).with_context(|| format!("reading {}", a.replay.display()))?;
+    let recording = jawtrack_recording::open(&a.replay)?;
     for (line, why) in &recording.skipped {
         eprintln!("warning: {} line {line} skipped: {why}", a.replay.display());
     }

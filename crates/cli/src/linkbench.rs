@@ -12,7 +12,6 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_pose::Pose;
-use jawtrack_tracker::record::read_recording;
 use jawtrack_wire::{BodyPose, Key, PosePacket, Security, Session, encode_pose, unix_ms};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -142,7 +141,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     let soak = receiver.finish()?;
-    let recorded = read_recording(BufReader::new(std::fs::File::open(&soak_file)?))?;
+    let recorded = jawtrack_recording::open(&soak_file)?;
     // Over the soak itself: the receiver's idle second before it exits adds no CPU time.
     let cpu_share = soak["cpu_s"].as_f64().map(|c| c / duration);
     let soak_ok = soak["accepted"].as_u64() == Some(total)

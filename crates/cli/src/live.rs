@@ -17,7 +17,7 @@ use axum::routing::get;
 use clap::Args;
 use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
 use jawtrack_pose::Pose;
-use jawtrack_tracker::record::FrameRecord;
+use jawtrack_recording::FrameRecord;
 use jawtrack_tracker::registration::mean_pose;
 use jawtrack_wire::link::Counters;
 use serde_json::{Value, json};
@@ -121,7 +121,7 @@ impl LiveState {
     }
 
     fn frame_message(&self, f: &FrameRecord, seq: Option<u64>, rest: Option<&Pose>) -> Value {
-        let tags = |b: &Option<jawtrack_tracker::record::BodyRecord>| b.as_ref().map_or(0, |b| b.tags.len());
+        let tags = |b: &Option<jawtrack_recording::BodyRecord>| b.as_ref().map_or(0, |b| b.tags.len());
         let (incisor, [opening, lateral, protrusive]) = match &f.maxilla_from_mandible {
             Some(m) => self.readouts(m, rest),
             None => (Value::Null, [None; 3]),
@@ -337,9 +337,7 @@ pub(crate) struct ViewArgs {
 }
 
 pub(crate) fn view(a: &ViewArgs) -> Result<()> {
-    let file = std::fs::File::open(&a.recording).with_context(|| format!("opening {}", a.recording.display()))?;
-    let rec = jawtrack_tracker::record::read_recording(std::io::BufReader::new(file))
-        .with_context(|| format!("reading {}", a.recording.display()))?;
+    let rec = jawtrack_recording::open(&a.recording)?;
     for (line, why) in &rec.skipped {
         eprintln!("warning: {} line {line} skipped: {why}", a.recording.display());
     }
@@ -377,6 +375,7 @@ mod tests {
         let m = Pose::from_axis_angle(Vector3::new(opening_rad, 0.0, 0.0), Vector3::new(0.0, 44.0, 0.0));
         FrameRecord {
             frame: 0,
+            session: None,
             path: None,
             t: 0.0,
             maxilla: None,

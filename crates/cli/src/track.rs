@@ -1,7 +1,7 @@
 //! `jawtrack track`: tracks recorded frames (image files, folders of them sorted by name, or a
-//! video decoded by ffmpeg) and writes one JSON line per frame in the tracker's recording
-//! schema (`jawtrack_tracker::record`), after a header line naming the camera, marker and settings. Every line is flushed as it is written, so a killed
-//! run leaves a readable file.
+//! video decoded by ffmpeg) and writes one JSON line per frame in the recording schema
+//! (`jawtrack_recording`), after a header line naming the camera, marker and settings. Every
+//! line is flushed as it is written, so a killed run leaves a readable file.
 
 use crate::frames::open_frames;
 use anyhow::{Context, Result, bail};
@@ -9,7 +9,7 @@ use clap::Args;
 use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_tracker::record::{RecordingHeader, frame_record};
+use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter, create_file};
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -90,10 +90,10 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     };
     let mut tracker = Tracker::new(marker, config)?;
     tracker.set_registration(registration);
-    let mut out: Box<dyn Write> = if a.out.as_os_str() == "-" {
+    let out: Box<dyn Write> = if a.out.as_os_str() == "-" {
         Box::new(std::io::stdout())
     } else {
-        Box::new(std::fs::File::create(&a.out).with_context(|| format!("creating {}", a.out.display()))?)
+        Box::new(create_file(&a.out, Overwrite::Replace)?)
     };
     let mut header = RecordingHeader::new("jawtrack track");
     header.intrinsics = Some(a.intrinsics);
@@ -102,7 +102,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
         "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
     });
-    writeln!(out, "{}", header.to_line()).and_then(|()| out.flush()).context("writing the poses")?;
+    let mut out = RecordingWriter::new(out, header, &a.out.display().to_string())?;
     let bar = progress_bar(source.len());
     let mut summary = Summary::default();
     let mut index = 0;
@@ -111,8 +111,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             ImageView::new(&frame.luma, frame.width, frame.height, frame.width).with_context(|| frame.name.clone())?;
         let r = tracker.track(&view, &a.intrinsics, frame.t).with_context(|| frame.name.clone())?;
         summary.add(&r);
-        let line = frame_record(index, Some(&frame.name), &r);
-        writeln!(out, "{line}").and_then(|()| out.flush()).context("writing the poses")?;
+        out.append(&r.to_record(index, Some(&frame.name)))?;
         bar.inc(1);
         index += 1;
     }

@@ -175,7 +175,7 @@ fn moving_the_sphere_away_gives_decreasing_contact_then_none_and_frames_without_
     let upper = upper_stl(dir.path(), 100);
     let lower = lower_obj(dir.path(), 0.2, 60);
     let poses = dir.path().join("session.jsonl");
-    let header = jawtrack_tracker::record::RecordingHeader::new("contacts test").to_line();
+    let header = jawtrack_recording::RecordingHeader::new("contacts test").to_line();
     let steps = [(0.0, Some(0.0)), (0.1, None), (0.2, Some(-0.1)), (0.3, Some(-0.2)), (0.4, None), (0.5, Some(-0.25))];
     let mut text = vec![header];
     text.extend(steps.iter().enumerate().map(|(k, (t, dz))| frame(k as u64, *t, *dz)));

@@ -4,7 +4,7 @@
 //! read back.
 
 use jawtrack_pose::Pose;
-use jawtrack_tracker::record::read_recording;
+use jawtrack_recording::read_recording;
 use jawtrack_wire::{Key, PosePacket, Security, Session, encode_pose, unix_ms};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};

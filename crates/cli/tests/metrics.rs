@@ -42,7 +42,7 @@ fn session(dir: &Path, point_on_mandible_head: Vector3<f64>) -> Session {
         JawMotion::Glide { direction: Glide::Right, amplitude_mm: 5.0, start_s: 4.0, period_s: 2.0 },
         JawMotion::Glide { direction: Glide::Protrusive, amplitude_mm: PROTRUSION_MM, start_s: 6.0, period_s: 2.0 },
     ];
-    let header = jawtrack_tracker::record::RecordingHeader::new("metrics test").to_line();
+    let header = jawtrack_recording::RecordingHeader::new("metrics test").to_line();
     let mut lines = vec![header];
     let (mut truth, mut lost, mut frame) = (Vec::new(), 0, 0u64);
     let no_pose = |frame: u64, t: f64| {

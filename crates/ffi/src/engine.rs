@@ -7,7 +7,7 @@ use crate::{Intrinsics, JawTrackError, Settings, invalid};
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
-use jawtrack_tracker::record::{BodyRecord, FrameRecord, TimingsRecord};
+use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use jawtrack_tracker::{BodyResult, Flag, Tracker};
 use nalgebra::{Point3, Vector3};
 use std::collections::VecDeque;
@@ -280,6 +280,7 @@ pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
     };
     Ok(FrameRecord {
         frame: r.frame,
+        session: None,
         path: None,
         t: r.t,
         maxilla: body(&r.maxilla, "camera_from_maxilla")?,

@@ -31,9 +31,8 @@ use engine::{Engine, record_of};
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_tracker::record::RecordingHeader;
+use jawtrack_recording::{Overwrite, RecordingError, RecordingHeader, RecordingWriter};
 use jawtrack_wire::{Key, PosePacket, Security, Session};
-use std::io::Write;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 uniffi::setup_scaffolding!("jawtrack");
@@ -59,6 +58,15 @@ pub enum JawTrackError {
         /// Why it was refused.
         message: String,
     },
+}
+
+impl From<RecordingError> for JawTrackError {
+    fn from(e: RecordingError) -> Self {
+        match e {
+            RecordingError::Io { .. } => JawTrackError::Io { message: e.to_string() },
+            RecordingError::Exists { .. } | RecordingError::Header(_) => invalid(e.to_string()),
+        }
+    }
 }
 
 pub(crate) fn invalid(message: impl Into<String>) -> JawTrackError {
@@ -198,14 +206,14 @@ pub struct RecordingInfo {
 /// readable recording.
 #[derive(uniffi::Object)]
 pub struct Recorder {
-    file: Mutex<Option<std::fs::File>>,
+    writer: Mutex<Option<RecordingWriter<std::fs::File>>>,
     frames: Mutex<u64>,
     path: String,
 }
 
 #[uniffi::export]
 impl Recorder {
-    /// Creates (or truncates) `path` and writes the header.
+    /// Creates (or truncates) `path` and writes the header, which starts a new session.
     #[uniffi::constructor]
     pub fn open(path: String, info: RecordingInfo) -> Result<Arc<Self>, JawTrackError> {
         let mut header = RecordingHeader::new("JawTrack iOS");
@@ -220,19 +228,17 @@ impl Recorder {
             None => serde_json::Value::Null,
         };
         header.key_id = info.key_id;
-        let mut file =
-            std::fs::File::create(&path).map_err(|e| JawTrackError::Io { message: format!("{path}: {e}") })?;
-        write_line(&mut file, &header.to_line(), &path)?;
-        Ok(Arc::new(Recorder { file: Mutex::new(Some(file)), frames: Mutex::new(0), path }))
+        let writer = RecordingWriter::create(std::path::Path::new(&path), header, Overwrite::Replace)?;
+        Ok(Arc::new(Recorder { writer: Mutex::new(Some(writer)), frames: Mutex::new(0), path }))
     }
 
     /// Appends a frame.
     pub fn append(&self, result: FrameResult) -> Result<(), JawTrackError> {
-        let line = record_of(&result)?.to_line();
-        let mut file = lock(&self.file);
-        let f = file.as_mut().ok_or_else(|| invalid(format!("{}: the recording is closed", self.path)))?;
-        write_line(f, &line, &self.path)?;
-        *lock(&self.frames) += 1;
+        let record = record_of(&result)?;
+        let mut writer = lock(&self.writer);
+        let w = writer.as_mut().ok_or_else(|| invalid(format!("{}: the recording is closed", self.path)))?;
+        w.append(&record)?;
+        *lock(&self.frames) = w.frames_written();
         Ok(())
     }
 
@@ -243,19 +249,11 @@ impl Recorder {
 
     /// Syncs the file to storage and closes it; later appends are refused.
     pub fn close(&self) -> Result<(), JawTrackError> {
-        if let Some(f) = lock(&self.file).take() {
-            f.sync_all().map_err(|e| JawTrackError::Io { message: format!("{}: {e}", self.path) })?;
+        if let Some(w) = lock(&self.writer).take() {
+            w.sync()?;
         }
         Ok(())
     }
-}
-
-/// One `write` per line: a killed process leaves at most that line cut short.
-fn write_line(f: &mut std::fs::File, line: &str, path: &str) -> Result<(), JawTrackError> {
-    let mut bytes = Vec::with_capacity(line.len() + 1);
-    bytes.extend_from_slice(line.as_bytes());
-    bytes.push(b'\n');
-    f.write_all(&bytes).map_err(|e| JawTrackError::Io { message: format!("{path}: {e}") })
 }
 
 /// The receiver's acknowledgement, as the app shows it.

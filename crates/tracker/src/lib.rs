@@ -17,17 +17,18 @@
 //! frame; a frame without tags is a result with flags, not an error, and a pose that is not
 //! finite is never returned.
 
-pub mod record;
 pub mod registration;
 pub mod roi;
 pub mod smoothing;
 
+pub use jawtrack_recording::Flag;
 pub use registration::{IntercuspationCalibration, Registration, RegistrationError, calibrate_intercuspation};
 pub use smoothing::{Smoother, SmootherConfig};
 
 use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{BodyPose, CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
+use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use nalgebra::{Matrix6, Point2, Point3};
 use roi::Timed;
 use std::time::Instant;
@@ -81,37 +82,6 @@ impl Default for TrackerConfig {
             flicker_px: 2.0,
             prior_max_age_s: 0.5,
             smoother: None,
-        }
-    }
-}
-
-/// Something to know about a frame's result.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Flag {
-    /// No tag of the marker was found.
-    NoTags,
-    /// A body has no tag in view (or too few points): no pose.
-    Lost(BodyKind),
-    /// A body is seen through a single tag: its pose rests on four points.
-    SingleTag(BodyKind),
-    /// A body's single-tag pose has a mirror solution and nothing to choose by.
-    Ambiguous(BodyKind),
-    /// A body's reprojection error is above `max_rms_px`.
-    HighReprojectionError(BodyKind),
-    /// Some of a body's tags disagreed with the rest and were dropped.
-    RejectedTags(BodyKind),
-}
-
-impl Flag {
-    /// A short machine-readable name, e.g. `mandible:lost`.
-    pub fn name(&self) -> String {
-        match self {
-            Flag::NoTags => "no_tags".into(),
-            Flag::Lost(b) => format!("{b}:lost"),
-            Flag::SingleTag(b) => format!("{b}:single_tag"),
-            Flag::Ambiguous(b) => format!("{b}:ambiguous"),
-            Flag::HighReprojectionError(b) => format!("{b}:high_reprojection_error"),
-            Flag::RejectedTags(b) => format!("{b}:rejected_tags"),
         }
     }
 }
@@ -171,6 +141,33 @@ impl FrameResult {
         match kind {
             BodyKind::Maxilla => self.maxilla.as_ref(),
             BodyKind::Mandible => self.mandible.as_ref(),
+        }
+    }
+
+    /// The frame's line in a recording ([`jawtrack_recording`]): frame `index` of its source,
+    /// read from `path` if it came from a file. The writer stamps the session.
+    pub fn to_record(&self, index: usize, path: Option<&str>) -> FrameRecord {
+        let body = |b: &BodyResult| BodyRecord {
+            camera_from_body: b.camera_from_body,
+            tags: b.tags.clone(),
+            rejected_tags: b.rejected_tags.clone(),
+            rms_px: b.rms_px,
+            cov: Some(b.covariance.transpose().iter().copied().collect()),
+        };
+        FrameRecord {
+            frame: index as u64,
+            session: None,
+            path: path.map(str::to_owned),
+            t: self.t,
+            maxilla: self.maxilla.as_ref().map(body),
+            mandible: self.mandible.as_ref().map(body),
+            maxilla_from_mandible: self.maxilla_from_mandible,
+            maxilla_scan_from_mandible_scan: self.maxilla_scan_from_mandible_scan,
+            flags: self.flags.iter().map(Flag::name).collect(),
+            searched: self.searched.map(|s| [s.x, s.y, s.width, s.height]),
+            timings_s: Some(TimingsRecord { detection: self.timings.detection_s, pose: self.timings.pose_s }),
+            seq: None,
+            received_unix_s: None,
         }
     }
 }
@@ -611,4 +608,45 @@ fn tag_rms(observations: &[Observation], ids: &[u32], camera_from_body: &Pose, c
         n += 1;
     }
     if n == 0 { 0.0 } else { (sum / n as f64).sqrt() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn a_record_carries_every_field_in_row_major_order() {
+        let pose = Pose::from_axis_angle(Vector3::new(0.0, 0.1, 0.0), Vector3::new(1.0, 2.0, 100.0));
+        let mut cov = Matrix6::zeros();
+        cov[(0, 1)] = 7.0;
+        let r = FrameResult {
+            t: 0.5,
+            maxilla: Some(BodyResult {
+                camera_from_body: pose,
+                tags: vec![0, 1],
+                rejected_tags: vec![5],
+                rms_px: 0.3,
+                covariance: cov,
+            }),
+            mandible: None,
+            maxilla_from_mandible: None,
+            maxilla_scan_from_mandible_scan: None,
+            flags: vec![Flag::Lost(BodyKind::Mandible)],
+            detections: Vec::new(),
+            searched: None,
+            timings: Timings { detection_s: 0.004, pose_s: 0.0001 },
+        };
+        let v: serde_json::Value = serde_json::from_str(&r.to_record(3, Some("f.png")).to_line()).expect("JSON");
+        assert_eq!(v["frame"], 3);
+        assert_eq!(v["path"], "f.png");
+        assert_eq!(v["maxilla"]["camera_from_body"][3], 1.0);
+        assert_eq!(v["maxilla"]["camera_from_body"][11], 100.0);
+        assert_eq!(v["maxilla"]["cov"][1], 7.0, "row-major: (0, 1) is the second number");
+        assert_eq!(v["maxilla"]["rejected_tags"][0], 5);
+        assert!(v["mandible"].is_null() && v["maxilla_from_mandible"].is_null());
+        assert!(v.get("maxilla_scan_from_mandible_scan").is_none());
+        assert_eq!(v["flags"][0], "mandible:lost");
+        assert_eq!(v["timings_s"]["detection"], 0.004);
+    }
 }

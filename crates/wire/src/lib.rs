@@ -17,7 +17,7 @@ pub mod link;
 use chacha20poly1305::aead::{Aead, KeyInit, Payload};
 use chacha20poly1305::{XChaCha20Poly1305, XNonce};
 use jawtrack_pose::Pose;
-use jawtrack_tracker::record::{BodyRecord, FrameRecord};
+use jawtrack_recording::{BodyRecord, Flag, FrameRecord, SessionId};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use sha2::{Digest, Sha256};
 
@@ -35,22 +35,6 @@ pub const POSE_BODY_LEN: usize = 216;
 pub const ACK_BODY_LEN: usize = 40;
 /// The longest datagram of this version (a sealed pose).
 pub const MAX_DATAGRAM_LEN: usize = HEADER_LEN + POSE_BODY_LEN + TAG_LEN;
-
-/// The quality flags a pose datagram carries, bit `i` for the `i`-th name. Names not listed
-/// here (from a newer tracker) are not sent.
-pub const FLAG_BITS: [&str; 11] = [
-    "no_tags",
-    "maxilla:lost",
-    "mandible:lost",
-    "maxilla:single_tag",
-    "mandible:single_tag",
-    "maxilla:ambiguous",
-    "mandible:ambiguous",
-    "maxilla:high_reprojection_error",
-    "mandible:high_reprojection_error",
-    "maxilla:rejected_tags",
-    "mandible:rejected_tags",
-];
 
 /// Why a datagram was not accepted. Every variant is a rejection the receiver counts by name.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -253,7 +237,8 @@ pub struct PosePacket {
     pub mandible: Option<BodyPose>,
     /// The mandible marker in the maxilla marker's frame.
     pub maxilla_from_mandible: Option<Pose>,
-    /// Quality flags, bit `i` for [`FLAG_BITS`]`[i]`.
+    /// Quality flags, bit `i` for [`Flag::ALL`]`[i]` (names this build does not know are not
+    /// sent).
     pub flags: u32,
 }
 
@@ -293,8 +278,11 @@ impl PosePacket {
             tag_count: b.tags.len().min(255) as u8,
             rms_px: b.rms_px as f32,
         };
-        let flags =
-            r.flags.iter().filter_map(|name| FLAG_BITS.iter().position(|b| b == name)).fold(0, |m, i| m | 1 << i);
+        let flags = r
+            .flags
+            .iter()
+            .filter_map(|name| Flag::from_name(name).and_then(|f| Flag::ALL.iter().position(|&b| b == f)))
+            .fold(0, |m, i| m | 1 << i);
         PosePacket {
             t: r.t,
             frame: r.frame,
@@ -317,17 +305,18 @@ impl PosePacket {
         };
         FrameRecord {
             frame: self.frame,
+            session: Some(SessionId(header.session)),
             path: None,
             t: self.t,
             maxilla: self.maxilla.as_ref().map(body),
             mandible: self.mandible.as_ref().map(body),
             maxilla_from_mandible: self.maxilla_from_mandible,
             maxilla_scan_from_mandible_scan: None,
-            flags: FLAG_BITS
+            flags: Flag::ALL
                 .iter()
                 .enumerate()
                 .filter(|(i, _)| self.flags & (1 << i) != 0)
-                .map(|(_, n)| (*n).into())
+                .map(|(_, f)| f.name())
                 .collect(),
             searched: None,
             timings_s: None,
@@ -498,7 +487,7 @@ fn read_pose_body(b: &[u8]) -> Result<PosePacket, WireError> {
     if present & !(HAS_MAXILLA | HAS_MANDIBLE | HAS_RELATIVE) != 0 {
         return Err(WireError::Malformed(format!("unknown presence bits {present:#x}")));
     }
-    if flags >> FLAG_BITS.len() != 0 {
+    if flags >> Flag::ALL.len() != 0 {
         return Err(WireError::Malformed(format!("unknown flag bits {flags:#x}")));
     }
     let pose_at = |slot: usize, what: &str| -> Result<Pose, WireError> {
@@ -680,6 +669,7 @@ mod tests {
         assert_eq!(r.maxilla.as_ref().map(|b| b.tags.clone()), Some(vec![0, 1, 3]));
         assert_eq!(r.flags, vec!["no_tags", "maxilla:single_tag"]);
         assert_eq!(r.seq, Some(4));
+        assert_eq!(r.session, Some(SessionId(1)), "the frame keeps the sender's session");
         assert_eq!(PosePacket::from_record(&r), p);
     }
 

@@ -1,0 +1,86 @@
+//! Quality flags and their names: the one place a flag is named, for the tracker that raises
+//! it, the recording that stores it and the datagram that carries it as a bit.
+
+use jawtrack_marker::BodyKind;
+
+/// Something to know about a frame's result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flag {
+    /// No tag of the marker was found.
+    NoTags,
+    /// A body has no tag in view (or too few points): no pose.
+    Lost(BodyKind),
+    /// A body is seen through a single tag: its pose rests on four points.
+    SingleTag(BodyKind),
+    /// A body's single-tag pose has a mirror solution and nothing to choose by.
+    Ambiguous(BodyKind),
+    /// A body's reprojection error is above the tracker's `max_rms_px`.
+    HighReprojectionError(BodyKind),
+    /// Some of a body's tags disagreed with the rest and were dropped.
+    RejectedTags(BodyKind),
+}
+
+impl Flag {
+    /// Every flag, in the order of their datagram bits (`docs/wire.md`): a flag added later
+    /// goes at the end.
+    pub const ALL: [Flag; 11] = [
+        Flag::NoTags,
+        Flag::Lost(BodyKind::Maxilla),
+        Flag::Lost(BodyKind::Mandible),
+        Flag::SingleTag(BodyKind::Maxilla),
+        Flag::SingleTag(BodyKind::Mandible),
+        Flag::Ambiguous(BodyKind::Maxilla),
+        Flag::Ambiguous(BodyKind::Mandible),
+        Flag::HighReprojectionError(BodyKind::Maxilla),
+        Flag::HighReprojectionError(BodyKind::Mandible),
+        Flag::RejectedTags(BodyKind::Maxilla),
+        Flag::RejectedTags(BodyKind::Mandible),
+    ];
+
+    /// A short machine-readable name, e.g. `mandible:lost`.
+    pub fn name(&self) -> String {
+        match self {
+            Flag::NoTags => "no_tags".into(),
+            Flag::Lost(b) => format!("{b}:lost"),
+            Flag::SingleTag(b) => format!("{b}:single_tag"),
+            Flag::Ambiguous(b) => format!("{b}:ambiguous"),
+            Flag::HighReprojectionError(b) => format!("{b}:high_reprojection_error"),
+            Flag::RejectedTags(b) => format!("{b}:rejected_tags"),
+        }
+    }
+
+    /// The flag of a name, or `None` for a name this build does not know (from a newer writer).
+    pub fn from_name(name: &str) -> Option<Flag> {
+        Flag::ALL.into_iter().find(|f| f.name() == name)
+    }
+}
+
+impl std::fmt::Display for Flag {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_is_unique_and_reads_back() {
+        for f in Flag::ALL {
+            assert_eq!(Flag::from_name(&f.name()), Some(f), "{f}");
+        }
+        let mut names: Vec<String> = Flag::ALL.iter().map(Flag::name).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), Flag::ALL.len());
+        assert_eq!(Flag::from_name("maxilla:from_the_future"), None);
+    }
+
+    #[test]
+    fn names_are_the_recorded_ones() {
+        assert_eq!(Flag::NoTags.name(), "no_tags");
+        assert_eq!(Flag::Lost(BodyKind::Mandible).name(), "mandible:lost");
+        assert_eq!(Flag::HighReprojectionError(BodyKind::Maxilla).name(), "maxilla:high_reprojection_error");
+    }
+}

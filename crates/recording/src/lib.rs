@@ -1,0 +1,68 @@
+//! The recording schema, its one writer and its one reader: how a tracked session is stored.
+//! `jawtrack track`, the receiver, the demo and the phone app all write through
+//! [`RecordingWriter`]; every command that reads a session reads through [`read_recording`] or
+//! [`open`].
+//!
+//! A recording is a JSON Lines file. The first line is a header,
+//! `{"recording": {"format": "jawtrack-recording", "version": 1, "source", "session", "device",
+//! "intrinsics", "marker", "settings", "key_id", "created_unix_s"}}` ([`RecordingHeader`]).
+//! Every later line is one frame ([`FrameRecord`]):
+//!
+//! ```text
+//! {"frame": i, "session": "16 hex digits", "path": "…" | null, "t": seconds,
+//!  "maxilla":  {"camera_from_body": M, "tags": [ids], "rejected_tags": [ids], "rms_px": …,
+//!               "cov": [36 numbers]} | null,
+//!  "mandible": {…} | null,
+//!  "maxilla_from_mandible": M | null,
+//!  "maxilla_scan_from_mandible_scan": M | null,   (only with a registration)
+//!  "flags": ["mandible:single_tag", …],
+//!  "searched": [x, y, width, height] | null,       (null: the whole frame)
+//!  "timings_s": {"detection": …, "pose": …}}
+//! ```
+//!
+//! Frames received over the link carry `"seq"` and `"received_unix_s"` and no `cov` or
+//! `timings_s`. Files written before session ids have none on their frames.
+//!
+//! Every `M` is a 4×4 row-major matrix in mm; `cov` is the 6×6 covariance of (rotation vector
+//! [rad], translation [mm]), row-major. No value is ever NaN: the tracker never returns a pose
+//! that is not finite, and JSON cannot carry one.
+
+mod flag;
+mod read;
+mod schema;
+mod write;
+
+pub use flag::Flag;
+pub use read::{Recording, open, read_recording};
+pub use schema::{
+    BodyRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader, SessionId, TimingsRecord,
+};
+pub use write::{Overwrite, RecordingWriter, create_file};
+
+/// Why a recording could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    /// Reading or writing the file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file, as given.
+        path: String,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The output exists and the writer was told not to replace it.
+    #[error("{path} already exists: give another name, or say that it may be replaced")]
+    Exists {
+        /// The file, as given.
+        path: String,
+    },
+    /// The header names another format or a version this build does not read.
+    #[error("line 1: {0}")]
+    Header(String),
+}
+
+impl RecordingError {
+    pub(crate) fn io(path: &str) -> impl FnOnce(std::io::Error) -> RecordingError + '_ {
+        move |source| RecordingError::Io { path: path.to_owned(), source }
+    }
+}

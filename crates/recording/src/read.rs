@@ -1,0 +1,172 @@
+//! The one reader of recordings: every line that is a frame, and for every other line where
+//! and why it was skipped.
+
+use crate::{FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingError, RecordingHeader, SessionId};
+use serde_json::Value;
+use std::io::BufRead;
+use std::path::Path;
+
+/// A recording read back.
+#[derive(Debug, Clone, Default)]
+pub struct Recording {
+    /// The header line, if the file has one (files from before headers have none).
+    pub header: Option<RecordingHeader>,
+    /// The frames, in file order.
+    pub frames: Vec<FrameRecord>,
+    /// Lines that were not frames: (1-based line number, why). A last line cut short by a
+    /// killed writer shows up here.
+    pub skipped: Vec<(usize, String)>,
+}
+
+impl Recording {
+    /// The sessions the frames belong to, in order of first appearance (files written before
+    /// session ids give none).
+    pub fn sessions(&self) -> Vec<SessionId> {
+        let mut seen = Vec::new();
+        for s in self.frames.iter().filter_map(|f| f.session) {
+            if !seen.contains(&s) {
+                seen.push(s);
+            }
+        }
+        seen
+    }
+
+    /// Puts the frames in capture order: by sequence number where the link gave one (datagrams
+    /// may arrive reordered), else by frame index.
+    pub fn sort_by_capture(&mut self) {
+        self.frames.sort_by_key(|f| (f.seq.unwrap_or(f.frame), f.frame));
+    }
+}
+
+/// Reads a recording. Lines that are not frames are collected in [`Recording::skipped`] (so a
+/// file cut off mid-line by a killed writer reads up to its last whole line); only a header
+/// this build cannot read is an error.
+pub fn read_recording(reader: impl BufRead) -> Result<Recording, RecordingError> {
+    read_named(reader, "the recording")
+}
+
+/// Opens and reads the recording at `path` (see [`read_recording`]).
+pub fn open(path: &Path) -> Result<Recording, RecordingError> {
+    let name = path.display().to_string();
+    let file = std::fs::File::open(path).map_err(RecordingError::io(&name))?;
+    read_named(std::io::BufReader::new(file), &name)
+}
+
+fn read_named(reader: impl BufRead, name: &str) -> Result<Recording, RecordingError> {
+    let mut rec = Recording::default();
+    for (i, line) in reader.lines().enumerate() {
+        let line = line.map_err(RecordingError::io(name))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let value: Value = match serde_json::from_str(&line) {
+            Ok(v) => v,
+            Err(e) => {
+                rec.skipped.push((i + 1, format!("not JSON ({e})")));
+                continue;
+            }
+        };
+        if let Some(h) = value.get("recording") {
+            let h: RecordingHeader = serde_json::from_value(h.clone())
+                .map_err(|e| RecordingError::Header(format!("not a recording header: {e}")))?;
+            if h.format != RECORDING_FORMAT || h.version != RECORDING_VERSION {
+                return Err(RecordingError::Header(format!(
+                    "format {} version {} (this build reads {RECORDING_FORMAT} version {RECORDING_VERSION})",
+                    h.format, h.version
+                )));
+            }
+            rec.header = Some(h);
+            continue;
+        }
+        match serde_path_to_error::deserialize::<_, FrameRecord>(value) {
+            Ok(f) => rec.frames.push(f),
+            Err(e) => rec.skipped.push((i + 1, format!("not a frame: field `{}`: {}", e.path(), e.inner()))),
+        }
+    }
+    Ok(rec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::RecordingWriter;
+    use jawtrack_pose::Pose;
+    use nalgebra::Vector3;
+
+    fn frame(i: u64, pose: Option<Pose>) -> FrameRecord {
+        FrameRecord {
+            frame: i,
+            session: None,
+            path: None,
+            t: 0.25,
+            maxilla: None,
+            mandible: None,
+            maxilla_from_mandible: pose,
+            maxilla_scan_from_mandible_scan: None,
+            flags: vec![],
+            searched: None,
+            timings_s: None,
+            seq: None,
+            received_unix_s: None,
+        }
+    }
+
+    #[test]
+    fn a_recording_reads_back_up_to_a_line_cut_short() {
+        let pose = Pose::from_axis_angle(Vector3::new(0.1, 0.0, 0.0), Vector3::new(0.0, 40.0, 0.0));
+        let mut header = RecordingHeader::new("test");
+        header.key_id = Some("abcd".into());
+        let mut w = RecordingWriter::new(Vec::new(), header, "memory").expect("header");
+        let first = frame(0, Some(pose));
+        w.append(&first).expect("frame");
+        w.append(&first).expect("frame");
+        let whole = String::from_utf8(w.into_inner()).expect("utf-8");
+        // A writer killed mid-line leaves part of the last one.
+        let cut = &whole[..whole.len() - 20];
+        let rec = read_recording(cut.as_bytes()).expect("readable");
+        assert_eq!(rec.header.as_ref().and_then(|h| h.key_id.as_deref()), Some("abcd"));
+        assert_eq!(rec.frames.len(), 1);
+        let back = &rec.frames[0];
+        let (a, d) = back.maxilla_from_mandible.expect("pose").distance_to(&pose);
+        assert!(a < 1e-12 && d < 1e-12, "the pose survives the round trip: {a} rad, {d} mm");
+        assert_eq!((back.frame, back.t, &back.flags, back.timings_s), (0, 0.25, &first.flags, first.timings_s));
+        assert_eq!(rec.skipped.len(), 1);
+        assert_eq!(rec.skipped[0].0, 3);
+    }
+
+    #[test]
+    fn a_header_of_another_version_is_an_error_naming_it() {
+        let mut header = RecordingHeader::new("test");
+        header.version = 99;
+        let err = read_recording(header.to_line().as_bytes()).expect_err("refused");
+        assert!(err.to_string().contains("version 99"), "{err}");
+    }
+
+    #[test]
+    fn a_file_from_before_session_ids_still_reads() {
+        let old = r#"{"frame":4,"path":null,"t":0.1,"maxilla":null,"mandible":null,"maxilla_from_mandible":null}"#;
+        let rec = read_recording(old.as_bytes()).expect("readable");
+        assert_eq!(rec.frames.len(), 1);
+        assert_eq!(rec.frames[0].session, None);
+        assert!(rec.sessions().is_empty());
+    }
+
+    #[test]
+    fn a_missing_file_is_named() {
+        let err = open(Path::new("/nonexistent/session.jsonl")).expect_err("no such file");
+        assert!(err.to_string().contains("/nonexistent/session.jsonl"), "{err}");
+    }
+
+    #[test]
+    fn capture_order_follows_the_link_sequence() {
+        let mut rec = Recording {
+            frames: vec![
+                FrameRecord { seq: Some(2), ..frame(0, None) },
+                FrameRecord { seq: Some(1), ..frame(5, None) },
+            ],
+            ..Recording::default()
+        };
+        rec.sort_by_capture();
+        assert_eq!(rec.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![5, 0]);
+    }
+}

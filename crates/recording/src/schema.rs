@@ -1,0 +1,199 @@
+//! The header and frame lines of a recording, as types (the crate's doc shows the JSON).
+
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+/// The header's `format` value: what a reader checks before trusting the rest.
+pub const RECORDING_FORMAT: &str = "jawtrack-recording";
+/// The only header version this build writes and reads.
+pub const RECORDING_VERSION: u32 = 1;
+
+/// A capture session's id: a random 64-bit number, fresh for every session, written as 16 hex
+/// digits (JSON numbers above 2^53 would not survive a JavaScript reader). Frames of two
+/// sessions in one file are told apart by it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SessionId(pub u64);
+
+impl SessionId {
+    /// A fresh random id.
+    pub fn random() -> SessionId {
+        SessionId(rand::random())
+    }
+}
+
+impl std::fmt::Display for SessionId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:016x}", self.0)
+    }
+}
+
+impl std::str::FromStr for SessionId {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.len() != 16 {
+            return Err(format!("a session id has 16 hex digits, got {s:?}"));
+        }
+        u64::from_str_radix(s, 16).map(SessionId).map_err(|_| format!("a session id has 16 hex digits, got {s:?}"))
+    }
+}
+
+impl Serialize for SessionId {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for SessionId {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// The first line of a recording, `{"recording": {…}}`: where the frames came from. It never
+/// carries a key, only the key's id.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecordingHeader {
+    /// Always [`RECORDING_FORMAT`].
+    pub format: String,
+    /// Always [`RECORDING_VERSION`].
+    pub version: u32,
+    /// What wrote the file, e.g. `jawtrack track`, `jawtrack receive`, `JawTrack iOS`.
+    pub source: String,
+    /// The session the file records, when it records one (the writer stamps it on every
+    /// frame); `None` for a receiver's file, whose frames carry the sessions they came from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub session: Option<SessionId>,
+    /// The capturing device, when known (e.g. `iPhone15,2 back wide`).
+    #[serde(default)]
+    pub device: Option<String>,
+    /// The camera, when known.
+    #[serde(default)]
+    pub intrinsics: Option<CameraIntrinsics>,
+    /// The marker file's JSON, when known.
+    #[serde(default)]
+    pub marker: Option<Value>,
+    /// Settings of the writer (detector, search, smoothing, link), free-form.
+    #[serde(default)]
+    pub settings: Value,
+    /// The id of the pairing key packets were sealed with (`wire`'s key id), never the key.
+    #[serde(default)]
+    pub key_id: Option<String>,
+    /// Wall-clock time the file was started (s since the Unix epoch).
+    pub created_unix_s: f64,
+}
+
+impl RecordingHeader {
+    /// A header for `source`, started now, for one new session, with nothing else known.
+    pub fn new(source: &str) -> Self {
+        let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+        RecordingHeader {
+            format: RECORDING_FORMAT.into(),
+            version: RECORDING_VERSION,
+            source: source.into(),
+            session: Some(SessionId::random()),
+            device: None,
+            intrinsics: None,
+            marker: None,
+            settings: Value::Null,
+            key_id: None,
+            created_unix_s: now,
+        }
+    }
+
+    /// The header as its JSON line (without the newline).
+    pub fn to_line(&self) -> String {
+        serde_json::json!({ "recording": self }).to_string()
+    }
+}
+
+/// One body in a frame's record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BodyRecord {
+    /// Maps the body's marker frame into the camera frame.
+    pub camera_from_body: Pose,
+    /// Tags used, ascending.
+    pub tags: Vec<u32>,
+    /// Tags seen but dropped.
+    #[serde(default)]
+    pub rejected_tags: Vec<u32>,
+    /// RMS reprojection error (px).
+    pub rms_px: f64,
+    /// 6×6 covariance of (rotation vector [rad], translation [mm]), row-major; absent when the
+    /// frame came over the link (packets do not carry it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cov: Option<Vec<f64>>,
+}
+
+/// Time spent on a frame (s).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimingsRecord {
+    /// Tag detection.
+    pub detection: f64,
+    /// Pose estimation.
+    pub pose: f64,
+}
+
+/// One frame's line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameRecord {
+    /// The frame's index in its source.
+    pub frame: u64,
+    /// The session the frame belongs to; `None` only in files written before session ids.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub session: Option<SessionId>,
+    /// The image file the frame came from, if any.
+    #[serde(default)]
+    pub path: Option<String>,
+    /// Capture time (s).
+    pub t: f64,
+    /// The upper jaw's marker.
+    pub maxilla: Option<BodyRecord>,
+    /// The lower jaw's marker.
+    pub mandible: Option<BodyRecord>,
+    /// The mandible marker in the maxilla marker's frame.
+    pub maxilla_from_mandible: Option<Pose>,
+    /// The lower scan in the upper scan's frame (only with a registration).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub maxilla_scan_from_mandible_scan: Option<Pose>,
+    /// Quality flags by name ([`crate::Flag::name`]; a reader keeps names it does not know).
+    #[serde(default)]
+    pub flags: Vec<String>,
+    /// The region searched, `[x, y, width, height]`, or `None` for the whole frame.
+    #[serde(default)]
+    pub searched: Option<[usize; 4]>,
+    /// Time per stage, when measured here.
+    #[serde(default)]
+    pub timings_s: Option<TimingsRecord>,
+    /// The packet's sequence number, for frames received over the link.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seq: Option<u64>,
+    /// When the packet arrived (s since the Unix epoch), for frames received over the link.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub received_unix_s: Option<f64>,
+}
+
+impl FrameRecord {
+    /// The record as its JSON line (without the newline).
+    pub fn to_line(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| unreachable!("a frame record always serialises: {e}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_session_id_is_sixteen_hex_digits_both_ways() {
+        let id = SessionId(0x00ab_cdef_0123_4567);
+        assert_eq!(id.to_string(), "00abcdef01234567");
+        assert_eq!(serde_json::to_value(id).expect("serialises"), "00abcdef01234567");
+        assert_eq!("00abcdef01234567".parse::<SessionId>(), Ok(id));
+        let err = serde_json::from_value::<SessionId>(serde_json::json!("12")).expect_err("too short");
+        assert!(err.to_string().contains("16 hex digits"), "{err}");
+        assert!("zzzzzzzzzzzzzzzz".parse::<SessionId>().is_err());
+    }
+}
