@@ -20,7 +20,9 @@ struct AppError: Error, LocalizedError {
 func userText(_ error: Error) -> String {
     if let error = error as? JawTrackError {
         switch error {
-        case .InvalidArgument(let message), .Io(let message), .Link(let message):
+        case .InvalidSetting(_, let message), .InvalidFrame(let message), .InvalidIntrinsics(let message),
+             .InvalidMarker(let message), .InvalidKey(let message), .NotEnoughFrames(_, _, let message),
+             .InvalidArgument(let message), .Io(_, let message), .Link(let message):
             return message
         }
     }

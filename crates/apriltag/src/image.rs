@@ -88,10 +88,25 @@ impl<'a> ImageView<'a> {
 /// BT.601 weights in fixed point: Y = (29·B + 150·G + 77·R + 128) / 256. BGRA frames are
 /// converted once; the luma plane of an NV12 frame needs no conversion at all.
 pub fn luma_from_bgra(bgra: &[u8], width: usize, height: usize, stride: usize) -> Result<Vec<u8>, DetectError> {
+    let mut out = Vec::new();
+    luma_from_bgra_into(bgra, width, height, stride, &mut out)?;
+    Ok(out)
+}
+
+/// [`luma_from_bgra`] into `out` (cleared first), so a caller that converts every frame
+/// reuses one buffer.
+pub fn luma_from_bgra_into(
+    bgra: &[u8],
+    width: usize,
+    height: usize,
+    stride: usize,
+    out: &mut Vec<u8>,
+) -> Result<(), DetectError> {
     let row_bytes = width.checked_mul(4).ok_or_else(|| DetectError::BadImage(format!("width {width} overflows")))?;
     // Validate the layout as a view of bytes, 4 per pixel.
     ImageView::new(bgra, row_bytes, height, stride)?;
-    let mut out = Vec::with_capacity(width * height);
+    out.clear();
+    out.reserve(width * height);
     for y in 0..height {
         let row = &bgra[y * stride..y * stride + row_bytes];
         out.extend(
@@ -99,7 +114,7 @@ pub fn luma_from_bgra(bgra: &[u8], width: usize, height: usize, stride: usize) -
                 .map(|p| ((29 * u32::from(p[0]) + 150 * u32::from(p[1]) + 77 * u32::from(p[2]) + 128) >> 8) as u8),
         );
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -41,7 +41,7 @@ pub use decode::{CodeTable, Decoded};
 pub use detector::{Detection, Detector};
 pub use family::{Tag36h11, TagBitmap};
 pub use gray::Gray;
-pub use image::{ImageView, luma_from_bgra};
+pub use image::{ImageView, luma_from_bgra, luma_from_bgra_into};
 
 /// Why detection could not run.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

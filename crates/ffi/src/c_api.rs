@@ -11,8 +11,8 @@
 #![allow(unsafe_code)]
 
 use crate::engine::Engine;
-use crate::{Intrinsics, Settings, default_settings, lock};
-use jawtrack_apriltag::ImageView;
+use crate::{Intrinsics, JawTrackError, Settings, default_settings, lock};
+use jawtrack_apriltag::{ImageView, luma_from_bgra_into};
 use jawtrack_marker::Marker;
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -169,6 +169,13 @@ fn invalid(message: impl Into<String>) -> (JtStatus, String) {
     (JtStatus::InvalidArgument, message.into())
 }
 
+/// Every library error is a caller's argument that is wrong; its message says which.
+impl From<JawTrackError> for (JtStatus, String) {
+    fn from(e: JawTrackError) -> Self {
+        invalid(e.to_string())
+    }
+}
+
 /// The default settings (those of `jawtrack track`).
 #[unsafe(no_mangle)]
 pub extern "C" fn jt_settings_default() -> JtSettings {
@@ -220,9 +227,9 @@ pub unsafe extern "C" fn jt_tracker_new(
             let text = unsafe { CStr::from_ptr(marker_json) }
                 .to_str()
                 .map_err(|e| invalid(format!("marker_json is not UTF-8: {e}")))?;
-            Marker::from_json(text).map_err(|e| invalid(format!("marker file: {e}")))?
+            Marker::from_json(text).map_err(JawTrackError::from)?
         };
-        let engine = Engine::new(marker, settings).map_err(|e| invalid(e.to_string()))?;
+        let engine = Engine::new(marker, settings)?;
         let handle = register(Arc::new(Mutex::new(engine)));
         // SAFETY: checked non-null; the caller promises it is writable.
         unsafe { *handle_out = handle };
@@ -350,8 +357,8 @@ pub unsafe extern "C" fn jt_track_luma(
             // SAFETY: non-null and `buffer_len` readable bytes, as the caller promises.
             let data = std::slice::from_raw_parts(luma, buffer_len);
             let view = ImageView::new(data, width as usize, height as usize, bytes_per_row as usize)
-                .map_err(|e| invalid(e.to_string()))?;
-            engine.track(&view, intrinsics, t).map_err(|e| invalid(e.to_string()))
+                .map_err(JawTrackError::from)?;
+            Ok(engine.track(&view, intrinsics, t)?)
         })
     }
 }
@@ -384,19 +391,11 @@ pub unsafe extern "C" fn jt_track_bgra(
             let data = std::slice::from_raw_parts(bgra, buffer_len);
             let (w, h, stride) = (width as usize, height as usize, bytes_per_row as usize);
             let mut luma = std::mem::take(&mut engine.luma);
-            luma.clear();
-            luma.reserve(w * h);
-            for row in data.chunks(stride).take(h) {
-                // BT.601 luma of the sRGB values, as the 420f camera output encodes it.
-                luma.extend(
-                    row[..4 * w].chunks_exact(4).map(|p| {
-                        ((29 * u32::from(p[0]) + 150 * u32::from(p[1]) + 77 * u32::from(p[2]) + 128) >> 8) as u8
-                    }),
-                );
-            }
-            let result = ImageView::new(&luma, w, h, w)
-                .map_err(|e| invalid(e.to_string()))
-                .and_then(|view| engine.track(&view, intrinsics, t).map_err(|e| invalid(e.to_string())));
+            let result = luma_from_bgra_into(data, w, h, stride, &mut luma)
+                .and_then(|()| ImageView::new(&luma, w, h, w))
+                .map_err(JawTrackError::from)
+                .and_then(|view| engine.track(&view, intrinsics, t))
+                .map_err(Into::into);
             engine.luma = luma;
             result
         })

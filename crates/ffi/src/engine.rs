@@ -3,7 +3,8 @@
 //! recent jaw poses for the intercuspation step, and converts results back into the recording
 //! schema for the recorder and the link.
 
-use crate::{Intrinsics, JawTrackError, Settings, invalid};
+use crate::error::invalid;
+use crate::{Intrinsics, JawTrackError, Settings};
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
@@ -126,7 +127,7 @@ fn kind_name(kind: BodyKind) -> String {
 
 impl Engine {
     pub(crate) fn new(marker: Marker, settings: Settings) -> Result<Self, JawTrackError> {
-        let tracker = Tracker::new(marker, settings.tracker_config()?).map_err(|e| invalid(e.to_string()))?;
+        let tracker = Tracker::new(marker, settings.tracker_config()?)?;
         Ok(Engine {
             tracker,
             settings,
@@ -140,8 +141,7 @@ impl Engine {
 
     pub(crate) fn update_settings(&mut self, settings: Settings) -> Result<(), JawTrackError> {
         let registration = self.tracker.registration().copied();
-        let mut tracker = Tracker::new(self.tracker.marker().clone(), settings.tracker_config()?)
-            .map_err(|e| invalid(e.to_string()))?;
+        let mut tracker = Tracker::new(self.tracker.marker().clone(), settings.tracker_config()?)?;
         tracker.set_registration(registration);
         self.tracker = tracker;
         self.settings = settings;
@@ -168,10 +168,10 @@ impl Engine {
         t: f64,
     ) -> Result<FrameResult, JawTrackError> {
         if !t.is_finite() {
-            return Err(invalid(format!("frame time {t} is not a number")));
+            return Err(JawTrackError::frame(format!("frame time {t} is not a number")));
         }
         let camera = intrinsics.camera()?;
-        let r = self.tracker.track(view, &camera, t).map_err(|e| invalid(e.to_string()))?;
+        let r = self.tracker.track(view, &camera, t)?;
         if let Some(m) = r.maxilla_from_mandible {
             self.recent.push_back(m);
             if self.recent.len() > INTERCUSPATION_FRAMES {
@@ -242,12 +242,9 @@ impl Engine {
     pub(crate) fn calibrate_intercuspation(&mut self) -> Result<IntercuspationResult, JawTrackError> {
         let recent: Vec<Pose> = self.recent.iter().copied().collect();
         if recent.len() < 3 {
-            return Err(invalid(format!(
-                "the intercuspation step needs at least 3 recent frames with both jaws tracked, have {}",
-                recent.len()
-            )));
+            return Err(JawTrackError::not_enough_frames(3, recent.len()));
         }
-        let cal = self.tracker.calibrate_intercuspation(&recent).map_err(|e| invalid(e.to_string()))?;
+        let cal = self.tracker.calibrate_intercuspation(&recent)?;
         Ok(IntercuspationResult {
             frames: cal.samples as u32,
             translation_mm: cal.translation_mm,
@@ -260,7 +257,7 @@ impl Engine {
 fn pose_of(m: &[f64], what: &str) -> Result<Pose, JawTrackError> {
     let m: [f64; 16] =
         m.try_into().map_err(|_| invalid(format!("{what}: a 4×4 matrix has 16 numbers, got {}", m.len())))?;
-    Pose::from_row_major(&m, what).map_err(|e| invalid(e.to_string()))
+    Ok(Pose::from_row_major(&m, what)?)
 }
 
 /// A result as a line of the recording schema.
@@ -316,12 +313,16 @@ pub fn intrinsics_from_camera_matrix(
     height: u32,
 ) -> Result<Intrinsics, JawTrackError> {
     if matrix.len() != 9 {
-        return Err(invalid(format!("the intrinsic matrix has 9 numbers, got {}", matrix.len())));
+        return Err(JawTrackError::InvalidIntrinsics {
+            message: format!("the intrinsic matrix has 9 numbers, got {}", matrix.len()),
+        });
     }
     if reference_width == 0 || reference_height == 0 || width == 0 || height == 0 {
-        return Err(invalid(format!(
-            "frame sizes must be positive: reference {reference_width}×{reference_height}, frame {width}×{height}"
-        )));
+        return Err(JawTrackError::InvalidIntrinsics {
+            message: format!(
+                "frame sizes must be positive: reference {reference_width}×{reference_height}, frame {width}×{height}"
+            ),
+        });
     }
     let (sx, sy) = (f64::from(width) / f64::from(reference_width), f64::from(height) / f64::from(reference_height));
     let m = |i: usize| f64::from(matrix[i]);

@@ -17,61 +17,28 @@
 
 pub mod c_api;
 mod engine;
+mod error;
 mod settings;
 
 pub use engine::{
     AxisOverlay, BodyPose, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
 };
+pub use error::JawTrackError;
 pub use settings::{
     AppSettings, Camera, FocusMode, Resolution, Settings, default_app_settings, default_settings,
     validate_app_settings, validate_settings,
 };
 
 use engine::{Engine, record_of};
+use error::invalid;
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_recording::{Overwrite, RecordingError, RecordingHeader, RecordingWriter};
+use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_wire::{Key, PosePacket, Security, Session};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 uniffi::setup_scaffolding!("jawtrack");
-
-/// What went wrong, as the app sees it.
-#[derive(Debug, Clone, PartialEq, thiserror::Error, uniffi::Error)]
-pub enum JawTrackError {
-    /// A setting, file or buffer the caller gave is not usable; the message names it.
-    #[error("{message}")]
-    InvalidArgument {
-        /// What is wrong.
-        message: String,
-    },
-    /// Reading or writing a file failed.
-    #[error("{message}")]
-    Io {
-        /// What failed.
-        message: String,
-    },
-    /// A datagram that is not a valid acknowledgement for this session.
-    #[error("{message}")]
-    Link {
-        /// Why it was refused.
-        message: String,
-    },
-}
-
-impl From<RecordingError> for JawTrackError {
-    fn from(e: RecordingError) -> Self {
-        match e {
-            RecordingError::Io { .. } => JawTrackError::Io { message: e.to_string() },
-            RecordingError::Exists { .. } | RecordingError::Header(_) => invalid(e.to_string()),
-        }
-    }
-}
-
-pub(crate) fn invalid(message: impl Into<String>) -> JawTrackError {
-    JawTrackError::InvalidArgument { message: message.into() }
-}
 
 /// Camera intrinsics in pixels of the delivered frame (pixel centres at integer coordinates).
 #[derive(Debug, Clone, Copy, PartialEq, uniffi::Record)]
@@ -93,7 +60,7 @@ pub struct Intrinsics {
 impl Intrinsics {
     pub(crate) fn camera(&self) -> Result<CameraIntrinsics, JawTrackError> {
         let c = CameraIntrinsics { fx: self.fx, fy: self.fy, cx: self.cx, cy: self.cy, k1: self.k1, k2: self.k2 };
-        c.validate().map_err(|e| invalid(format!("camera intrinsics: {e}")))?;
+        c.validate()?;
         Ok(c)
     }
 }
@@ -118,7 +85,7 @@ impl Tracker {
     #[uniffi::constructor]
     pub fn new(settings: Settings, marker_json: Option<String>) -> Result<Arc<Self>, JawTrackError> {
         let marker = match marker_json {
-            Some(text) => Marker::from_json(&text).map_err(|e| invalid(format!("marker file: {e}")))?,
+            Some(text) => Marker::from_json(&text)?,
             None => Marker::default(),
         };
         let engine = Arc::new(Mutex::new(Engine::new(marker, settings)?));
@@ -158,8 +125,7 @@ impl Tracker {
         intrinsics: Intrinsics,
         t: f64,
     ) -> Result<FrameResult, JawTrackError> {
-        let view = ImageView::new(&luma, width as usize, height as usize, bytes_per_row as usize)
-            .map_err(|e| invalid(format!("frame: {e}")))?;
+        let view = ImageView::new(&luma, width as usize, height as usize, bytes_per_row as usize)?;
         lock(&self.engine).track(&view, &intrinsics, t)
     }
 
@@ -285,7 +251,7 @@ impl LinkEncoder {
     pub fn new(key_hex: Option<String>, insecure_plaintext: bool) -> Result<Arc<Self>, JawTrackError> {
         let (security, key_id) = match (key_hex, insecure_plaintext) {
             (Some(k), false) => {
-                let key: Key = k.parse().map_err(|e| invalid(format!("{e}")))?;
+                let key: Key = k.parse()?;
                 let id = key.id();
                 (Security::Sealed(key), Some(id))
             }
@@ -314,8 +280,7 @@ impl LinkEncoder {
 
     /// Reads a datagram from the receiver; only a valid acknowledgement of this session passes.
     pub fn read_ack(&self, datagram: Vec<u8>) -> Result<LinkAck, JawTrackError> {
-        let ack =
-            lock(&self.session).read_ack(&datagram).map_err(|e| JawTrackError::Link { message: e.to_string() })?;
+        let ack = lock(&self.session).read_ack(&datagram)?;
         Ok(LinkAck { highest_seq: ack.highest_seq, accepted: ack.accepted, lost: ack.lost, rejected: ack.rejected })
     }
 }
@@ -337,12 +302,12 @@ pub struct Pairing {
 /// `jawtrack://pair?host=H&port=P&key=K` (`jawtrack_wire::pairing_uri`).
 #[uniffi::export]
 pub fn parse_pairing(text: String) -> Result<Pairing, JawTrackError> {
-    let p = jawtrack_wire::parse_pairing_uri(text.trim()).map_err(|e| invalid(e.to_string()))?;
+    let p = jawtrack_wire::parse_pairing_uri(text.trim())?;
     Ok(Pairing { host: p.host, port: p.port.map(u32::from), key_id: p.key.id(), key_hex: p.key.to_hex() })
 }
 
 /// Checks a pairing key typed or scanned (64 hex digits, surrounding blanks ignored); its id.
 #[uniffi::export]
 pub fn pairing_key_id(text: String) -> Result<String, JawTrackError> {
-    text.trim().parse::<Key>().map(|k| k.id()).map_err(|e| invalid(e.to_string()))
+    Ok(text.trim().parse::<Key>()?.id())
 }

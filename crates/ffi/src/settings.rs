@@ -2,7 +2,7 @@
 //! settings screen's ([`AppSettings`]). The Swift side persists them and shows the errors;
 //! what is valid is decided here.
 
-use crate::{JawTrackError, invalid};
+use crate::JawTrackError;
 use jawtrack_apriltag::DetectorConfig;
 use jawtrack_tracker::{SearchConfig, SmootherConfig, TrackerConfig};
 
@@ -47,16 +47,25 @@ impl Settings {
     /// Checks every range, naming the setting that is out of it.
     pub fn validate(&self) -> Result<(), JawTrackError> {
         if !DECIMATIONS.contains(&self.decimate) {
-            return Err(invalid(format!("decimation must be 1, 1.5, 2, 3 or 4, got {}", self.decimate)));
+            return Err(JawTrackError::setting(
+                "decimate",
+                format!("decimation must be 1, 1.5, 2, 3 or 4, got {}", self.decimate),
+            ));
         }
         if !(0.0..=0.8).contains(&self.quad_sigma) {
-            return Err(invalid(format!("quad sigma must be within 0–0.8, got {}", self.quad_sigma)));
+            return Err(JawTrackError::setting(
+                "quad_sigma",
+                format!("quad sigma must be within 0–0.8, got {}", self.quad_sigma),
+            ));
         }
         if self.max_hamming > 2 {
-            return Err(invalid(format!("max hamming must be 0, 1 or 2, got {}", self.max_hamming)));
+            return Err(JawTrackError::setting(
+                "max_hamming",
+                format!("max hamming must be 0, 1 or 2, got {}", self.max_hamming),
+            ));
         }
         if !(1..=8).contains(&self.threads) {
-            return Err(invalid(format!("threads must be within 1–8, got {}", self.threads)));
+            return Err(JawTrackError::setting("threads", format!("threads must be within 1–8, got {}", self.threads)));
         }
         Ok(())
     }
@@ -164,22 +173,32 @@ pub fn default_app_settings() -> AppSettings {
 pub fn validate_app_settings(settings: AppSettings, streaming: bool) -> Result<(), JawTrackError> {
     let s = &settings;
     if s.fps != 30 && s.fps != 60 {
-        return Err(invalid(format!("frame rate must be 30 or 60, got {}", s.fps)));
+        return Err(JawTrackError::setting("fps", format!("frame rate must be 30 or 60, got {}", s.fps)));
     }
     if !(0.0..=1.0).contains(&s.lens_position) {
-        return Err(invalid(format!("lens position must be within 0–1, got {}", s.lens_position)));
+        return Err(JawTrackError::setting(
+            "lens_position",
+            format!("lens position must be within 0–1, got {}", s.lens_position),
+        ));
     }
     s.tracker.validate()?;
     if streaming {
         let host = s.receiver_host.trim();
         if host.is_empty() || host.contains(char::is_whitespace) {
-            return Err(invalid("receiver host: give the computer's name or address, e.g. 192.168.1.20"));
+            return Err(JawTrackError::setting(
+                "receiver_host",
+                "receiver host: give the computer's name or address, e.g. 192.168.1.20",
+            ));
         }
         if !(1..=65535).contains(&s.receiver_port) {
-            return Err(invalid(format!("receiver port must be within 1–65535, got {}", s.receiver_port)));
+            return Err(JawTrackError::setting(
+                "receiver_port",
+                format!("receiver port must be within 1–65535, got {}", s.receiver_port),
+            ));
         }
-        crate::pairing_key_id(s.pairing_key.clone())
-            .map_err(|e| invalid(format!("pairing key: {e} (scan the QR code `jawtrack receive` shows)")))?;
+        crate::pairing_key_id(s.pairing_key.clone()).map_err(|e| {
+            JawTrackError::setting("pairing_key", format!("{e} (scan the QR code `jawtrack receive` shows)"))
+        })?;
     }
     Ok(())
 }

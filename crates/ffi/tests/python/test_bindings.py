@@ -59,9 +59,10 @@ class Bindings(unittest.TestCase):
 
     def test_the_intercuspation_step_needs_frames_then_corrects(self):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+        with self.assertRaises(jawtrack.JawTrackError.NotEnoughFrames) as e:
             tracker.calibrate_intercuspation()
-        self.assertIn("at least 3", str(e.exception))
+        self.assertEqual((e.exception.needed, e.exception.got), (3, 0))
+        self.assertIn("at least 3", e.exception.message)
         w, h, pixels = frames()[0]
         for i in range(5):
             tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0)
@@ -77,30 +78,33 @@ class Bindings(unittest.TestCase):
     def test_misuse_raises_errors_naming_the_problem(self):
         bad = jawtrack.default_settings()
         bad.decimate = 2.5
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+        with self.assertRaises(jawtrack.JawTrackError.InvalidSetting) as e:
             jawtrack.Tracker(bad, None)
-        self.assertIn("decimation", str(e.exception))
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+        self.assertEqual(e.exception.setting, "decimate")
+        self.assertIn("decimation", e.exception.message)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidMarker):
             jawtrack.Tracker(jawtrack.default_settings(), '{"version": 7}')
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
         w, h, pixels = frames()[0]
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+        with self.assertRaises(jawtrack.JawTrackError.InvalidFrame) as e:
             tracker.track_luma(pixels[: len(pixels) // 2], w, h, w, INTRINSICS, 0.0)
-        self.assertIn("needs", str(e.exception))
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+        self.assertIn("needs", e.exception.message)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidFrame):
             tracker.track_luma(pixels, w, h, w - 1, INTRINSICS, 0.0)
         broken = jawtrack.Intrinsics(fx=-1.0, fy=1500.0, cx=959.5, cy=539.5, k1=0.0, k2=0.0)
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+        with self.assertRaises(jawtrack.JawTrackError.InvalidIntrinsics) as e:
             tracker.track_luma(pixels, w, h, w, broken, 0.0)
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+        self.assertEqual(e.exception.message.count("intrinsics"), 1, "said once")
+        with self.assertRaises(jawtrack.JawTrackError.InvalidSetting):
             tracker.update_settings(bad)
         settings = jawtrack.default_app_settings()
         jawtrack.validate_app_settings(settings, False)
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+        with self.assertRaises(jawtrack.JawTrackError.InvalidSetting) as e:
             jawtrack.validate_app_settings(settings, True)
-        self.assertIn("receiver host", str(e.exception))
+        self.assertEqual(e.exception.setting, "receiver_host")
+        self.assertIn("receiver host", e.exception.message)
         self.assertEqual(len(jawtrack.pairing_key_id(" " + KEY + "\n")), 16)
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+        with self.assertRaises(jawtrack.JawTrackError.InvalidKey):
             jawtrack.pairing_key_id("not a key")
 
     def test_intrinsics_scale_to_the_delivered_frame(self):
@@ -110,7 +114,7 @@ class Bindings(unittest.TestCase):
         s = 1920 / 4032
         self.assertAlmostEqual(k.fx, 2800.0 * s, places=3)
         self.assertAlmostEqual(k.cx, 2016.0 * s - 0.5, places=3)
-        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+        with self.assertRaises(jawtrack.JawTrackError.InvalidIntrinsics):
             jawtrack.intrinsics_from_camera_matrix(m[:8], 4032, 3024, 1920, 1440)
 
     def test_the_recorder_writes_the_track_schema_line_by_line(self):
@@ -135,8 +139,9 @@ class Bindings(unittest.TestCase):
             got = line["maxilla_from_mandible"]
             self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in zip(got, r.maxilla_from_mandible)))
             self.assertEqual(len(line["maxilla"]["cov"]), 36)
-        with self.assertRaises(jawtrack.JawTrackError.Io):
+        with self.assertRaises(jawtrack.JawTrackError.Io) as e:
             jawtrack.Recorder.open(str(OUT / "no-such-folder" / "x.jsonl"), info)
+        self.assertTrue(e.exception.path.endswith("x.jsonl"), e.exception.path)
 
     def test_the_link_encoder_seals_datagrams_libsodium_can_open(self):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
@@ -154,6 +159,8 @@ class Bindings(unittest.TestCase):
             enc.read_ack(first)  # a pose, not an acknowledgement
         with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
             jawtrack.LinkEncoder(None, False)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidKey):
+            jawtrack.LinkEncoder("not a key", False)
         try:
             from nacl.bindings import crypto_aead_xchacha20poly1305_ietf_decrypt
         except ImportError:

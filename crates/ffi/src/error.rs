@@ -1,0 +1,196 @@
+//! The one error the app sees, and the one place every crate's own error is mapped to it
+//! (`From`), so a call site only writes `?`. Variants say what the app can act on: which
+//! setting to correct, that the frame or the camera is wrong, that the marker file or the
+//! pairing key must be replaced, which file could not be written.
+
+use jawtrack_apriltag::DetectError;
+use jawtrack_marker::MarkerError;
+use jawtrack_pose::GeometryError;
+use jawtrack_recording::RecordingError;
+use jawtrack_tracker::{RegistrationError, TrackError};
+use jawtrack_wire::{KeyError, WireError};
+
+/// What went wrong, as the app sees it. Every variant's `message` is written for people.
+#[derive(Debug, Clone, PartialEq, thiserror::Error, uniffi::Error)]
+pub enum JawTrackError {
+    /// A setting out of its range: `setting` names it (e.g. `decimate`, `receiver_port`), so
+    /// the settings screen can point at the field.
+    #[error("{message}")]
+    InvalidSetting {
+        /// The setting, by its field name.
+        setting: String,
+        /// What is wrong with it and what it may be.
+        message: String,
+    },
+    /// The frame is not what its description says (empty, rows too short, buffer too small,
+    /// time not a number).
+    #[error("{message}")]
+    InvalidFrame {
+        /// What is wrong.
+        message: String,
+    },
+    /// The camera intrinsics cannot describe a camera.
+    #[error("{message}")]
+    InvalidIntrinsics {
+        /// What is wrong.
+        message: String,
+    },
+    /// The marker file cannot be used: choose another one or the nominal marker.
+    #[error("{message}")]
+    InvalidMarker {
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The pairing key or pairing code cannot be read: scan the receiver's QR code again.
+    #[error("{message}")]
+    InvalidKey {
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The intercuspation step has too few recent frames with both jaws tracked: bite, hold
+    /// still, and try again.
+    #[error("{message}")]
+    NotEnoughFrames {
+        /// Frames the step needs.
+        needed: u32,
+        /// Frames it has.
+        got: u32,
+        /// The same, in words.
+        message: String,
+    },
+    /// Anything else the caller gave is not usable (a matrix, JSON, a closed recording); the
+    /// message names it.
+    #[error("{message}")]
+    InvalidArgument {
+        /// What is wrong.
+        message: String,
+    },
+    /// Reading or writing a file failed.
+    #[error("{message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// What failed, naming the file.
+        message: String,
+    },
+    /// A datagram that is not a valid acknowledgement for this session.
+    #[error("{message}")]
+    Link {
+        /// Why it was refused.
+        message: String,
+    },
+}
+
+impl JawTrackError {
+    /// A setting out of range.
+    pub(crate) fn setting(setting: &str, message: impl Into<String>) -> Self {
+        JawTrackError::InvalidSetting { setting: setting.into(), message: message.into() }
+    }
+
+    /// Too few recent frames for the intercuspation step.
+    pub(crate) fn not_enough_frames(needed: usize, got: usize) -> Self {
+        JawTrackError::NotEnoughFrames {
+            needed: needed as u32,
+            got: got as u32,
+            message: format!(
+                "the intercuspation step needs at least {needed} recent frames with both jaws tracked, have {got}: \
+                 bite, hold still, and try again"
+            ),
+        }
+    }
+
+    /// A frame that is not what it claims to be.
+    pub(crate) fn frame(message: impl Into<String>) -> Self {
+        JawTrackError::InvalidFrame { message: message.into() }
+    }
+}
+
+/// Anything else the caller gave that is not usable.
+pub(crate) fn invalid(message: impl Into<String>) -> JawTrackError {
+    JawTrackError::InvalidArgument { message: message.into() }
+}
+
+impl From<MarkerError> for JawTrackError {
+    fn from(e: MarkerError) -> Self {
+        JawTrackError::InvalidMarker { message: format!("marker file: {e}") }
+    }
+}
+
+impl From<GeometryError> for JawTrackError {
+    fn from(e: GeometryError) -> Self {
+        match e {
+            GeometryError::BadIntrinsics(_) => JawTrackError::InvalidIntrinsics { message: format!("camera {e}") },
+            _ => invalid(e.to_string()),
+        }
+    }
+}
+
+impl From<DetectError> for JawTrackError {
+    fn from(e: DetectError) -> Self {
+        match e {
+            DetectError::BadImage(_) => JawTrackError::frame(format!("frame: {e}")),
+            DetectError::BadConfig(_) => JawTrackError::setting("detector", e.to_string()),
+        }
+    }
+}
+
+impl From<TrackError> for JawTrackError {
+    fn from(e: TrackError) -> Self {
+        match e {
+            TrackError::Detect(d) => d.into(),
+            TrackError::BadIntrinsics(_) => JawTrackError::InvalidIntrinsics { message: e.to_string() },
+            TrackError::BadConfig(_) => JawTrackError::setting("tracker", e.to_string()),
+        }
+    }
+}
+
+impl From<RegistrationError> for JawTrackError {
+    fn from(e: RegistrationError) -> Self {
+        match e {
+            RegistrationError::TooFewSamples { needed, got } => JawTrackError::not_enough_frames(needed, got),
+            _ => invalid(e.to_string()),
+        }
+    }
+}
+
+impl From<KeyError> for JawTrackError {
+    fn from(e: KeyError) -> Self {
+        JawTrackError::InvalidKey { message: e.to_string() }
+    }
+}
+
+impl From<WireError> for JawTrackError {
+    fn from(e: WireError) -> Self {
+        JawTrackError::Link { message: e.to_string() }
+    }
+}
+
+impl From<RecordingError> for JawTrackError {
+    fn from(e: RecordingError) -> Self {
+        match &e {
+            RecordingError::Io { path, .. } | RecordingError::Exists { path } => {
+                JawTrackError::Io { path: path.clone(), message: e.to_string() }
+            }
+            RecordingError::Header(_) => invalid(e.to_string()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_crate_error_lands_on_the_variant_a_caller_can_act_on() {
+        let e: JawTrackError = DetectError::BadImage("too short".into()).into();
+        assert!(matches!(e, JawTrackError::InvalidFrame { .. }), "{e:?}");
+        let e: JawTrackError = TrackError::BadIntrinsics("fx".into()).into();
+        assert!(matches!(e, JawTrackError::InvalidIntrinsics { .. }), "{e:?}");
+        let e: JawTrackError = MarkerError::Json("eof".into()).into();
+        assert!(matches!(e, JawTrackError::InvalidMarker { .. }) && e.to_string().starts_with("marker file"));
+        let e: JawTrackError = "nope".parse::<jawtrack_wire::Key>().expect_err("not a key").into();
+        assert!(matches!(e, JawTrackError::InvalidKey { .. }), "{e:?}");
+        let e: JawTrackError = RecordingError::Exists { path: "/tmp/s.jsonl".into() }.into();
+        assert!(matches!(&e, JawTrackError::Io { path, .. } if path == "/tmp/s.jsonl"), "{e:?}");
+    }
+}
