@@ -5,7 +5,7 @@
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::Marker;
 use jawtrack_synth::GroundTruth;
-use jawtrack_tests::fixture_sets;
+use jawtrack_test_support::fixture_sets;
 use jawtrack_tracker::{Flag, Tracker, TrackerConfig};
 use std::io::Write as _;
 

@@ -11,7 +11,7 @@
 
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
-use jawtrack_tests::{say_skipped, shared_data};
+use jawtrack_test_support::{say_skipped, shared_data};
 use std::io::Write as _;
 
 /// For every reference tag: our nearest same-id detection's worst corner distance to C's and

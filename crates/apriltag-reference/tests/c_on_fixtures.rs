@@ -4,7 +4,7 @@
 
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_synth::GroundTruth;
-use jawtrack_tests::fixture_sets;
+use jawtrack_test_support::fixture_sets;
 use std::io::Write as _;
 
 /// What the reference did on one fixture set.

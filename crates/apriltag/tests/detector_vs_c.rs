@@ -3,7 +3,7 @@
 
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
-use jawtrack_tests::{fixture_sets, say_skipped, shared_data};
+use jawtrack_test_support::{fixture_sets, say_skipped, shared_data};
 use std::io::Write as _;
 use std::path::PathBuf;
 
@@ -98,7 +98,7 @@ fn two_threads_find_exactly_what_one_does() {
     let one = Detector::new(DetectorConfig::default()).expect("detector");
     let two = Detector::new(DetectorConfig { nthreads: 2, ..DetectorConfig::default() }).expect("detector");
     let mut tags = 0;
-    for path in frames().iter().filter(|p| p.starts_with(jawtrack_tests::fixtures_dir())) {
+    for path in frames().iter().filter(|p| p.starts_with(jawtrack_test_support::fixtures_dir())) {
         let img = image::open(path).expect("image").to_luma8();
         let (w, h) = (img.width() as usize, img.height() as usize);
         let view = ImageView::new(img.as_raw(), w, h, w).expect("view");
@@ -122,7 +122,7 @@ fn blurred_and_sharpened_quad_images_give_cs_tags_and_corners() {
             ..ReferenceParams::default()
         })
         .expect("reference");
-        for path in frames().iter().filter(|p| p.starts_with(jawtrack_tests::fixtures_dir())) {
+        for path in frames().iter().filter(|p| p.starts_with(jawtrack_test_support::fixtures_dir())) {
             let img = image::open(path).expect("image").to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
             let mine = ours.detect(&ImageView::new(img.as_raw(), w, h, w).expect("view")).expect("detects");

@@ -8,7 +8,7 @@
 
 use jawtrack_apriltag::Tag36h11;
 use jawtrack_synth::render::{INK_ALBEDO, tag_texture};
-use jawtrack_tests::{read_tag, say_skipped, shared_data};
+use jawtrack_test_support::{read_tag, say_skipped, shared_data};
 
 #[test]
 fn rendered_tags_match_the_reference_decoding_of_real_photos() {

@@ -1,17 +1,22 @@
-//! Shared helpers for the whole-chain tests in `tests/`: where the fixtures and the shared
-//! data live, and reading a tag's cells out of an image through its four corners.
+//! Shared helpers for every crate's tests: where the fixtures and the shared data live, how a
+//! test says it skipped, and reading a tag's cells out of an image through its four corners.
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use std::path::PathBuf;
 
+/// The repository's top folder (this crate is its `tests/`).
+fn repository() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
 /// The repository's `fixtures/` folder.
 pub fn fixtures_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures")
+    repository().join("fixtures")
 }
 
 /// `../shared/data` beside the repository, if present (it is not part of the product).
 pub fn shared_data() -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    let p = repository().join("../shared/data");
     p.is_dir().then_some(p)
 }
 

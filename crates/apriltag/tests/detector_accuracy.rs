@@ -5,7 +5,7 @@
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_synth::GroundTruth;
-use jawtrack_tests::fixture_sets;
+use jawtrack_test_support::fixture_sets;
 use std::io::Write as _;
 
 fn median(v: &mut [f64]) -> f64 {

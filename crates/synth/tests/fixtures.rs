@@ -4,7 +4,7 @@
 use jawtrack_apriltag::Tag36h11;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer};
-use jawtrack_tests::{fixture_sets, read_tag};
+use jawtrack_test_support::{fixture_sets, read_tag};
 use nalgebra::Point3;
 use std::path::Path;
 
@@ -115,7 +115,7 @@ fn images_show_the_tags_where_the_truth_puts_them() {
 fn fixtures_regenerate_bit_for_bit() {
     let cases = [("clean-static-1080p", Realism::clean(), 1), ("static-1080p", Realism::default(), 3)];
     for (name, realism, stride) in cases {
-        let set = jawtrack_tests::fixtures_dir().join(name);
+        let set = jawtrack_test_support::fixtures_dir().join(name);
         let config = SynthConfig {
             scene: SceneKind::Static,
             resolution: Resolution::P1080,

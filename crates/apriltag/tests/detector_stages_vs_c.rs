@@ -5,7 +5,7 @@
 use jawtrack_apriltag::workers::Workers;
 use jawtrack_apriltag::{ImageView, QuadThreshold, clusters, components, preprocess, quads, threshold};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
-use jawtrack_tests::fixture_sets;
+use jawtrack_test_support::fixture_sets;
 use std::collections::HashMap;
 
 fn read_pnm(path: &std::path::Path) -> image::GrayImage {

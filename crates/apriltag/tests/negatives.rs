@@ -3,7 +3,7 @@
 //! and three hamming-2 decodes at max_hamming 2 (EuRoC.png id 7, two_boards.png ids 0, 24).
 
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
-use jawtrack_tests::{say_skipped, shared_data};
+use jawtrack_test_support::{say_skipped, shared_data};
 
 #[test]
 fn aprilgrid_negatives_give_no_more_than_the_reference() {
