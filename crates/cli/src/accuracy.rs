@@ -549,7 +549,7 @@ fn write_csv(run: &Run, out: &Path) -> Result<Vec<PathBuf>> {
         "about_z_deg",
     ])
     .map_err(csv_err(&path))?;
-    let head_from_maxilla = jawtrack_synth::scenes::Rig::default().head_from_maxilla;
+    let head_from_maxilla = jawtrack_kinematics::Mounting::default().head_from_maxilla;
     for f in &run.frames {
         for (col, estimate) in run.columns.iter().zip(&f.estimates) {
             let e = estimate.map(|e| benchtop::error_parts(&e, &f.truth, &head_from_maxilla));

@@ -8,12 +8,12 @@ use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_calibration::{CalibrationOptions, Finding, calibrate};
+use jawtrack_kinematics::Mounting;
 use jawtrack_marker::Marker;
 use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_tracker::{Tracker, TrackerConfig};
 
 use crate::plot::{self, Series, Style};
-use jawtrack_synth::scenes::Rig;
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SceneSummary, SynthConfig};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
@@ -108,10 +108,10 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
         ..TrackerConfig::default()
     };
-    let rig = Rig::default();
-    let closed = Point3::from(rig.lower_incisal_point);
+    let mounting = Mounting::default();
+    let closed = Point3::from(mounting.lower_incisal_point);
     let truth_path: Vec<Sample> =
-        truth.frames.iter().map(|f| (f.t, rig.lower_incisor(&f.maxilla_from_mandible))).collect();
+        truth.frames.iter().map(|f| (f.t, mounting.lower_incisor(&f.maxilla_from_mandible))).collect();
     let mut tracked_paths = Vec::new();
     let markers = [
         ("nominal marker file", Marker::default(), "poses.jsonl"),
@@ -137,7 +137,7 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
                 let (angle, dist) = m.distance_to(&f.maxilla_from_mandible);
                 dt.push(dist);
                 dr.push(angle.to_degrees());
-                path.push((f.t, rig.lower_incisor(&m)));
+                path.push((f.t, mounting.lower_incisor(&m)));
             }
         }
         for v in [&mut dt, &mut dr, &mut ms] {

@@ -6,7 +6,6 @@
 //! computed here, not in the browser ([`crate::motion`]), from the rest position, which the "Calibrate" button sets to the mean of the last frames while the
 //! patient bites in maximal intercuspation (the first frame until then).
 
-use crate::motion::Incisor;
 use anyhow::{Context, Result, bail};
 use axum::Router;
 use axum::extract::ws::{Message as WsMessage, WebSocket, WebSocketUpgrade};
@@ -15,6 +14,7 @@ use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Json, Response};
 use axum::routing::get;
 use clap::Args;
+use jawtrack_kinematics::Incisor;
 use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
 use jawtrack_pose::Pose;
 use jawtrack_recording::FrameRecord;

@@ -24,7 +24,6 @@ mod link;
 mod linkbench;
 mod live;
 mod metrics;
-mod motion;
 mod occlusal;
 mod plot;
 mod register;

@@ -118,9 +118,9 @@ fn check_envelope(env: &Value, points: &[[f64; 2]]) -> f64 {
 /// The true peak opening of the hinge at a point `r` mm from the hinge axis (Y, Z in the head
 /// frame), turned by the angle that opens the standard incisal point by the chord `HINGE_MM`.
 fn hinge_opening(rig: &Rig, point: Vector3<f64>) -> f64 {
-    let lever = rig.lower_incisal_point - rig.hinge_point;
+    let lever = rig.mounting.lower_incisal_point - rig.mounting.hinge_point;
     let a = 2.0 * (HINGE_MM / (2.0 * lever.norm())).asin();
-    let r = point - rig.hinge_point;
+    let r = point - rig.mounting.hinge_point;
     // A turn by `a` about +X: y' = y cos a − z sin a.
     r.y * (a.cos() - 1.0) - r.z * a.sin()
 }
@@ -129,7 +129,7 @@ fn hinge_opening(rig: &Rig, point: Vector3<f64>) -> f64 {
 fn metrics_equal_the_known_motion() {
     let dir = tempfile::tempdir().expect("temp dir");
     let rig = Rig::default();
-    let s = session(dir.path(), rig.lower_incisal_point);
+    let s = session(dir.path(), rig.mounting.lower_incisal_point);
     let file = s.file.to_str().expect("utf-8");
     let out = dir.path().join("out");
     let o = jawtrack(&["metrics", file, "--json", "--out", out.to_str().expect("utf-8")]);
@@ -143,7 +143,7 @@ fn metrics_equal_the_known_motion() {
 
     // The extremes against the rig's jaw motion, and the simple ones against closed forms.
     let opening = peak(&s.truth, |d| d[0]);
-    assert!((opening.0 - hinge_opening(&rig, rig.lower_incisal_point)).abs() < 1e-9 && opening.2 == 1.0);
+    assert!((opening.0 - hinge_opening(&rig, rig.mounting.lower_incisal_point)).abs() < 1e-9 && opening.2 == 1.0);
     check_extreme(&report, "max_opening", opening);
     check_extreme(&report, "max_left_lateral", peak(&s.truth, |d| d[1]));
     check_extreme(&report, "max_right_lateral", peak(&s.truth, |d| -d[1]));
@@ -191,10 +191,10 @@ fn a_custom_incisal_point_is_measured_instead() {
     let rig = Rig::default();
     // 10 mm below the standard incisal point (head frame, jaw closed), in the mandible
     // marker's frame.
-    let lower = rig.lower_incisal_point + Vector3::new(0.0, 10.0, 0.0);
+    let lower = rig.mounting.lower_incisal_point + Vector3::new(0.0, 10.0, 0.0);
     let s = session(dir.path(), lower);
     let file = s.file.to_str().expect("utf-8");
-    let in_marker = |p: Vector3<f64>| rig.head_from_mandible_rest.inverse().transform_point(&Point3::from(p));
+    let in_marker = |p: Vector3<f64>| rig.mounting.head_from_mandible_rest.inverse().transform_point(&Point3::from(p));
     let arg = |p: Point3<f64>| format!("{},{},{}", p.x, p.y, p.z);
     let q = in_marker(lower);
     assert!(q.x < 0.0 || q.y < 0.0 || q.z < 0.0, "a negative coordinate is passed as it is: {q}");
@@ -207,7 +207,7 @@ fn a_custom_incisal_point_is_measured_instead() {
     check_extreme(&report, "max_protrusion", peak(&s.truth, |d| d[2]));
     assert_eq!(report["incisor_standard"], false);
     // Naming the standard point gives the default's numbers.
-    let standard = in_marker(rig.lower_incisal_point);
+    let standard = in_marker(rig.mounting.lower_incisal_point);
     let named: Value =
         serde_json::from_str(&ok(&jawtrack(&["metrics", file, "--json", "--incisor", &arg(standard)]))).expect("json");
     let default: Value = serde_json::from_str(&ok(&jawtrack(&["metrics", file, "--json"]))).expect("json");
@@ -229,7 +229,7 @@ fn bad_input_is_refused_with_a_message_naming_the_problem() {
     refused(&jawtrack(&["metrics", &path("garbage.jsonl", "not json\n{\"frame\":")]), "has no frames");
     let lost = "{\"frame\":0,\"t\":0,\"maxilla\":null,\"mandible\":null,\"maxilla_from_mandible\":null}\n";
     refused(&jawtrack(&["metrics", &path("lost.jsonl", lost)]), "no frame has a jaw pose");
-    let s = session(dir.path(), Rig::default().lower_incisal_point);
+    let s = session(dir.path(), Rig::default().mounting.lower_incisal_point);
     let file = s.file.to_str().expect("utf-8");
     refused(&jawtrack(&["metrics", file, "--rest-frame", "0"]), "frame 0 has no jaw pose");
     refused(&jawtrack(&["metrics", file, "--rest-frame", "9999"]), "no such frame");

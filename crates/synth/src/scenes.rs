@@ -10,12 +10,13 @@
 //! 22 mm below it. The mandible hinges about a transverse axis 95 mm behind and 20 mm above
 //! the incisal point (the condyles).
 
+use jawtrack_kinematics::Mounting;
 use jawtrack_pose::Pose;
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 
 /// The scenes `jawtrack synth` can render.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,35 +64,19 @@ impl std::str::FromStr for SceneKind {
     }
 }
 
-/// Fixed anatomy of the rig (head frame, mm).
+/// The rendered rig: the patient's head with the harnesses mounted, in front of a face.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rig {
-    /// Pose of the maxilla marker.
-    pub head_from_maxilla: Pose,
-    /// Pose of the mandible marker with the jaw closed.
-    pub head_from_mandible_rest: Pose,
-    /// A point on the hinge (condylar) axis; the axis runs along head X.
-    pub hinge_point: Vector3<f64>,
-    /// Distance between the condyles (mm).
-    pub intercondylar_mm: f64,
-    /// The lower incisal point with the jaw closed.
-    pub lower_incisal_point: Vector3<f64>,
+    /// How the harnesses sit on the head and where the jaw's anatomy is (head frame, mm): the
+    /// one the readouts use too.
+    pub mounting: Mounting,
     /// Background (the face) as the plane z = this, facing the camera.
     pub face_plane_z: f64,
 }
 
 impl Default for Rig {
     fn default() -> Self {
-        // Body +Z anterior (−Z head), body Y = head Y: a half turn about Y.
-        let facing = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI);
-        Rig {
-            head_from_maxilla: Pose::from_parts(facing, Vector3::new(0.0, -22.0, -38.0)),
-            head_from_mandible_rest: Pose::from_parts(facing, Vector3::new(0.0, 22.0, -38.0)),
-            hinge_point: Vector3::new(0.0, -20.0, 95.0),
-            intercondylar_mm: 100.0,
-            lower_incisal_point: Vector3::new(0.0, 1.5, 1.0),
-            face_plane_z: -10.0,
-        }
+        Rig { mounting: Mounting::default(), face_plane_z: -10.0 }
     }
 }
 
@@ -158,7 +143,7 @@ fn rotation_about(point: &Vector3<f64>, axis: &Unit<Vector3<f64>>, angle: f64) -
 impl Rig {
     /// Hinge angle (rad) that moves the lower incisal point by `chord` mm.
     fn hinge_angle(&self, chord: f64) -> f64 {
-        let r = (self.lower_incisal_point - self.hinge_point).norm();
+        let r = (self.mounting.lower_incisal_point - self.mounting.hinge_point).norm();
         2.0 * (chord / (2.0 * r)).clamp(-1.0, 1.0).asin()
     }
 
@@ -169,7 +154,7 @@ impl Rig {
             JawMotion::Hinge { opening_mm, start_s, period_s } => {
                 let a = self.hinge_angle(opening_mm) * cycle(t, start_s, period_s);
                 // A positive turn about +X swings the chin down (+Y) and back.
-                rotation_about(&self.hinge_point, &Vector3::x_axis(), a)
+                rotation_about(&self.mounting.hinge_point, &Vector3::x_axis(), a)
             }
             JawMotion::Glide { direction, amplitude_mm, start_s, period_s } => {
                 let s = cycle(t, start_s, period_s);
@@ -182,17 +167,18 @@ impl Rig {
                         // Rotation about the working condyle's vertical axis (Bennett movement)
                         // plus a slight opening from canine guidance.
                         let side = if direction == Glide::Left { 1.0 } else { -1.0 };
-                        let condyle = self.hinge_point + Vector3::new(side * self.intercondylar_mm / 2.0, 0.0, 0.0);
-                        let lever = self.lower_incisal_point - condyle;
+                        let condyle = self.mounting.hinge_point
+                            + Vector3::new(side * self.mounting.intercondylar_mm / 2.0, 0.0, 0.0);
+                        let lever = self.mounting.lower_incisal_point - condyle;
                         let horizontal = (lever.x * lever.x + lever.z * lever.z).sqrt();
                         let angle = amplitude_mm * s / horizontal;
                         // Sign so that the incisal point moves toward `side`.
                         let probe = rotation_about(&condyle, &Vector3::y_axis(), angle);
-                        let moved = probe.transform_point(&Point3::from(self.lower_incisal_point)).x
-                            - self.lower_incisal_point.x;
+                        let moved = probe.transform_point(&Point3::from(self.mounting.lower_incisal_point)).x
+                            - self.mounting.lower_incisal_point.x;
                         let angle = if moved * side >= 0.0 { angle } else { -angle };
                         let open = rotation_about(
-                            &self.hinge_point,
+                            &self.mounting.hinge_point,
                             &Vector3::x_axis(),
                             self.hinge_angle(0.3 * amplitude_mm * s),
                         );
@@ -203,7 +189,8 @@ impl Rig {
             JawMotion::Chew { opening_mm, lateral_mm, period_s } => {
                 let phase = TAU * t / period_s;
                 let open = 0.5 * (1.0 - phase.cos());
-                let hinge = rotation_about(&self.hinge_point, &Vector3::x_axis(), self.hinge_angle(opening_mm * open));
+                let hinge =
+                    rotation_about(&self.mounting.hinge_point, &Vector3::x_axis(), self.hinge_angle(opening_mm * open));
                 // Out on one side, back on the other: a loop in the frontal plane.
                 let lateral = Pose::from_parts(
                     UnitQuaternion::identity(),
@@ -214,18 +201,9 @@ impl Rig {
         }
     }
 
-    /// Where the lower incisal point is (head frame) when the mandible marker sits at
-    /// `maxilla_from_mandible` in the maxilla marker's frame: how a tracked pose reads as the
-    /// incisor's motion.
-    pub fn lower_incisor(&self, maxilla_from_mandible: &Pose) -> Point3<f64> {
-        let on_mandible =
-            self.head_from_mandible_rest.inverse().transform_point(&Point3::from(self.lower_incisal_point));
-        (self.head_from_maxilla * *maxilla_from_mandible).transform_point(&on_mandible)
-    }
-
     /// Maxilla and mandible marker poses in the head frame at time `t`.
     pub fn markers(&self, motion: &JawMotion, t: f64) -> (Pose, Pose) {
-        (self.head_from_maxilla, self.jaw(motion, t) * self.head_from_mandible_rest)
+        (self.mounting.head_from_maxilla, self.jaw(motion, t) * self.mounting.head_from_mandible_rest)
     }
 }
 
@@ -429,21 +407,21 @@ mod tests {
         let rig = Rig::default();
         let motion = JawMotion::Hinge { opening_mm: 30.0, start_s: 0.0, period_s: 2.0 };
         let peak = rig.jaw(&motion, 1.0);
-        let p = Point3::from(rig.lower_incisal_point);
+        let p = Point3::from(rig.mounting.lower_incisal_point);
         let moved = peak.transform_point(&p) - p;
         assert!((moved.norm() - 30.0).abs() < 1e-9);
         assert!(moved.y > 20.0, "opens downward: {moved:?}");
         assert!(rig.jaw(&motion, 0.0).distance_to(&Pose::identity()).1 < 1e-12);
         // Read back from the markers' relative pose, as a tracker would see it.
         let (maxilla, mandible) = rig.markers(&motion, 1.0);
-        let seen = rig.lower_incisor(&(maxilla.inverse() * mandible));
+        let seen = rig.mounting.lower_incisor(&(maxilla.inverse() * mandible));
         assert!((seen - peak.transform_point(&p)).norm() < 1e-9);
     }
 
     #[test]
     fn glides_go_where_they_say() {
         let rig = Rig::default();
-        let p = Point3::from(rig.lower_incisal_point);
+        let p = Point3::from(rig.mounting.lower_incisal_point);
         for (dir, check) in [
             (Glide::Left, Box::new(|d: Vector3<f64>| d.x > 3.9) as Box<dyn Fn(Vector3<f64>) -> bool>),
             (Glide::Right, Box::new(|d: Vector3<f64>| d.x < -3.9)),

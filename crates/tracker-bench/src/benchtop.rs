@@ -24,10 +24,11 @@ use anyhow::{Context, Result, bail};
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, SeenTag, calibrate};
+use jawtrack_kinematics::Mounting;
 use jawtrack_marker::Marker;
 use jawtrack_pose::Pose;
 use jawtrack_synth::SceneKind;
-use jawtrack_synth::scenes::{JawMotion, Rig, View};
+use jawtrack_synth::scenes::{JawMotion, View};
 use jawtrack_tracker::{Registration, Tracker, TrackerConfig, calibrate_intercuspation};
 use nalgebra::Vector3;
 use std::path::PathBuf;
@@ -599,7 +600,7 @@ impl StaticRow {
 /// The run's frames of `scene` with column `column`'s estimate, as (frame, error), plus the
 /// frames without one.
 fn judged(run: &Run, scene: SceneKind, column: usize) -> impl Iterator<Item = (&FrameRecord, Option<ErrorParts>)> {
-    let head_from_maxilla = Rig::default().head_from_maxilla;
+    let head_from_maxilla = Mounting::default().head_from_maxilla;
     run.frames
         .iter()
         .filter(move |f| f.scene == scene)
@@ -669,8 +670,8 @@ impl DynamicRow {
 
 /// The hinge (by opening) or excursion (by glide) table for one column.
 pub fn dynamic_rows(run: &Run, scene: SceneKind, column: usize) -> Vec<DynamicRow> {
-    let rig = Rig::default();
-    let closed = rig.lower_incisal_point;
+    let mounting = Mounting::default();
+    let closed = mounting.lower_incisal_point;
     let mut rows: Vec<DynamicRow> = Vec::new();
     for (f, error) in judged(run, scene, column) {
         let label = match f.motion {
@@ -688,8 +689,8 @@ pub fn dynamic_rows(run: &Run, scene: SceneKind, column: usize) -> Vec<DynamicRo
         };
         row.frames += 1;
         if let (Some(estimate), Some(error)) = (f.estimates[column], error) {
-            row.truth.push(rig.lower_incisor(&f.truth).coords - closed);
-            row.tracked.push(rig.lower_incisor(&estimate).coords - closed);
+            row.truth.push(mounting.lower_incisor(&f.truth).coords - closed);
+            row.tracked.push(mounting.lower_incisor(&estimate).coords - closed);
             row.errors.push(error);
         }
     }
@@ -751,13 +752,13 @@ mod tests {
 
     #[test]
     fn errors_are_read_along_the_head_axes() {
-        let rig = Rig::default();
+        let mounting = Mounting::default();
         let truth = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 44.0, 0.0));
         // 0.1 mm along maxilla +X and 0.2° about maxilla +Z: the maxilla marker faces forward
         // (a half turn about Y from the head), so that is head −X and about head −Z.
         let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.2f64.to_radians());
         let estimate = Pose::from_parts(turn, Vector3::new(0.1, 44.0, 0.0));
-        let e = error_parts(&estimate, &truth, &rig.head_from_maxilla);
+        let e = error_parts(&estimate, &truth, &mounting.head_from_maxilla);
         assert!((e.position_mm - Vector3::new(-0.1, 0.0, 0.0)).norm() < 1e-12, "{e:?}");
         assert!((e.rotation_deg - Vector3::new(0.0, 0.0, -0.2)).norm() < 1e-9, "{e:?}");
         assert!((e.mm() - 0.1).abs() < 1e-12 && (e.deg() - 0.2).abs() < 1e-9);
@@ -766,8 +767,8 @@ mod tests {
     /// A run of two static frames from one view and a hinge opening, one column, with
     /// estimates off by known amounts.
     fn tiny_run() -> Run {
-        let rig = Rig::default();
-        let rest = rig.head_from_maxilla.inverse() * rig.head_from_mandible_rest;
+        let rig = jawtrack_synth::scenes::Rig::default();
+        let rest = rig.mounting.maxilla_from_mandible_rest();
         let view =
             View { distance_mm: 100.0, azimuth_deg: 30.0, elevation_deg: 0.0, target: [0.0; 3], hand_seed: None };
         // 0.04 mm along maxilla +Y is 0.04 mm along head +Y (the half turn is about Y).

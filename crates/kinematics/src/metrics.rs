@@ -1,0 +1,156 @@
+//! The lower incisor's clinical numbers over a session: widest opening, left and right
+//! lateral excursion, protrusion and retrusion, each with the frame where it happens, and the
+//! envelopes of motion in the sagittal plane (protrusive vs opening) and the frontal plane
+//! (lateral vs opening).
+
+use crate::envelope::Envelope;
+use crate::point::Displacement;
+use serde_json::{Value, json};
+
+/// One frame of the path: its time (s), its `frame` number, the incisor's displacement.
+pub type Sample = (f64, u64, Displacement);
+
+/// The largest value of one displacement measure and where it happens.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extreme {
+    /// The value (mm).
+    pub mm: f64,
+    /// The frame's `frame` number.
+    pub frame: u64,
+    /// The frame's time (s).
+    pub t: f64,
+}
+
+impl Extreme {
+    /// The first sample where `f` is largest (`None` for no samples).
+    pub fn of(path: &[Sample], f: impl Fn(&Displacement) -> f64) -> Option<Self> {
+        let mut best: Option<Extreme> = None;
+        for (t, frame, d) in path {
+            let mm = f(d);
+            // Strictly greater: ties keep the earliest frame.
+            if best.is_none_or(|b| mm > b.mm) {
+                best = Some(Extreme { mm, frame: *frame, t: *t });
+            }
+        }
+        best
+    }
+
+    /// As `metrics.json` holds it.
+    pub fn to_json(self) -> Value {
+        json!({ "mm": self.mm, "frame": self.frame, "t_s": self.t })
+    }
+}
+
+/// The incisor's motion metrics over a path (displacements from rest, mm).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Metrics {
+    /// Frames in the path.
+    pub frames: usize,
+    /// Widest opening (down).
+    pub max_opening: Extreme,
+    /// Farthest excursion toward the patient's left (+lateral).
+    pub max_left: Extreme,
+    /// Farthest excursion toward the patient's right (−lateral), as a positive number.
+    pub max_right: Extreme,
+    /// Farthest forward.
+    pub max_protrusion: Extreme,
+    /// Farthest back (−protrusive), as a positive number.
+    pub max_retrusion: Extreme,
+    /// Sagittal envelope: x protrusive, y opening.
+    pub sagittal: Envelope,
+    /// Frontal envelope: x lateral (patient's left), y opening.
+    pub frontal: Envelope,
+}
+
+impl Metrics {
+    /// The metrics of `path`; `None` when it is empty.
+    pub fn compute(path: &[Sample]) -> Option<Self> {
+        let plane = |f: fn(&Displacement) -> (f64, f64)| path.iter().map(|(_, _, d)| f(d)).collect::<Vec<_>>();
+        Some(Metrics {
+            frames: path.len(),
+            max_opening: Extreme::of(path, |d| d.opening)?,
+            max_left: Extreme::of(path, |d| d.lateral)?,
+            max_right: Extreme::of(path, |d| -d.lateral)?,
+            max_protrusion: Extreme::of(path, |d| d.protrusive)?,
+            max_retrusion: Extreme::of(path, |d| -d.protrusive)?,
+            sagittal: Envelope::of(&plane(sagittal)),
+            frontal: Envelope::of(&plane(frontal)),
+        })
+    }
+
+    /// As `metrics.json` holds it.
+    pub fn to_json(&self) -> Value {
+        json!({
+            "frames_used": self.frames,
+            "max_opening": self.max_opening.to_json(),
+            "max_left_lateral": self.max_left.to_json(),
+            "max_right_lateral": self.max_right.to_json(),
+            "max_protrusion": self.max_protrusion.to_json(),
+            "max_retrusion": self.max_retrusion.to_json(),
+            "envelope_sagittal": self.sagittal.to_json("protrusive_mm", "opening_mm"),
+            "envelope_frontal": self.frontal.to_json("lateral_mm", "opening_mm"),
+        })
+    }
+}
+
+/// A displacement in the sagittal plane: (protrusive, opening).
+pub fn sagittal(d: &Displacement) -> (f64, f64) {
+    (d.protrusive, d.opening)
+}
+
+/// A displacement in the frontal plane: (lateral, opening).
+pub fn frontal(d: &Displacement) -> (f64, f64) {
+    (d.lateral, d.opening)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::envelope::{cross, polygon_area};
+
+    fn d(opening: f64, lateral: f64, protrusive: f64) -> Displacement {
+        Displacement { opening, lateral, protrusive }
+    }
+
+    /// Whether `q` is inside or on the counter-clockwise polygon `hull`.
+    fn inside(hull: &[(f64, f64)], q: (f64, f64)) -> bool {
+        (0..hull.len()).all(|i| cross(hull[i], hull[(i + 1) % hull.len()], q) >= -1e-12)
+    }
+
+    #[test]
+    fn metrics_pick_each_extreme_and_its_frame() {
+        let path: Vec<Sample> = vec![
+            (0.0, 10, d(0.0, 0.0, 0.0)),
+            (0.1, 11, d(30.0, 0.5, -4.0)),
+            (0.2, 12, d(1.0, 6.0, 0.0)),
+            (0.3, 14, d(1.0, -5.0, 0.5)),
+            (0.4, 15, d(3.2, 0.0, 8.0)),
+            (0.5, 16, d(30.0, 0.0, 0.0)),
+        ];
+        let m = Metrics::compute(&path).expect("a path");
+        assert_eq!(m.frames, 6);
+        assert_eq!(m.max_opening, Extreme { mm: 30.0, frame: 11, t: 0.1 }, "ties keep the first frame");
+        assert_eq!(m.max_left, Extreme { mm: 6.0, frame: 12, t: 0.2 });
+        assert_eq!(m.max_right, Extreme { mm: 5.0, frame: 14, t: 0.3 });
+        assert_eq!(m.max_protrusion, Extreme { mm: 8.0, frame: 15, t: 0.4 });
+        assert_eq!(m.max_retrusion, Extreme { mm: 4.0, frame: 11, t: 0.1 });
+        // Sagittal (protrusive, opening): corners (-4,30) (0,0) (8,3.2) (0,30).
+        assert_eq!(m.sagittal.hull.len(), 4);
+        assert!(
+            (m.sagittal.area_mm2 - polygon_area(&[(0.0, 0.0), (8.0, 3.2), (0.0, 30.0), (-4.0, 30.0)])).abs() < 1e-12
+        );
+        assert!(path.iter().all(|(_, _, x)| inside(&m.frontal.hull, frontal(x))));
+        assert!(path.iter().all(|(_, _, x)| inside(&m.sagittal.hull, sagittal(x))));
+        let j = m.to_json();
+        assert_eq!(j["max_right_lateral"]["mm"], 5.0);
+        assert_eq!(j["envelope_sagittal"]["vertices"], 4);
+    }
+
+    #[test]
+    fn a_path_at_rest_has_zero_metrics_and_no_path_has_none() {
+        let m = Metrics::compute(&[(0.0, 0, d(0.0, 0.0, 0.0)), (0.1, 1, d(0.0, 0.0, 0.0))]).expect("a path");
+        assert_eq!((m.max_opening.mm, m.max_left.mm, m.max_right.mm), (0.0, 0.0, 0.0));
+        assert_eq!((m.sagittal.area_mm2, m.sagittal.hull.len()), (0.0, 1));
+        assert!(Metrics::compute(&[]).is_none());
+    }
+}
