@@ -54,97 +54,20 @@
 //! distance indexes' reach ([`crate::SurfaceIndex::reach`]); a step that moves the arch by more
 //! than half the reach is refused.
 
+mod body;
+mod error;
+mod options;
+
+pub use body::RigidBody;
+pub use error::DynamicsError;
+pub use options::{DynamicsOptions, MAX_DT_S};
+
 use crate::contacts::{Arch, Side};
-use crate::mesh::Mesh;
 use jawtrack_pose::Pose;
-use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use options::above;
 use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// Numbers that set up the rigid body, its spring and the contact resolution.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct DynamicsOptions {
-    /// Mass of the lower arch (kg); a mandible with its teeth is about 0.1 kg.
-    pub mass_kg: f64,
-    /// Natural frequency (Hz) of the spring–damper pulling the arch toward the target, the same
-    /// for every translational and rotational mode: the stiffness is (2π f)² times the mass
-    /// (translation) or the inertia tensor (rotation).
-    pub natural_frequency_hz: f64,
-    /// Damping ratio of the spring–damper (1: critical, no overshoot). Damping acts on the
-    /// velocity relative to the target's, so a moving target is followed without lag.
-    pub damping_ratio: f64,
-    /// Integration step (s), at most 0.01 and at most 0.5 / (2π f) so that the explicit
-    /// spring stays accurate; target intervals are split into equal steps no longer than this.
-    pub dt_s: f64,
-    /// Deepest penetration (mm) allowed after each step, in either direction.
-    pub tolerance_mm: f64,
-    /// Most projection rounds (measure, solve, move) per step before giving up with an error.
-    pub max_iterations: usize,
-}
-
-impl Default for DynamicsOptions {
-    fn default() -> Self {
-        DynamicsOptions {
-            mass_kg: 0.1,
-            natural_frequency_hz: 15.0,
-            damping_ratio: 1.0,
-            dt_s: 1e-3,
-            // Half the 0.01 mm target, so that a reported path is well inside it.
-            tolerance_mm: 0.005,
-            max_iterations: 30,
-        }
-    }
-}
-
-impl DynamicsOptions {
-    /// Checks every number is usable.
-    pub fn validate(&self) -> Result<(), DynamicsError> {
-        let bad = |message: String| Err(DynamicsError::Options(message));
-        if !above(self.mass_kg, 0.0, f64::MAX) {
-            return bad(format!("the mass must be positive, got {} kg", self.mass_kg));
-        }
-        if !above(self.natural_frequency_hz, 0.0, f64::MAX) {
-            return bad(format!("the natural frequency must be positive, got {} Hz", self.natural_frequency_hz));
-        }
-        if !(0.0..=f64::MAX).contains(&self.damping_ratio) {
-            return bad(format!("the damping ratio must be 0 or more, got {}", self.damping_ratio));
-        }
-        if !above(self.dt_s, 0.0, MAX_DT_S) {
-            return bad(format!("the time step must be more than 0 and at most {MAX_DT_S} s, got {} s", self.dt_s));
-        }
-        let omega = std::f64::consts::TAU * self.natural_frequency_hz;
-        if omega * self.dt_s > MAX_OMEGA_DT {
-            return bad(format!(
-                "a {} s step is too long for a {} Hz spring (the step must be at most {:.2e} s)",
-                self.dt_s,
-                self.natural_frequency_hz,
-                MAX_OMEGA_DT / omega
-            ));
-        }
-        if !above(self.tolerance_mm, 0.0, 0.1) {
-            return bad(format!(
-                "the penetration tolerance must be more than 0 and at most 0.1 mm, got {}",
-                self.tolerance_mm
-            ));
-        }
-        if self.max_iterations == 0 {
-            return bad("at least one projection round is needed".to_owned());
-        }
-        Ok(())
-    }
-}
-
-/// Whether `lo < x ≤ hi` (false for NaN).
-fn above(x: f64, lo: f64, hi: f64) -> bool {
-    x > lo && x <= hi
-}
-
-/// The longest step accepted (s).
-pub const MAX_DT_S: f64 = 0.01;
-
-/// The largest ω·dt accepted: semi-implicit Euler on a critically damped spring is unstable
-/// past about 0.83 and loses accuracy well before.
-const MAX_OMEGA_DT: f64 = 0.5;
 
 /// Vertices within this distance (mm) of the other arch are kept as (possibly inactive)
 /// constraints and re-measured after every projection round.
@@ -152,154 +75,6 @@ const MARGIN_MM: f64 = 0.05;
 
 /// Projected Gauss–Seidel sweeps per solve, at most.
 const MAX_SWEEPS: usize = 500;
-
-/// Why dynamics could not be computed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum DynamicsError {
-    /// An option is out of range.
-    #[error("invalid dynamics option: {0}")]
-    Options(String),
-    /// The target path has no samples.
-    #[error("the target path is empty: it needs at least one (time, pose) sample")]
-    EmptyTarget,
-    /// A target sample is not after the one before it.
-    #[error("target sample {index}: its time {time_s} s is not after the previous sample's {previous_s} s")]
-    NonIncreasingTime {
-        /// The sample.
-        index: usize,
-        /// Its time (s).
-        time_s: f64,
-        /// The previous sample's time (s).
-        previous_s: f64,
-    },
-    /// A target sample's time or pose has a NaN or infinity.
-    #[error("target sample {index}: its time or pose is not finite")]
-    NonFinite {
-        /// The sample.
-        index: usize,
-    },
-    /// The starting pose has a NaN or infinity.
-    #[error("the pose to resolve is not finite")]
-    NonFinitePose,
-    /// The lower arch's mesh has no area, hence no centre of mass or inertia.
-    #[error("the lower arch has no area, so it has no centre of mass or inertia")]
-    DegenerateMesh,
-    /// The distance indexes do not reach far enough for the tolerance.
-    #[error(
-        "the arches' distance indexes reach {reach_mm} mm, too little for a {tolerance_mm} mm tolerance (build them with a reach of at least {needed_mm} mm)"
-    )]
-    ShortReach {
-        /// The smaller of the two indexes' reach (mm).
-        reach_mm: f64,
-        /// The tolerance (mm).
-        tolerance_mm: f64,
-        /// The least reach that works (mm).
-        needed_mm: f64,
-    },
-    /// One step moved the arch so far that penetration could go unseen.
-    #[error(
-        "at t = {t_s:.4} s the lower arch moved up to {moved_mm:.3} mm in one step, more than half the distance indexes' reach ({reach_mm} mm): use a shorter step or arches with a longer reach"
-    )]
-    TooFast {
-        /// When (s).
-        t_s: f64,
-        /// The bound on any vertex's displacement in the step (mm).
-        moved_mm: f64,
-        /// The indexes' reach (mm).
-        reach_mm: f64,
-    },
-    /// Penetration remained deeper than the tolerance after the allowed projection rounds.
-    #[error(
-        "{at}: {depth_mm:.4} mm of penetration remained after {iterations} projection rounds (tolerance {tolerance_mm} mm)"
-    )]
-    Unresolved {
-        /// Where: "at maximal intercuspation" or "at t = … s".
-        at: String,
-        /// The deepest remaining penetration (mm).
-        depth_mm: f64,
-        /// Rounds done.
-        iterations: usize,
-        /// The tolerance (mm).
-        tolerance_mm: f64,
-    },
-}
-
-/// The lower arch as a rigid body: a thin shell over its triangles.
-///
-/// A scan is an open surface, so it has no volume to fill; its mass is spread evenly over its
-/// area instead (each triangle's exact second moment of area, summed and scaled to the mass).
-/// For a mandible that puts the centre of mass among the teeth rather than at the condyles,
-/// which is right for how the teeth, not the whole bone, meet: the spring's pull then acts
-/// where the contacts are.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RigidBody {
-    /// Mass (kg).
-    pub mass_kg: f64,
-    /// Centre of mass, in the lower scan's frame (mm).
-    pub centre_of_mass: Point3<f64>,
-    /// Inertia tensor about the centre of mass, in the lower scan's axes (kg·mm²).
-    pub inertia_kg_mm2: Matrix3<f64>,
-    /// The largest distance of a vertex from the centre of mass (mm).
-    pub radius_mm: f64,
-}
-
-impl RigidBody {
-    /// The shell body of `mesh` with `mass_kg` spread evenly over its area.
-    pub fn shell(mesh: &Mesh, mass_kg: f64) -> Result<RigidBody, DynamicsError> {
-        let (mut area, mut moment) = (0.0, Vector3::zeros());
-        for t in 0..mesh.triangles.len() {
-            let a = mesh.area_normal(t).norm() / 2.0;
-            let [p, q, r] = mesh.corners(t);
-            area += a;
-            moment += (p.coords + q.coords + r.coords) * (a / 3.0);
-        }
-        if !above(area, 0.0, f64::MAX) || !above(mass_kg, 0.0, f64::MAX) {
-            return Err(DynamicsError::DegenerateMesh);
-        }
-        let c = moment / area;
-        // ∫ (p−c)(p−c)ᵀ dA over a triangle = A/12 (Σ vᵢvᵢᵀ + s sᵀ), vᵢ its corners about c, s their sum.
-        let mut second = Matrix3::zeros();
-        for t in 0..mesh.triangles.len() {
-            let a = mesh.area_normal(t).norm() / 2.0;
-            let v = mesh.corners(t).map(|p| p.coords - c);
-            let s = v[0] + v[1] + v[2];
-            second += (v[0] * v[0].transpose() + v[1] * v[1].transpose() + v[2] * v[2].transpose() + s * s.transpose())
-                * (a / 12.0);
-        }
-        let second = second * (mass_kg / area);
-        let inertia = Matrix3::identity() * second.trace() - second;
-        let radius = mesh.vertices.iter().map(|v| (v.coords - c).norm()).fold(0.0, f64::max);
-        Ok(RigidBody { mass_kg, centre_of_mass: Point3::from(c), inertia_kg_mm2: inertia, radius_mm: radius })
-    }
-
-    /// The inertia tensor in the upper scan's axes with the lower scan at `pose`, and its inverse.
-    fn inertia_world(&self, pose: &Pose) -> (Matrix3<f64>, Matrix3<f64>) {
-        let r = pose.rotation_matrix();
-        let i = r * self.inertia_kg_mm2 * r.transpose();
-        // A surface with area spans two directions, so every principal moment of its shell is
-        // positive and the inverse exists; the fallback (no rotation) is never taken.
-        let inv = i.try_inverse().unwrap_or_else(Matrix3::zeros);
-        (i, inv)
-    }
-
-    /// Where `pose` puts the centre of mass (upper scan frame).
-    fn centre(&self, pose: &Pose) -> Point3<f64> {
-        pose.transform_point(&self.centre_of_mass)
-    }
-
-    /// `pose` moved by `dx` (mm) and turned by the rotation vector `dtheta` (rad) about the
-    /// centre of mass.
-    fn displaced(&self, pose: &Pose, dx: &Vector3<f64>, dtheta: &Vector3<f64>) -> Pose {
-        let q = UnitQuaternion::from_scaled_axis(*dtheta) * pose.rotation();
-        let com = self.centre(pose) + dx;
-        Pose::from_parts(q, com.coords - q * self.centre_of_mass.coords)
-    }
-
-    /// How far at most any point of the arch moves under (dx, dtheta) about its centre of mass.
-    fn displacement_bound(&self, dx: &Vector3<f64>, dtheta: &Vector3<f64>) -> f64 {
-        dx.norm() + dtheta.norm() * self.radius_mm
-    }
-}
 
 /// The smallest rigid correction of a penetrating pose, from [`resolve_intercuspation`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -832,31 +607,6 @@ fn solve(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenes;
-
-    #[test]
-    fn a_spherical_shell_has_its_centre_and_two_thirds_m_r_squared() {
-        let (c, r, m) = (Point3::new(1.0, -2.0, 3.0), 3.0, 0.1);
-        let body = RigidBody::shell(&scenes::sphere(c, r, 60), m).expect("area");
-        assert!((body.centre_of_mass - c).norm() < 1e-9, "{}", body.centre_of_mass);
-        let expected = 2.0 / 3.0 * m * r * r;
-        for i in 0..3 {
-            assert!((body.inertia_kg_mm2[(i, i)] / expected - 1.0).abs() < 3e-3, "{}", body.inertia_kg_mm2);
-        }
-        let i = body.inertia_kg_mm2;
-        assert!([i[(0, 1)], i[(0, 2)], i[(1, 2)]].iter().all(|x| x.abs() < 1e-3 * expected), "{i}");
-        assert!((body.radius_mm - r).abs() < 1e-9);
-    }
-
-    #[test]
-    fn a_flat_patch_has_the_inertia_of_a_plate() {
-        // A square plate of side a: I = m a²/12 about in-plane axes, m a²/6 about the normal.
-        let (a, m) = (10.0, 0.1);
-        let body = RigidBody::shell(&scenes::patch(a, 8, 0.0, false), m).expect("area");
-        let i = body.inertia_kg_mm2;
-        let plate = m * a * a / 12.0;
-        assert!((i[(0, 0)] / plate - 1.0).abs() < 1e-9 && (i[(2, 2)] / (2.0 * plate) - 1.0).abs() < 1e-9, "{i}");
-    }
 
     #[test]
     fn one_constraint_is_met_by_the_least_motion() {
