@@ -5,10 +5,11 @@
 //! replays a recording, with deliberate loss, reordering and duplication for tests and demos.
 //! `jawtrack keygen` makes a pairing key. The datagram itself lives in `jawtrack_wire`.
 
-use crate::live::{LiveServer, LiveState, ViewerOptions};
+use crate::live::ViewerArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_recording::{FrameRecord, Overwrite, RecordingHeader, RecordingWriter};
+use jawtrack_viewer::{LiveServer, LiveState};
 use jawtrack_wire::link::{Counters, Link, LinkConfig, Verdict};
 use jawtrack_wire::{Ack, Key, Message, PosePacket, Security, Session, decode, encode_ack, unix_ms};
 use rand::{Rng, SeedableRng};
@@ -66,7 +67,7 @@ pub(crate) struct ReceiveArgs {
     #[arg(long)]
     serve: Option<SocketAddr>,
     #[command(flatten)]
-    viewer: ViewerOptions,
+    viewer: ViewerArgs,
     /// Stop after this many seconds (default: run until Ctrl-C).
     #[arg(long)]
     duration: Option<f64>,
@@ -111,23 +112,10 @@ fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
     Ok(())
 }
 
-/// The link's counts as JSON: the receiver's exit summary and the viewer's status share them.
-pub(crate) fn counters_json(c: &Counters) -> serde_json::Value {
-    serde_json::json!({
-        "received": c.received,
-        "accepted": c.accepted,
-        "lost": c.lost,
-        "reordered": c.reordered,
-        "duplicated": c.duplicated,
-        "rejected": c.rejected_total(),
-        "rejected_by_reason": c.rejected,
-    })
-}
-
 /// What a receiver run did, printed as one JSON line at exit.
 fn summary_json(c: &Counters, acks: u64, elapsed: f64) -> serde_json::Value {
     let cpu = process_cpu_seconds();
-    let mut v = counters_json(c);
+    let mut v = c.to_json();
     v["acks_sent"] = acks.into();
     v["duration_s"] = elapsed.into();
     v["cpu_s"] = cpu.into();
@@ -187,7 +175,7 @@ pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
     header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
     let mut out = RecordingWriter::create(&a.out, header, Overwrite::Replace)?;
 
-    let live = Arc::new(LiveState::new(&a.viewer, "live")?);
+    let live = Arc::new(LiveState::new(&a.viewer.options(), "live")?);
     let _server = match a.serve {
         Some(addr) => Some(LiveServer::start(addr, live.clone())?),
         None => None,

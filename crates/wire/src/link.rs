@@ -66,6 +66,19 @@ impl Counters {
     pub fn rejected_total(&self) -> u64 {
         self.rejected.values().sum()
     }
+
+    /// The counts as JSON: the receiver's exit summary and the viewer's status share them.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "received": self.received,
+            "accepted": self.accepted,
+            "lost": self.lost,
+            "reordered": self.reordered,
+            "duplicated": self.duplicated,
+            "rejected": self.rejected_total(),
+            "rejected_by_reason": self.rejected,
+        })
+    }
 }
 
 #[derive(Debug)]

@@ -1,0 +1,501 @@
+//! The web viewer's server: the page (`viewer/` in the repository, embedded in this library at
+//! build time with the three.js modules it imports), the scene (the two meshes, or the two
+//! marker dodecahedrons when no scan is given), live poses over a WebSocket for
+//! `jawtrack receive --serve`, and a whole recording for `jawtrack view`.
+//!
+//! The readouts (opening, lateral and protrusive displacement of the lower incisor) are
+//! computed here, not in the browser (`jawtrack_kinematics`), from the rest position, which
+//! the "Calibrate" button sets to the mean of the last frames while the patient bites in
+//! maximal intercuspation (the first frame until then).
+
+use axum::Router;
+use axum::extract::ws::{Message as WsMessage, WebSocket, WebSocketUpgrade};
+use axum::extract::{Path as UrlPath, State};
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Json, Response};
+use axum::routing::get;
+use jawtrack_kinematics::Incisor;
+use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
+use jawtrack_pose::Pose;
+use jawtrack_recording::FrameRecord;
+use jawtrack_tracker::registration::mean_pose;
+use jawtrack_wire::link::Counters;
+use serde_json::{Value, json};
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use tower_http::services::{ServeDir, ServeFile};
+
+mod page {
+    include!(concat!(env!("OUT_DIR"), "/page.rs"));
+}
+
+/// Why the viewer could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewerError {
+    /// A scan the viewer cannot show.
+    #[error("{path}: {reason}")]
+    Mesh {
+        /// The mesh file, as given.
+        path: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The page's three.js modules were not installed when this program was built.
+    #[error(
+        "this jawtrack was built without the viewer's three.js: run `npm ci --prefix viewer` in the repository \
+         and build again (or serve a page folder with --viewer-dir)"
+    )]
+    PageMissing,
+    /// A page folder given instead of the embedded page lacks a file.
+    #[error("the viewer page is not ready in {dir}: {missing} is missing (run `npm ci --prefix viewer` there)")]
+    PageDirIncomplete {
+        /// The folder.
+        dir: String,
+        /// The file it lacks.
+        missing: String,
+    },
+    /// The address could not be served (taken, or not this machine's).
+    #[error("serving the viewer on {addr}: {source}")]
+    Bind {
+        /// The address.
+        addr: SocketAddr,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The server's thread or runtime could not start.
+    #[error("starting the viewer's server: {0}")]
+    Start(std::io::Error),
+}
+
+/// What the viewer shows besides the poses.
+#[derive(Debug, Clone, Default)]
+pub struct ViewerOptions {
+    /// The upper arch's scan (STL, PLY or OBJ, mm) to show instead of the maxilla marker.
+    pub maxilla: Option<PathBuf>,
+    /// The lower arch's scan, placed by each frame's pose of the mandible in the maxilla.
+    pub mandible: Option<PathBuf>,
+    /// Serve the page from this folder (with three.js installed by `npm ci`) instead of the
+    /// copy built into the program: for working on the page.
+    pub page_dir: Option<PathBuf>,
+}
+
+/// Frames averaged by the intercuspation step (half a second at 30 frames/s).
+const CALIBRATION_FRAMES: usize = 15;
+
+/// What the viewer shows, and the poses it moves by.
+pub struct LiveState {
+    mode: &'static str,
+    page_dir: Option<PathBuf>,
+    meshes: [Option<(PathBuf, &'static str)>; 2],
+    tx: tokio::sync::broadcast::Sender<Arc<str>>,
+    inner: Mutex<Inner>,
+    recording: Option<Value>,
+    incisor: Incisor,
+}
+
+#[derive(Default)]
+struct Inner {
+    recent: VecDeque<Pose>,
+    rest: Option<Pose>,
+    /// The last status's time and accepted count, for the rate.
+    last_status: Option<(Instant, u64)>,
+}
+
+fn mesh_format(path: &Path) -> Result<&'static str, ViewerError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("stl") => Ok("stl"),
+        Some("ply") => Ok("ply"),
+        Some("obj") => Ok("obj"),
+        _ => Err(ViewerError::Mesh {
+            path: path.display().to_string(),
+            reason: "the viewer reads STL, PLY or OBJ meshes (by file extension)".into(),
+        }),
+    }
+}
+
+impl LiveState {
+    /// A state for `mode` (`live` or `replay`), checking the meshes it is to show.
+    pub fn new(options: &ViewerOptions, mode: &'static str) -> Result<Self, ViewerError> {
+        let mut meshes = [None, None];
+        for (slot, path) in meshes.iter_mut().zip([&options.maxilla, &options.mandible]) {
+            if let Some(p) = path {
+                let format = mesh_format(p)?;
+                if !p.is_file() {
+                    return Err(ViewerError::Mesh {
+                        path: p.display().to_string(),
+                        reason: "no such mesh file".into(),
+                    });
+                }
+                *slot = Some((p.clone(), format));
+            }
+        }
+        Ok(LiveState {
+            mode,
+            page_dir: options.page_dir.clone(),
+            meshes,
+            tx: tokio::sync::broadcast::channel(256).0,
+            inner: Mutex::new(Inner::default()),
+            recording: None,
+            incisor: Incisor::standard(),
+        })
+    }
+
+    /// A state for replaying `frames` (`jawtrack view`).
+    pub fn replay(options: &ViewerOptions, header: Option<Value>, frames: &[FrameRecord]) -> Result<Self, ViewerError> {
+        let mut state = LiveState::new(options, "replay")?;
+        let rest = frames.iter().find_map(|f| f.maxilla_from_mandible);
+        state.inner.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner).rest = rest;
+        let list: Vec<Value> = frames.iter().map(|f| state.frame_message(f, f.seq, rest.as_ref())).collect();
+        state.recording = Some(json!({ "header": header, "frames": list }));
+        Ok(state)
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
+        // A panic elsewhere cannot leave these few poses inconsistent: keep serving.
+        self.inner.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// The lower incisor in the scene (maxilla) frame, and its displacement from `rest` as
+    /// (opening, lateral toward the patient's left, protrusive) in mm.
+    fn readouts(&self, m: &Pose, rest: Option<&Pose>) -> (Value, [Option<f64>; 3]) {
+        let p = self.incisor.in_maxilla(m);
+        let d = rest.map(|r| self.incisor.displacement(m, r));
+        (json!([p.x, p.y, p.z]), [d.map(|d| d.opening), d.map(|d| d.lateral), d.map(|d| d.protrusive)])
+    }
+
+    fn frame_message(&self, f: &FrameRecord, seq: Option<u64>, rest: Option<&Pose>) -> Value {
+        let tags = |b: &Option<jawtrack_recording::BodyRecord>| b.as_ref().map_or(0, |b| b.tags.len());
+        let (incisor, [opening, lateral, protrusive]) = match &f.maxilla_from_mandible {
+            Some(m) => self.readouts(m, rest),
+            None => (Value::Null, [None; 3]),
+        };
+        json!({
+            "type": "pose",
+            "seq": seq,
+            "t": f.t,
+            "maxilla_from_mandible": f.maxilla_from_mandible,
+            "incisor": incisor,
+            "opening_mm": opening,
+            "lateral_mm": lateral,
+            "protrusive_mm": protrusive,
+            "tags": {"maxilla": tags(&f.maxilla), "mandible": tags(&f.mandible)},
+        })
+    }
+
+    /// A frame arrived: remember it and show it.
+    pub fn pose(&self, f: &FrameRecord, seq: Option<u64>) {
+        let rest = {
+            let mut inner = self.lock();
+            if let Some(m) = f.maxilla_from_mandible {
+                inner.rest.get_or_insert(m);
+                inner.recent.push_back(m);
+                if inner.recent.len() > CALIBRATION_FRAMES {
+                    inner.recent.pop_front();
+                }
+            }
+            inner.rest
+        };
+        if self.tx.receiver_count() > 0 {
+            // Only an absent viewer makes this fail.
+            let _ = self.tx.send(self.frame_message(f, seq, rest.as_ref()).to_string().into());
+        }
+    }
+
+    /// The link's counts, for the status badge.
+    pub fn status(&self, c: &Counters, last_arrival: Option<Instant>) {
+        let link = match last_arrival.map(|t| t.elapsed().as_secs_f64()) {
+            None => "waiting",
+            Some(s) if s < 1.0 => "up",
+            Some(_) => "stale",
+        };
+        let expected = c.accepted + c.lost;
+        let now = Instant::now();
+        let rate = self.lock().last_status.replace((now, c.accepted)).map_or(0.0, |(then, accepted)| {
+            (c.accepted - accepted) as f64 / now.duration_since(then).as_secs_f64().max(1e-3)
+        });
+        let mut message = c.to_json();
+        message["type"] = "status".into();
+        message["link"] = link.into();
+        message["rate_hz"] = rate.into();
+        message["loss_percent"] = (if expected > 0 { 100.0 * c.lost as f64 / expected as f64 } else { 0.0 }).into();
+        if self.tx.receiver_count() > 0 {
+            let _ = self.tx.send(message.to_string().into());
+        }
+    }
+
+    /// The maximal-intercuspation step: the mean of the last frames becomes the rest position.
+    fn calibrate(&self) -> Value {
+        let mut inner = self.lock();
+        let recent: Vec<Pose> = inner.recent.iter().copied().collect();
+        match mean_pose(&recent) {
+            Some(mean) if recent.len() >= 3 => {
+                let moved = inner.rest.map(|r| (self.incisor.in_head(&mean) - self.incisor.in_head(&r)).norm());
+                inner.rest = Some(mean);
+                json!({"type": "calibrated", "ok": true, "message": format!(
+                    "rest position set from the last {} frames{}", recent.len(),
+                    moved.map(|d| format!(" (the incisor's rest moved {d:.2} mm)")).unwrap_or_default())})
+            }
+            _ => json!({"type": "calibrated", "ok": false, "message": format!(
+                "need at least 3 recent frames with both jaws tracked, have {}", recent.len())}),
+        }
+    }
+
+    fn scene(&self) -> Value {
+        let mesh = |i: usize, name: &str| match &self.meshes[i] {
+            Some((_, format)) => json!({"format": format, "url": format!("/api/mesh/{name}")}),
+            None => dodecahedron_mesh(),
+        };
+        json!({
+            "mode": self.mode,
+            "maxilla": mesh(0, "maxilla"),
+            "mandible": mesh(1, "mandible"),
+            "maxilla_from_mandible_rest": self.lock().rest,
+        })
+    }
+}
+
+/// The marker solid as inline triangles (body frame, mm).
+fn dodecahedron_mesh() -> Value {
+    let solid = Dodecahedron::new(DEFAULT_EDGE_MM);
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for face in solid.faces() {
+        let base = positions.len() / 3;
+        for v in &face.vertices {
+            positions.extend([v.x, v.y, v.z]);
+        }
+        for k in 1..4 {
+            indices.extend([base, base + k, base + k + 1]);
+        }
+    }
+    json!({"format": "mesh", "positions": positions, "indices": indices})
+}
+
+/// The running web server (on its own thread; it ends with the process).
+pub struct LiveServer;
+
+impl LiveServer {
+    /// Binds `addr` now (so a taken port is reported at once) and serves on a thread.
+    pub fn start(addr: SocketAddr, state: Arc<LiveState>) -> Result<LiveServer, ViewerError> {
+        let mut app = Router::new();
+        match &state.page_dir {
+            Some(dir) => {
+                for needed in ["index.html", "viewer.js", "style.css", "node_modules/three/build/three.module.js"] {
+                    if !dir.join(needed).is_file() {
+                        return Err(ViewerError::PageDirIncomplete {
+                            dir: dir.display().to_string(),
+                            missing: needed.into(),
+                        });
+                    }
+                }
+                app = app
+                    .route_service("/", ServeFile::new(dir.join("index.html")))
+                    .route_service("/viewer.js", ServeFile::new(dir.join("viewer.js")))
+                    .route_service("/style.css", ServeFile::new(dir.join("style.css")))
+                    .nest_service("/vendor/three", ServeDir::new(dir.join("node_modules/three")));
+            }
+            None if !page::THREE_EMBEDDED => return Err(ViewerError::PageMissing),
+            None => {
+                for &(url, content_type, bytes) in page::FILES {
+                    let serve = move || async move { ([(header::CONTENT_TYPE, content_type)], bytes) };
+                    app = app.route(url, get(serve));
+                    if url == "/index.html" {
+                        app = app.route("/", get(serve));
+                    }
+                }
+            }
+        }
+        let app = app
+            .route("/api/scene", get(|State(s): State<Arc<LiveState>>| async move { Json(s.scene()) }))
+            .route("/api/mesh/{body}", get(mesh))
+            .route("/api/recording", get(recording))
+            .route("/ws", get(socket))
+            .with_state(state);
+        let listener = std::net::TcpListener::bind(addr).map_err(|source| ViewerError::Bind { addr, source })?;
+        listener.set_nonblocking(true).map_err(ViewerError::Start)?;
+        let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().map_err(ViewerError::Start)?;
+        std::thread::Builder::new()
+            .name("viewer".into())
+            .spawn(move || {
+                runtime.block_on(async move {
+                    match tokio::net::TcpListener::from_std(listener) {
+                        Ok(l) => {
+                            if let Err(e) = axum::serve(l, app).await {
+                                eprintln!("viewer server stopped: {e}");
+                            }
+                        }
+                        Err(e) => eprintln!("viewer server could not start: {e}"),
+                    }
+                });
+            })
+            .map_err(ViewerError::Start)?;
+        Ok(LiveServer)
+    }
+}
+
+async fn mesh(State(s): State<Arc<LiveState>>, UrlPath(body): UrlPath<String>) -> Response {
+    let slot = match body.as_str() {
+        "maxilla" => 0,
+        "mandible" => 1,
+        _ => return (StatusCode::NOT_FOUND, "no such body").into_response(),
+    };
+    match &s.meshes[slot] {
+        Some((path, _)) => match tokio::fs::read(path).await {
+            Ok(bytes) => ([(header::CONTENT_TYPE, "application/octet-stream")], bytes).into_response(),
+            Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, format!("{}: {e}", path.display())).into_response(),
+        },
+        None => (StatusCode::NOT_FOUND, "no mesh file given for this body").into_response(),
+    }
+}
+
+async fn recording(State(s): State<Arc<LiveState>>) -> Response {
+    match &s.recording {
+        Some(r) => Json(r.clone()).into_response(),
+        None => (StatusCode::NOT_FOUND, "live mode: poses come over /ws").into_response(),
+    }
+}
+
+async fn socket(State(s): State<Arc<LiveState>>, upgrade: WebSocketUpgrade) -> Response {
+    upgrade.on_upgrade(move |ws| session(ws, s))
+}
+
+async fn session(mut ws: WebSocket, s: Arc<LiveState>) {
+    let mut poses = s.tx.subscribe();
+    loop {
+        tokio::select! {
+            out = poses.recv() => match out {
+                Ok(text) => if ws.send(WsMessage::Text(text.as_ref().into())).await.is_err() { return },
+                // A slow browser skips frames rather than holding the receiver back.
+                Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => continue,
+                Err(tokio::sync::broadcast::error::RecvError::Closed) => return,
+            },
+            incoming = ws.recv() => match incoming {
+                Some(Ok(WsMessage::Text(text))) => {
+                    let asked: Value = serde_json::from_str(text.as_str()).unwrap_or(Value::Null);
+                    if asked["type"] == "calibrate_intercuspation" {
+                        let reply = s.calibrate().to_string();
+                        if ws.send(WsMessage::Text(reply.into())).await.is_err() { return }
+                    }
+                }
+                Some(Ok(_)) => {}
+                Some(Err(_)) | None => return,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn options() -> ViewerOptions {
+        ViewerOptions::default()
+    }
+
+    fn frame(opening_rad: f64) -> FrameRecord {
+        let m = Pose::from_axis_angle(Vector3::new(opening_rad, 0.0, 0.0), Vector3::new(0.0, 44.0, 0.0));
+        FrameRecord {
+            frame: 0,
+            session: None,
+            path: None,
+            t: 0.0,
+            maxilla: None,
+            mandible: None,
+            maxilla_from_mandible: Some(m),
+            maxilla_scan_from_mandible_scan: None,
+            flags: Vec::new(),
+            searched: None,
+            timings_s: None,
+            seq: None,
+            received_unix_s: None,
+        }
+    }
+
+    #[test]
+    fn the_calibration_step_sets_the_rest_from_recent_frames_only_when_there_are_enough() {
+        let state = LiveState::new(&options(), "live").expect("state");
+        state.pose(&frame(0.2), Some(0));
+        state.pose(&frame(0.0), Some(1));
+        let refused = state.calibrate();
+        assert_eq!(refused["ok"], false, "{refused}");
+        for i in 2..40 {
+            state.pose(&frame(0.0), Some(i));
+        }
+        let done = state.calibrate();
+        assert_eq!(done["ok"], true, "{done}");
+        // The first frame was open: the rest moved to the closed position.
+        let rest = state.lock().rest.expect("rest");
+        let (angle, _) = rest.distance_to(&frame(0.0).maxilla_from_mandible.expect("pose"));
+        assert!(angle < 1e-12);
+        let (_, [opening, lateral, _]) = state.readouts(&frame(0.0).maxilla_from_mandible.expect("pose"), Some(&rest));
+        assert_eq!((opening, lateral), (Some(0.0), Some(0.0)));
+    }
+
+    #[test]
+    fn the_scene_falls_back_to_the_marker_solids_and_refuses_unknown_meshes() {
+        let state = LiveState::new(&options(), "live").expect("state");
+        let scene = state.scene();
+        assert_eq!(scene["maxilla"]["format"], "mesh");
+        assert_eq!(
+            scene["maxilla"]["indices"].as_array().map(Vec::len),
+            Some(12 * 3 * 3),
+            "12 pentagons, 3 triangles each"
+        );
+        let bad = ViewerOptions { maxilla: Some("a.dxf".into()), mandible: Some("b.stl".into()), ..options() };
+        assert!(LiveState::new(&bad, "live").is_err_and(|e| e.to_string().contains("STL, PLY or OBJ")));
+    }
+
+    /// A GET over a plain socket: (status line, content type, body length).
+    fn get(addr: SocketAddr, path: &str) -> (String, String, usize) {
+        use std::io::{Read as _, Write as _};
+        let mut stream = std::net::TcpStream::connect(addr).expect("connect");
+        write!(stream, "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").expect("request");
+        let mut response = Vec::new();
+        stream.read_to_end(&mut response).expect("response");
+        let text = String::from_utf8_lossy(&response);
+        let (head, body) = text.split_once("\r\n\r\n").expect("a head and a body");
+        let status = head.lines().next().unwrap_or_default().to_owned();
+        let content_type = head
+            .lines()
+            .find_map(|l| l.to_ascii_lowercase().strip_prefix("content-type: ").map(str::to_owned))
+            .unwrap_or_default();
+        (status, content_type, body.len())
+    }
+
+    #[test]
+    fn the_page_is_served_from_the_program_itself() {
+        let state = Arc::new(LiveState::new(&options(), "live").expect("state"));
+        // A free port: bound, then released for the server.
+        let addr = std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port");
+        if !page::THREE_EMBEDDED {
+            assert!(matches!(LiveServer::start(addr, state), Err(ViewerError::PageMissing)));
+            eprintln!("SKIPPED: serving the embedded page: three.js was not installed when this was built");
+            return;
+        }
+        LiveServer::start(addr, state).expect("serving");
+        let (status, content_type, len) = get(addr, "/");
+        assert!(
+            status.contains("200") && content_type.starts_with("text/html") && len > 100,
+            "{status} {content_type}"
+        );
+        for path in
+            ["/viewer.js", "/style.css", "/vendor/three/build/three.module.js", "/vendor/three/build/three.core.js"]
+        {
+            let (status, _, len) = get(addr, path);
+            assert!(status.contains("200") && len > 100, "{path}: {status}");
+        }
+        assert!(get(addr, "/vendor/three/package.json").0.contains("404"), "only what the page imports");
+        // Every module the page imports is in the program.
+        let page = String::from_utf8_lossy(page::FILES.iter().find(|f| f.0 == "/viewer.js").expect("viewer.js").2);
+        for line in page.lines().filter(|l| l.starts_with("import ")) {
+            let Some(module) = line.split('\'').nth(1) else { continue };
+            let url = module.replace("three/addons/", "/vendor/three/examples/jsm/");
+            let url = if url == "three" { "/vendor/three/build/three.module.js".to_owned() } else { url };
+            assert!(page::FILES.iter().any(|f| f.0 == url), "{module} is imported but not embedded");
+        }
+    }
+}
