@@ -3,9 +3,9 @@
 //! can read (`report.md` with PNG plots), CSV tables, and the same tables for the reference
 //! stack on the same frames when OpenCV is installed.
 
-use crate::plot::{self, Series, Style};
 use anyhow::{Context, Result};
 use clap::Args;
+use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_synth::{Realism, SceneKind};
 use jawtrack_tracker_bench::benchtop::{
     self, Column, DynamicRow, FLIP_DEG, MarkerFile, MeanSd, Options, Regression, Run, Stack, StaticRow,

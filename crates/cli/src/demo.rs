@@ -13,7 +13,7 @@ use jawtrack_marker::Marker;
 use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_tracker::{Tracker, TrackerConfig};
 
-use crate::plot::{self, Series, Style};
+use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SceneSummary, SynthConfig};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};

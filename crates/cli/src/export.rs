@@ -6,10 +6,10 @@
 //! sequence order. Displacements are measured from the rest position: the first frame with a
 //! jaw pose, or `--rest-frame`.
 
-use crate::plot::{self, Series, Style};
 use anyhow::{Context, Result, bail};
 use clap::{ArgGroup, Args};
 use jawtrack_kinematics::{Displacement, Incisor};
+use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{FrameRecord, Recording, RecordingHeader};
 use std::io::Write;

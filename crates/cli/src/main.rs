@@ -25,7 +25,6 @@ mod linkbench;
 mod live;
 mod metrics;
 mod occlusal;
-mod plot;
 mod register;
 mod track;
 

@@ -7,11 +7,11 @@
 //! rest position); frames without a jaw pose are skipped and counted.
 
 use crate::export::{load, rest_pose};
-use crate::plot::{self, Series, Style};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::metrics::{frontal, sagittal};
 use jawtrack_kinematics::{Displacement, Incisor, Metrics, Sample};
+use jawtrack_plot::{self as plot, Series, Style};
 use nalgebra::Point3;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};

@@ -1,6 +1,8 @@
-//! Small SVG line charts for the CLI's reports (trajectories against their truth): axes with
-//! round-number ticks, one polyline or set of dots per series, a legend; saved as SVG and, for
-//! reports read where SVG is not shown, rasterised to PNG by resvg.
+//! Small SVG line charts for the reports of the `jawtrack` command and of the benchmarks
+//! (trajectories against their truth, errors per view): axes with round-number ticks, one
+//! polyline or set of dots per series, a legend; saved as SVG and, for reports read where SVG
+//! is not shown, rasterised to PNG by resvg. Its own crate so that the command and the
+//! benchmarks share it without either depending on the other.
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
@@ -9,7 +11,7 @@ use svg::node::element::{Circle, Line, Polyline, Rectangle, Text};
 
 /// How a series is drawn.
 #[derive(Clone, Copy)]
-pub(crate) enum Style {
+pub enum Style {
     /// A line through the points.
     Line,
     /// A dot at each point.
@@ -17,10 +19,14 @@ pub(crate) enum Style {
 }
 
 /// One series of a chart.
-pub(crate) struct Series<'a> {
+pub struct Series<'a> {
+    /// Its name in the legend.
     pub name: &'a str,
+    /// Its SVG colour ("#d62728").
     pub color: &'a str,
+    /// Line or dots.
     pub style: Style,
+    /// (x, y) in the axes' units; points that are not finite are left out.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -53,7 +59,7 @@ fn label(s: &str, x: f64, y: f64, anchor: &str) -> Text {
 
 /// A chart of `series` with its title and axis labels; the y axis keeps the x axis's scale
 /// when `equal_axes` (paths in a plane).
-pub(crate) fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], equal_axes: bool) -> Document {
+pub fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], equal_axes: bool) -> Document {
     let all = series.iter().flat_map(|s| s.points.iter().copied()).filter(|p| p.0.is_finite() && p.1.is_finite());
     let (mut x0, mut x1, mut y0, mut y1) = all
         .fold((f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY), |(a, b, c, d), (x, y)| {
@@ -152,7 +158,7 @@ pub(crate) fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<
 
 /// Writes `doc` as `<stem>.svg` and `<stem>.png` (twice the SVG's size; text in the system's
 /// sans-serif font, left out when the system has none); returns both paths.
-pub(crate) fn save_svg_and_png(doc: &Document, stem: &Path) -> Result<[PathBuf; 2]> {
+pub fn save_svg_and_png(doc: &Document, stem: &Path) -> Result<[PathBuf; 2]> {
     use resvg::{tiny_skia, usvg};
     let svg_path = stem.with_extension("svg");
     let png_path = stem.with_extension("png");
