@@ -34,7 +34,7 @@ enum BenchKind {
     Pipeline(PipelineArgs),
     /// The thesis's benchtop experiments on rendered frames: static grid, hinge, excursions,
     /// after calibrating the marker; tables, CSV, plots and a report, beside the reference stack.
-    Accuracy(crate::accuracy::AccuracyArgs),
+    Accuracy(jawtrack_tracker_bench::accuracy::AccuracyArgs),
     /// The phone link on loopback: a sustained stream against a real receiver (loss, CPU), then
     /// random, forged and replayed datagrams (none accepted, every one counted).
     Link(crate::linkbench::LinkBenchArgs),
@@ -65,7 +65,7 @@ struct PipelineArgs {
 pub(crate) fn run(a: &BenchArgs) -> Result<()> {
     match &a.which {
         BenchKind::Pipeline(p) => pipeline(p),
-        BenchKind::Accuracy(a) => crate::accuracy::run(a),
+        BenchKind::Accuracy(a) => jawtrack_tracker_bench::accuracy::run(a),
         BenchKind::Link(a) => crate::linkbench::run(a),
     }
 }

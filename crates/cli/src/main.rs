@@ -12,7 +12,6 @@ macro_rules! say {
     }};
 }
 
-mod accuracy;
 mod bench;
 mod calibrate;
 mod contacts;

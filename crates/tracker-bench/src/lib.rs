@@ -3,6 +3,7 @@
 //! and `jawtrack bench accuracy`'s benchtop experiments in the 2020 thesis's form both stand
 //! on it.
 
+pub mod accuracy;
 pub mod benchtop;
 pub mod frames;
 pub mod opencv;

@@ -1,15 +1,16 @@
-//! `jawtrack bench accuracy`: the 2020 thesis's benchtop experiments on rendered frames with
-//! exact ground truth (`jawtrack_tracker_bench::benchtop`), written as a report a clinician
-//! can read (`report.md` with PNG plots), CSV tables, and the same tables for the reference
-//! stack on the same frames when OpenCV is installed.
+//! The benchtop accuracy run behind `jawtrack bench accuracy`: the 2020 thesis's benchtop
+//! experiments on rendered frames with exact ground truth (`crate::benchtop`), written as a
+//! report a clinician can read (`report.md` with PNG plots), CSV tables, and the same tables
+//! for the reference stack on the same frames when OpenCV is installed. A front-end parses
+//! `AccuracyArgs` and calls `run`.
 
+use crate::benchtop::{
+    self, Column, DynamicRow, FLIP_DEG, MarkerFile, MeanSd, Options, Regression, Run, Stack, StaticRow,
+};
 use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_synth::{Realism, SceneKind};
-use jawtrack_tracker_bench::benchtop::{
-    self, Column, DynamicRow, FLIP_DEG, MarkerFile, MeanSd, Options, Regression, Run, Stack, StaticRow,
-};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -24,7 +25,7 @@ const AXES: [&str; 3] = ["X (left)", "Y (down)", "Z (back)"];
 
 /// Arguments of `jawtrack bench accuracy`.
 #[derive(Args)]
-pub(crate) struct AccuracyArgs {
+pub struct AccuracyArgs {
     /// Output folder: report.md, CSV tables, PNG and SVG plots. Rendered frames are cached in
     /// its `frames/` (rendering is most of a first run's time; later runs reuse them).
     #[arg(long, default_value = "out/bench-accuracy")]
@@ -59,7 +60,9 @@ pub(crate) struct AccuracyArgs {
     python: String,
 }
 
-pub(crate) fn run(a: &AccuracyArgs) -> Result<()> {
+/// Runs the benchtop experiments and writes the report, tables, plots and calibrated marker
+/// into `a.out`; prints a summary and the report's path.
+pub fn run(a: &AccuracyArgs) -> Result<()> {
     let options = Options {
         seed: a.seed,
         calibration_frames_per_view: if a.quick { 1 } else { a.calibration_frames_per_view },
@@ -105,9 +108,18 @@ pub(crate) fn run(a: &AccuracyArgs) -> Result<()> {
     let report = report(&run, &options, &files, &a.out);
     let path = a.out.join("report.md");
     std::fs::write(&path, &report).with_context(|| format!("writing {}", path.display()))?;
-    say!("{}", summary(&run));
-    say!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64());
+    say(format_args!("{}", summary(&run)));
+    say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
     Ok(())
+}
+
+/// Prints a line, ending the program quietly when stdout is closed (`… | head`) instead of
+/// panicking, as the `jawtrack` command does.
+fn say(line: std::fmt::Arguments<'_>) {
+    use std::io::Write as _;
+    if writeln!(std::io::stdout(), "{line}").is_err() {
+        std::process::exit(0);
+    }
 }
 
 /// The columns by what they are.
