@@ -1,8 +1,9 @@
-//! The benchtop accuracy run behind `jawtrack bench accuracy`: the 2020 thesis's benchtop
-//! experiments on rendered frames with exact ground truth (`crate::benchtop`), written as a
-//! report a clinician can read (`report.md` with PNG plots), CSV tables, and the same tables
-//! for the reference stack on the same frames when OpenCV is installed. A front-end parses
-//! `AccuracyArgs` and calls `run`.
+//! The benchtop accuracy run behind `jawtrack bench accuracy` and the `bench-accuracy`
+//! binary: the 2020 thesis's benchtop experiments on rendered frames with exact ground truth
+//! (`crate::benchtop`), written as a report a clinician can read (`report.md` with PNG plots),
+//! CSV tables, and the same tables for the reference stack on the same frames when OpenCV is
+//! installed. Both front-ends parse `AccuracyArgs` and call `run`, so they take the same flags
+//! and write the same report.
 
 use crate::benchtop::{
     self, Column, DynamicRow, FLIP_DEG, MarkerFile, MeanSd, Options, Regression, Run, Stack, StaticRow,
@@ -23,7 +24,7 @@ const DYNAMIC_SE_MM: f64 = 0.1;
 /// Head axes, in the order of the error vectors.
 const AXES: [&str; 3] = ["X (left)", "Y (down)", "Z (back)"];
 
-/// Arguments of `jawtrack bench accuracy`.
+/// Arguments of `jawtrack bench accuracy` and of the `bench-accuracy` binary.
 #[derive(Args)]
 pub struct AccuracyArgs {
     /// Output folder: report.md, CSV tables, PNG and SVG plots. Rendered frames are cached in
