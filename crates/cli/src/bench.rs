@@ -33,7 +33,11 @@ enum BenchKind {
     /// Time per frame of detection, pose and the whole pipeline; PnP per body beside OpenCV.
     Pipeline(PipelineArgs),
     /// The thesis's benchtop experiments on rendered frames: static grid, hinge, excursions,
-    /// after calibrating the marker; tables, CSV, plots and a report, beside the reference stack.
+    /// after calibrating the marker; tables, CSV, plots and a report.
+    ///
+    /// jawtrack links no C, so its report has our columns only. For the reference stack's
+    /// columns (AprilTag C + OpenCV SQPnP) beside ours, give the same flags to
+    /// `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- …`.
     Accuracy(jawtrack_tracker_bench::accuracy::AccuracyArgs),
     /// The phone link on loopback: a sustained stream against a real receiver (loss, CPU), then
     /// random, forged and replayed datagrams (none accepted, every one counted).

@@ -2,8 +2,9 @@
 //! binary: the 2020 thesis's benchtop experiments on rendered frames with exact ground truth
 //! (`crate::benchtop`), written as a report a clinician can read (`report.md` with PNG plots),
 //! CSV tables, and the same tables for the reference stack on the same frames when OpenCV is
-//! installed. Both front-ends parse `AccuracyArgs` and call `run`, so they take the same flags
-//! and write the same report.
+//! installed and the `reference` feature is on (in `bench-accuracy`, not in `jawtrack`, which
+//! links no C). Both front-ends parse `AccuracyArgs` and call `run`, so they take the same
+//! flags and write the same report.
 
 use crate::benchtop::{
     self, Column, DynamicRow, FLIP_DEG, MarkerFile, MeanSd, Options, Regression, Run, Stack, StaticRow,
@@ -467,9 +468,15 @@ fn report(run: &Run, o: &Options, files: &[PathBuf], out: &Path) -> String {
             let _ = writeln!(md, "- [{name}]({name})");
         }
     }
+    // The reference columns come only from the binary that links the C library.
+    let command = if run.reference.is_ok() {
+        "cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy --"
+    } else {
+        "jawtrack bench accuracy"
+    };
     let _ = writeln!(
         md,
-        "\nReproduce: `jawtrack bench accuracy --seed {} --frames-per-view {} --hinge-cycles {} --excursion-cycles {} --fps {}`.",
+        "\nReproduce: `{command} --seed {} --frames-per-view {} --hinge-cycles {} --excursion-cycles {} --fps {}`.",
         o.seed, o.frames_per_view, o.hinge_cycles, o.excursion_cycles, o.fps
     );
     md

@@ -5,11 +5,12 @@
 //!
 //! The marker is first calibrated from a separate calibration recording of the same printed
 //! marker (never from the frames it is judged on). Every frame then goes through our tracker
-//! and, when OpenCV is installed, through the reference stack (AprilTag C + OpenCV SQPnP),
-//! each with three marker files: the nominal one, the calibrated one and the marker as
-//! printed (the limit calibration can reach). The tables are pure functions of the run: per
-//! static view the mean and SD of the error along the head's axes; per opening and per glide
-//! a regression of the tracked incisor path on the true one (r², standard error); flips.
+//! and, when the `reference` feature is on and OpenCV is installed, through the reference
+//! stack (AprilTag C + OpenCV SQPnP), each with three marker files: the nominal one, the
+//! calibrated one and the marker as printed (the limit calibration can reach). The tables are
+//! pure functions of the run: per static view the mean and SD of the error along the head's
+//! axes; per opening and per glide a regression of the tracked incisor path on the true one
+//! (r², standard error); flips.
 //!
 //! Errors are of `maxilla_from_mandible` and are expressed along the head's axes (X the
 //! patient's left, Y down, Z posterior). Orientation errors are the error rotation's
@@ -18,15 +19,16 @@
 //! undefined). To first order, the components equal the Euler-angle errors about the same axes.
 
 use crate::frames::{self, Request};
-use crate::opencv::OpenCv;
-use crate::reference;
+#[cfg(feature = "reference")]
+use crate::{opencv::OpenCv, reference};
 use anyhow::{Context, Result, bail};
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
+#[cfg(feature = "reference")]
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, SeenTag, calibrate};
 use jawtrack_kinematics::Mounting;
 use jawtrack_marker::Marker;
-use jawtrack_pose::Pose;
+use jawtrack_pose::{CameraIntrinsics, Pose};
 use jawtrack_synth::SceneKind;
 use jawtrack_synth::scenes::{JawMotion, View};
 use jawtrack_tracker::{Registration, Tracker, TrackerConfig, calibrate_intercuspation};
@@ -235,19 +237,9 @@ pub struct Run {
 /// reports rendering and tracking.
 pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> Result<Run> {
     options.validate()?;
-    let mut cv = match OpenCv::start(&options.python)? {
-        Ok(cv) => Some(cv),
-        Err(why) => {
-            progress(&format!("SKIPPED: the reference stack — {why}"), 0, 0);
-            None
-        }
-    };
-    let reference = match &cv {
-        Some(cv) => Ok(format!("AprilTag C 3.4.5, then OpenCV {} `solvePnP` SQPnP per body", cv.version)),
-        None => Err(format!("no Python with OpenCV was found (`{}`)", crate::opencv::INSTALL_HINT)),
-    };
+    let (reference_stack, reference) = ReferenceStack::start(options, progress)?;
     let mut columns: Vec<Column> = MarkerFile::ALL.map(|marker| Column { stack: Stack::Ours, marker }).to_vec();
-    if cv.is_some() {
+    if reference_stack.is_some() {
         columns.extend(MarkerFile::ALL.map(|marker| Column { stack: Stack::Reference, marker }));
     }
 
@@ -282,8 +274,7 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
         })
         .collect();
 
-    let mut c = ReferenceDetector::new(&ReferenceParams::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut stacks = Stacks { reference_detector: &mut c, cv: cv.as_mut() };
+    let mut stacks = Stacks { reference: reference_stack };
 
     // The bite step: each stack's poses of the closed jaw in the calibration recording,
     // mapped onto the scanned bite (here the true rest pose, as a bite scan would give it).
@@ -404,14 +395,13 @@ fn new_trackers(markers: &[Marker; 3], truth: &jawtrack_synth::GroundTruth) -> R
 type PerMarker = [Option<Pose>; 3];
 
 /// Both pipelines.
-struct Stacks<'a> {
-    reference_detector: &'a mut ReferenceDetector,
-    cv: Option<&'a mut OpenCv>,
+struct Stacks {
+    reference: Option<ReferenceStack>,
 }
 
-impl Stacks<'_> {
+impl Stacks {
     /// `maxilla_from_mandible` of one frame by our trackers (one per marker file) and, when
-    /// OpenCV is there, by the reference stack with the same marker files.
+    /// it runs, by the reference stack with the same marker files.
     fn frame(
         &mut self,
         trackers: &mut [Tracker],
@@ -427,19 +417,84 @@ impl Stacks<'_> {
             let r = tracker.track(&img.view()?, camera, t).with_context(|| format!("tracking {}", path.display()))?;
             *out = r.maxilla_from_mandible;
         }
-        let Some(cv) = self.cv.as_deref_mut() else { return Ok((ours, None)) };
+        let Some(reference) = self.reference.as_mut() else { return Ok((ours, None)) };
+        Ok((ours, Some(reference.frame(&img, markers, path, camera)?)))
+    }
+}
+
+/// The reference stack: the AprilTag C library, then OpenCV's SQPnP per body.
+#[cfg(feature = "reference")]
+struct ReferenceStack {
+    detector: ReferenceDetector,
+    cv: OpenCv,
+}
+
+/// The reference stack is not built in (the `jawtrack` binary links no C): no value of this
+/// type exists, so the run has our columns only.
+#[cfg(not(feature = "reference"))]
+enum ReferenceStack {}
+
+/// Why a build without the `reference` feature has no reference columns, and how to get them.
+#[cfg(not(feature = "reference"))]
+const NOT_BUILT_IN: &str = "the AprilTag C library is not built into this binary (`jawtrack` links no C); \
+     `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- <the same flags>` runs the same benchtop with it";
+
+/// Both `start`s give the stack (or none) and its description (or why there is none); both
+/// `frame`s give its `maxilla_from_mandible` of one frame with each marker file.
+#[cfg(feature = "reference")]
+impl ReferenceStack {
+    fn start(
+        options: &Options,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<(Option<ReferenceStack>, std::result::Result<String, String>)> {
+        match OpenCv::start(&options.python)? {
+            Ok(cv) => {
+                let description = format!("AprilTag C 3.4.5, then OpenCV {} `solvePnP` SQPnP per body", cv.version);
+                let detector =
+                    ReferenceDetector::new(&ReferenceParams::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
+                Ok((Some(ReferenceStack { detector, cv }), Ok(description)))
+            }
+            Err(why) => {
+                progress(&format!("SKIPPED: the reference stack — {why}"), 0, 0);
+                Ok((None, Err(format!("no Python with OpenCV was found (`{}`)", crate::opencv::INSTALL_HINT))))
+            }
+        }
+    }
+
+    fn frame(
+        &mut self,
+        img: &Luma,
+        markers: &[Marker; 3],
+        path: &std::path::Path,
+        camera: &CameraIntrinsics,
+    ) -> Result<PerMarker> {
         let detections = self
-            .reference_detector
+            .detector
             .detect(&img.luma, img.width, img.height, img.width)
             .map_err(|e| anyhow::anyhow!("C library on {}: {e}", path.display()))?;
         let refs: Vec<&Marker> = markers.iter().collect();
         let mut theirs = [None; 3];
         for (pose, out) in
-            reference::maxilla_from_mandible(cv, &refs, &detections, camera)?.into_iter().zip(&mut theirs)
+            reference::maxilla_from_mandible(&mut self.cv, &refs, &detections, camera)?.into_iter().zip(&mut theirs)
         {
             *out = pose.ok();
         }
-        Ok((ours, Some(theirs)))
+        Ok(theirs)
+    }
+}
+
+#[cfg(not(feature = "reference"))]
+impl ReferenceStack {
+    fn start(
+        _: &Options,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<(Option<ReferenceStack>, std::result::Result<String, String>)> {
+        progress(&format!("SKIPPED: the reference stack — {NOT_BUILT_IN}"), 0, 0);
+        Ok((None, Err(NOT_BUILT_IN.to_owned())))
+    }
+
+    fn frame(&mut self, _: &Luma, _: &[Marker; 3], _: &std::path::Path, _: &CameraIntrinsics) -> Result<PerMarker> {
+        match *self {}
     }
 }
 
