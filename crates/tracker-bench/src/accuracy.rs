@@ -350,7 +350,9 @@ fn report(run: &Run, o: &Options, files: &[PathBuf], out: &Path) -> String {
          In the clinic, this offset is removed by the maximal-intercuspation (bite) step: the patient bites, and the mean of the tracked closed-jaw poses is mapped onto the scanned bite. \
          Here, the jaw is closed in the calibration recording, so each stack takes that step from its own poses of that recording:\n"
     );
-    for (stack, b) in ["ours", "reference"].iter().zip(&run.bite_steps) {
+    // A skipped reference stack took no step: "no closed-jaw pose" would misread as a failure.
+    let stacks_run = if run.reference.is_ok() { 2 } else { 1 };
+    for (stack, b) in ["ours", "reference"].iter().zip(&run.bite_steps).take(stacks_run) {
         match b {
             Some(b) => {
                 let _ = writeln!(
@@ -685,4 +687,55 @@ fn write_plots(run: &Run, out: &Path) -> Result<Vec<PathBuf>> {
         files.extend(plot::save_svg_and_png(&doc, &out.join(format!("{stem}_error")))?);
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jawtrack_marker::Marker;
+
+    /// A run with one column of ours and no frames: enough for the report's prose.
+    fn empty_run(reference: std::result::Result<String, String>) -> Run {
+        Run {
+            columns: vec![Column { stack: Stack::Ours, marker: MarkerFile::Calibrated }],
+            reference,
+            calibration: Vec::new(),
+            calibrated_marker: Marker::default(),
+            bite_steps: vec![None, None],
+            calibration_frames: 0,
+            frames: Vec::new(),
+        }
+    }
+
+    fn options() -> Options {
+        Options {
+            seed: 1,
+            calibration_frames_per_view: 1,
+            frames_per_view: 1,
+            hinge_cycles: 1,
+            excursion_cycles: 1,
+            fps: 5.0,
+            max_frames: None,
+            cache: PathBuf::from("frames"),
+            python: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_report_names_the_command_that_reproduces_its_columns() {
+        let out = Path::new("out");
+        let skipped = report(&empty_run(Err("not built in".into())), &options(), &[], out);
+        assert!(skipped.contains("**The reference stack was skipped**: not built in."), "{skipped}");
+        assert!(!skipped.contains("- reference:"), "no bite step is reported for a stack that did not run");
+        assert!(skipped.contains("Reproduce: `jawtrack bench accuracy --seed 1 "), "{skipped}");
+
+        let with = report(&empty_run(Ok("the C library".into())), &options(), &[], out);
+        assert!(with.contains("- reference: no closed-jaw pose, so no bite step."), "{with}");
+        assert!(
+            with.contains(
+                "Reproduce: `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- --seed 1 "
+            ),
+            "{with}"
+        );
+    }
 }
