@@ -65,7 +65,7 @@ pub(crate) fn detect_views(
     linear_edges: bool,
 ) -> Result<Vec<CalibrationFrame>> {
     let detector = Detector::new(DetectorConfig { linear_edges, ..DetectorConfig::default() })?;
-    let bar = crate::track::progress_bar(source.len());
+    let bar = crate::progress::bar("detecting", source.len().map(|n| n as u64), "frames");
     let mut frames = Vec::new();
     while let Some(frame) = source.next_frame()? {
         let view =

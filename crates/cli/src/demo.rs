@@ -3,7 +3,7 @@
 //! then tracks the jaw (with the nominal marker file and with the marker as printed), reports
 //! the mandible-in-maxilla error and the motion in plain words, and plots the incisor's path.
 
-use crate::render_with_progress;
+use crate::synth::render_with_progress;
 use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
@@ -163,7 +163,7 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
     let peak = |v: &[(f64, f64)]| v.iter().map(|p| p.1).fold(0.0, f64::max);
     say!(
         "The jaw: the lower incisor opened {} times, widest {:.1} mm from its closed position (truth {:.1} mm), and moved back by up to {:.1} mm as it swung about the condyles.",
-        count_openings(&tracked.iter().map(|p| p.1).collect::<Vec<_>>()),
+        jawtrack_kinematics::metrics::count_openings(&tracked.iter().map(|p| p.1).collect::<Vec<_>>()),
         peak(&tracked),
         peak(&real),
         tracked_paths[0].1.iter().map(|(_, x)| x.z - closed.z).fold(0.0, f64::max),
@@ -222,28 +222,6 @@ fn plot_incisor(
     Ok(written)
 }
 
-/// Openings in a sequence of incisor openings (mm): rises of at least 3 mm from the lowest
-/// point since the last opening, each counted once it falls back by 3 mm or the data ends.
-fn count_openings(opening: &[f64]) -> usize {
-    const STEP_MM: f64 = 3.0;
-    let (mut n, mut low, mut high, mut open) = (0, f64::INFINITY, f64::NEG_INFINITY, false);
-    for &v in opening {
-        if open {
-            high = high.max(v);
-            if v < high - STEP_MM {
-                (open, low) = (false, v);
-                n += 1;
-            }
-        } else {
-            low = low.min(v);
-            if v > low + STEP_MM {
-                (open, high) = (true, v);
-            }
-        }
-    }
-    n + usize::from(open)
-}
-
 /// Runs the detector on the rendered session and compares with the ground truth.
 fn detect_and_compare(dir: &Path) -> Result<()> {
     let path = dir.join("ground_truth.json");
@@ -296,18 +274,4 @@ pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary
     );
     say!("  mandible marker travel relative to the maxilla: up to {:.1} mm", s.max_mandible_travel_mm);
     say!("  ground truth: {}", out.join("ground_truth.json").display());
-}
-
-#[cfg(test)]
-mod tests {
-    use super::count_openings;
-
-    #[test]
-    fn openings_are_counted_however_small_the_first() {
-        let cycle = |peak: f64| [0.0, peak / 2.0, peak, peak / 2.0, 0.0];
-        let v: Vec<f64> = [10.0, 20.0, 30.0, 40.0].iter().flat_map(|&p| cycle(p)).collect();
-        assert_eq!(count_openings(&v), 4);
-        assert_eq!(count_openings(&[0.0, 1.0, 0.5, 1.5, 0.2]), 0, "tremor is not an opening");
-        assert_eq!(count_openings(&[0.0, 5.0, 10.0]), 1, "still open at the end");
-    }
 }

@@ -103,7 +103,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
     });
     let mut out = RecordingWriter::new(out, header, &a.out.display().to_string())?;
-    let bar = progress_bar(source.len());
+    let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
     let mut summary = Summary::default();
     let mut index = 0;
     while let Some(frame) = source.next_frame()? {
@@ -155,19 +155,4 @@ impl Summary {
             median * 1e3
         )
     }
-}
-
-pub(crate) fn progress_bar(len: Option<usize>) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len.unwrap_or(0) as u64);
-    let template = if len.is_some() {
-        "tracking [{bar:30}] {pos}/{len} frames, {elapsed} elapsed, ~{eta} left"
-    } else {
-        "tracking {pos} frames, {elapsed} elapsed"
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(template)
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    bar
 }

@@ -6,7 +6,8 @@
 //!   markers' rest poses, the hinge axis, the condyles and the lower incisal point.
 //! - [`point`]: a point fixed to the mandible (the incisor by default, or a condyle) carried
 //!   by tracked poses, and its [`Displacement`] from rest.
-//! - [`metrics`]: the incisor's clinical extremes over a session ([`Metrics`]).
+//! - [`metrics`]: the incisor's clinical extremes over a session ([`Metrics`]), and how many
+//!   times the jaw opened.
 //! - [`envelope`]: envelopes of motion as convex hulls in one plane ([`Envelope`]).
 //!
 //! The head frame: X toward the patient's left, Y down, Z posterior (mm).

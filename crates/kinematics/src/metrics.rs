@@ -103,6 +103,28 @@ pub fn frontal(d: &Displacement) -> (f64, f64) {
     (d.lateral, d.opening)
 }
 
+/// Openings in a sequence of incisor openings (mm): rises of at least 3 mm from the lowest
+/// point since the last opening, each counted once it falls back by 3 mm or the data ends.
+pub fn count_openings(opening: &[f64]) -> usize {
+    const STEP_MM: f64 = 3.0;
+    let (mut n, mut low, mut high, mut open) = (0, f64::INFINITY, f64::NEG_INFINITY, false);
+    for &v in opening {
+        if open {
+            high = high.max(v);
+            if v < high - STEP_MM {
+                (open, low) = (false, v);
+                n += 1;
+            }
+        } else {
+            low = low.min(v);
+            if v > low + STEP_MM {
+                (open, high) = (true, v);
+            }
+        }
+    }
+    n + usize::from(open)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -152,5 +174,14 @@ mod tests {
         assert_eq!((m.max_opening.mm, m.max_left.mm, m.max_right.mm), (0.0, 0.0, 0.0));
         assert_eq!((m.sagittal.area_mm2, m.sagittal.hull.len()), (0.0, 1));
         assert!(Metrics::compute(&[]).is_none());
+    }
+
+    #[test]
+    fn openings_are_counted_however_small_the_first() {
+        let cycle = |peak: f64| [0.0, peak / 2.0, peak, peak / 2.0, 0.0];
+        let v: Vec<f64> = [10.0, 20.0, 30.0, 40.0].iter().flat_map(|&p| cycle(p)).collect();
+        assert_eq!(count_openings(&v), 4);
+        assert_eq!(count_openings(&[0.0, 1.0, 0.5, 1.5, 0.2]), 0, "tremor is not an opening");
+        assert_eq!(count_openings(&[0.0, 5.0, 10.0]), 1, "still open at the end");
     }
 }

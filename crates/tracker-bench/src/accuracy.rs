@@ -110,18 +110,9 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     let report = report(&run, &options, &files, &a.out);
     let path = a.out.join("report.md");
     std::fs::write(&path, &report).with_context(|| format!("writing {}", path.display()))?;
-    say(format_args!("{}", summary(&run)));
-    say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
+    crate::say(format_args!("{}", summary(&run)));
+    crate::say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
     Ok(())
-}
-
-/// Prints a line, ending the program quietly when stdout is closed (`… | head`) instead of
-/// panicking, as the `jawtrack` command does.
-fn say(line: std::fmt::Arguments<'_>) {
-    use std::io::Write as _;
-    if writeln!(std::io::stdout(), "{line}").is_err() {
-        std::process::exit(0);
-    }
 }
 
 /// The columns by what they are.

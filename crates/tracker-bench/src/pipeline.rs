@@ -10,7 +10,7 @@
 //! table gives the median over frames. Machines here are noisy: read ratios and medians.
 
 use anyhow::{Context, Result, bail};
-use clap::{Args, Subcommand};
+use clap::Args;
 use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Observation, Pose, solve_pnp};
@@ -21,31 +21,9 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-/// Arguments of `jawtrack bench`.
+/// Arguments of `jawtrack bench pipeline`.
 #[derive(Args)]
-pub(crate) struct BenchArgs {
-    #[command(subcommand)]
-    which: BenchKind,
-}
-
-#[derive(Subcommand)]
-enum BenchKind {
-    /// Time per frame of detection, pose and the whole pipeline; PnP per body beside OpenCV.
-    Pipeline(PipelineArgs),
-    /// The thesis's benchtop experiments on rendered frames: static grid, hinge, excursions,
-    /// after calibrating the marker; tables, CSV, plots and a report.
-    ///
-    /// jawtrack links no C, so its report has our columns only. For the reference stack's
-    /// columns (AprilTag C + OpenCV SQPnP) beside ours, give the same flags to
-    /// `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- …`.
-    Accuracy(jawtrack_tracker_bench::accuracy::AccuracyArgs),
-    /// The phone link on loopback: a sustained stream against a real receiver (loss, CPU), then
-    /// random, forged and replayed datagrams (none accepted, every one counted).
-    Link(crate::linkbench::LinkBenchArgs),
-}
-
-#[derive(Args)]
-struct PipelineArgs {
+pub struct PipelineArgs {
     /// Resolutions to run (comma-separated): 1080p, 4k.
     #[arg(long, value_delimiter = ',', default_value = "1080p,4k")]
     resolutions: Vec<Resolution>,
@@ -66,14 +44,6 @@ struct PipelineArgs {
     out: Option<PathBuf>,
 }
 
-pub(crate) fn run(a: &BenchArgs) -> Result<()> {
-    match &a.which {
-        BenchKind::Pipeline(p) => pipeline(p),
-        BenchKind::Accuracy(a) => jawtrack_tracker_bench::accuracy::run(a),
-        BenchKind::Link(a) => crate::linkbench::run(a),
-    }
-}
-
 /// Median of a list (NaN when empty).
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -86,13 +56,14 @@ struct PnpCase {
     prior: Option<Pose>,
 }
 
-fn pipeline(a: &PipelineArgs) -> Result<()> {
+/// Runs `jawtrack bench pipeline`.
+pub fn run(a: &PipelineArgs) -> Result<()> {
     if a.frames < 2 || a.repeat == 0 || a.pnp_repeat == 0 {
         bail!("--frames must be at least 2, --repeat and --pnp-repeat at least 1");
     }
     let mut table = String::new();
     let mut line = |s: String| {
-        say!("{s}");
+        crate::say(format_args!("{s}"));
         table.push_str(&s);
         table.push('\n');
     };
@@ -115,7 +86,13 @@ fn pipeline(a: &PipelineArgs) -> Result<()> {
             ..SynthConfig::new(SceneKind::Hinge)
         })?;
         let camera = synth.header().intrinsics;
-        let bar = crate::progress_bar(&format!("rendering {}", resolution_name(resolution)), synth.len());
+        let bar = indicatif::ProgressBar::new(synth.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len}, {elapsed} elapsed, ~{eta} left")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(format!("rendering {}", resolution_name(resolution)));
         let mut frames = Vec::with_capacity(synth.len());
         for i in 0..synth.len() {
             frames.push(synth.render(i)?);
@@ -248,7 +225,7 @@ fn opencv_times(cases: &[PnpCase], camera: &CameraIntrinsics, a: &PipelineArgs) 
         bail!("{} cannot import cv2 (pip install opencv-python-headless)", a.python);
     }
     let mut child = Command::new(&a.python)
-        .args(["-c", include_str!("../../tracker-bench/python/solve_pnp.py")])
+        .args(["-c", include_str!("../python/solve_pnp.py")])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .spawn()

@@ -1,56 +1,21 @@
-//! The desktop end of the phone link: `jawtrack receive` records the sealed pose datagrams the
-//! phone streams (one JSON line per accepted frame, flushed as it arrives), counts what was
-//! lost, reordered, duplicated or rejected, acknowledges so the phone can show the link is
-//! alive, and optionally serves the live viewer. `jawtrack send` is a phone simulator that
-//! replays a recording, with deliberate loss, reordering and duplication for tests and demos.
-//! `jawtrack keygen` makes a pairing key. The datagram itself lives in `jawtrack_wire`.
+//! `jawtrack receive`: records the sealed pose datagrams the phone streams (one JSON line per
+//! accepted frame, flushed as it arrives), counts what was lost, reordered, duplicated or
+//! rejected, acknowledges so the phone can show the link is alive, and optionally serves the
+//! live viewer.
 
-use crate::live::ViewerArgs;
+use super::{KeyArgs, key_id};
+use crate::viewer::ViewerArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_recording::{FrameRecord, Overwrite, RecordingHeader, RecordingWriter};
+use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_viewer::{LiveServer, LiveState};
 use jawtrack_wire::link::{Counters, Link, LinkConfig, Verdict};
-use jawtrack_wire::{Ack, Key, Message, PosePacket, Security, Session, decode, encode_ack, unix_ms};
-use rand::{Rng, SeedableRng};
+use jawtrack_wire::{Ack, Key, Message, Security, decode, encode_ack, unix_ms};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// How the pairing key is given, shared by `receive` and `send`.
-#[derive(Args)]
-pub(crate) struct KeyArgs {
-    /// The pairing key, 64 hex digits (from `jawtrack keygen`); or set JAWTRACK_KEY, which
-    /// keeps it out of the process list.
-    #[arg(long, env = "JAWTRACK_KEY", hide_env_values = true)]
-    key: Option<String>,
-    /// Send and accept unauthenticated, unencrypted datagrams. For development only: never with
-    /// patient data.
-    #[arg(long, conflicts_with = "key")]
-    insecure_plaintext: bool,
-}
-
-impl KeyArgs {
-    fn security(&self) -> Result<Security> {
-        match (&self.key, self.insecure_plaintext) {
-            (Some(k), false) => Ok(Security::Sealed(k.parse().context("--key")?)),
-            (None, true) => Ok(Security::Plaintext),
-            _ => bail!(
-                "give the pairing key with --key (or JAWTRACK_KEY); `jawtrack keygen` makes one. \
-                 --insecure-plaintext is for development only"
-            ),
-        }
-    }
-}
-
-fn key_id(security: &Security) -> Option<String> {
-    match security {
-        Security::Sealed(k) => Some(k.id()),
-        Security::Plaintext => None,
-    }
-}
 
 /// Arguments of `jawtrack receive`.
 #[derive(Args)]
@@ -145,7 +110,7 @@ pub(crate) fn process_cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
+pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     let security = a.key.security()?;
     if security == Security::Plaintext {
         eprintln!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
@@ -286,173 +251,4 @@ pub(crate) fn receive(a: &ReceiveArgs) -> Result<()> {
     }
     say!("{}", summary_json(&c, ack_seq, started.elapsed().as_secs_f64()));
     Ok(())
-}
-
-/// Arguments of `jawtrack send`.
-#[derive(Args)]
-pub(crate) struct SendArgs {
-    /// The recording to replay (JSON lines from `jawtrack track`, `receive` or the phone).
-    #[arg(long)]
-    replay: PathBuf,
-    /// Where the receiver listens.
-    #[arg(long)]
-    to: SocketAddr,
-    #[command(flatten)]
-    key: KeyArgs,
-    /// Datagrams per second.
-    #[arg(long, default_value_t = 30.0)]
-    rate: f64,
-    /// Send this many datagrams, cycling through the recording (default: each frame once).
-    #[arg(long)]
-    count: Option<u64>,
-    /// Probability of dropping a datagram (its sequence number is used, so the receiver sees
-    /// a gap). The last datagram is always sent, so every loss is visible.
-    #[arg(long, default_value_t = 0.0)]
-    loss: f64,
-    /// Probability of holding a datagram back and sending it after the next one.
-    #[arg(long, default_value_t = 0.0)]
-    reorder: f64,
-    /// Probability of sending a datagram twice.
-    #[arg(long, default_value_t = 0.0)]
-    duplicate: f64,
-    /// Seed of the loss, reorder and duplicate draws.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-}
-
-pub(crate) fn send(a: &SendArgs) -> Result<()> {
-    let security = a.key.security()?;
-    for (name, p) in [("--loss", a.loss), ("--reorder", a.reorder), ("--duplicate", a.duplicate)] {
-        if !(0.0..1.0).contains(&p) {
-            bail!("{name} must be a probability in [0, 1), got {p}");
-        }
-    }
-    if !(a.rate.is_finite() && a.rate > 0.0) {
-        bail!("--rate must be a positive number of datagrams per second, got {}", a.rate);
-    }
-    let recording = jawtrack_recording::open(&a.replay)?;
-    for (line, why) in &recording.skipped {
-        eprintln!("warning: {} line {line} skipped: {why}", a.replay.display());
-    }
-    let frames: Vec<FrameRecord> = recording.frames;
-    if frames.is_empty() {
-        bail!("{} holds no frames to replay", a.replay.display());
-    }
-    let total = a.count.unwrap_or(frames.len() as u64);
-    let socket =
-        UdpSocket::bind(if a.to.is_ipv4() { "0.0.0.0:0" } else { "[::]:0" }).context("opening a UDP socket")?;
-    socket.set_nonblocking(true)?;
-    let mut session = Session::new(security);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("sending [{bar:30}] {pos}/{len} datagrams, {elapsed} elapsed")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    let (mut sent, mut dropped, mut reordered, mut duplicated, mut acks, mut refused) =
-        (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
-    let mut last_ack: Option<Ack> = None;
-    let mut held: Option<Vec<u8>> = None;
-    let period = Duration::from_secs_f64(1.0 / a.rate);
-    let start = Instant::now();
-    let mut buf = [0u8; 2048];
-    let transmit = |d: &[u8], rng: &mut rand_chacha::ChaCha8Rng, sent: &mut u64, duplicated: &mut u64| {
-        let copies = if rng.random_bool(a.duplicate) { 2 } else { 1 };
-        for _ in 0..copies {
-            // Loopback drops nothing; a full socket buffer is retried rather than lost.
-            while let Err(e) = socket.send_to(d, a.to) {
-                if e.kind() != std::io::ErrorKind::WouldBlock {
-                    return Err(e);
-                }
-                std::thread::sleep(Duration::from_micros(200));
-            }
-            *sent += 1;
-        }
-        *duplicated += copies - 1;
-        Ok(())
-    };
-    for i in 0..total {
-        let due = start + period.mul_f64(i as f64);
-        if let Some(wait) = due.checked_duration_since(Instant::now()) {
-            std::thread::sleep(wait);
-        }
-        let mut record = frames[(i % frames.len() as u64) as usize].clone();
-        // Cycled frames keep counting up, as a live session would.
-        record.frame = i;
-        record.t = i as f64 / a.rate;
-        let datagram = session.pose_datagram(&PosePacket::from_record(&record));
-        let last = i + 1 == total;
-        if !last && rng.random_bool(a.loss) {
-            dropped += 1;
-        } else if !last && held.is_none() && rng.random_bool(a.reorder) {
-            held = Some(datagram);
-        } else {
-            transmit(&datagram, &mut rng, &mut sent, &mut duplicated).context("sending")?;
-            if let Some(h) = held.take() {
-                transmit(&h, &mut rng, &mut sent, &mut duplicated).context("sending")?;
-                reordered += 1;
-            }
-        }
-        while let Ok((n, _)) = socket.recv_from(&mut buf) {
-            match session.read_ack(&buf[..n]) {
-                Ok(ack) => {
-                    acks += 1;
-                    last_ack = Some(ack);
-                }
-                Err(_) => refused += 1,
-            }
-        }
-        bar.inc(1);
-    }
-    // Late acknowledgements of the last datagrams.
-    let until = Instant::now() + Duration::from_millis(300);
-    while Instant::now() < until {
-        match socket.recv_from(&mut buf) {
-            Ok((n, _)) => match session.read_ack(&buf[..n]) {
-                Ok(ack) => {
-                    acks += 1;
-                    last_ack = Some(ack);
-                }
-                Err(_) => refused += 1,
-            },
-            Err(_) => std::thread::sleep(Duration::from_millis(10)),
-        }
-    }
-    bar.finish_and_clear();
-    let elapsed = start.elapsed().as_secs_f64();
-    eprintln!(
-        "sent {total} frames as {sent} datagrams in {elapsed:.1} s (session {:#018x}): dropped {dropped}, reordered {reordered}, duplicated {duplicated}; {}",
-        session.id(),
-        match last_ack {
-            Some(ack) => format!("{acks} acknowledgements, the last: {} accepted, {} lost", ack.accepted, ack.lost),
-            None => "no acknowledgement (is the receiver running, with the same key?)".into(),
-        }
-    );
-    say!(
-        "{}",
-        serde_json::json!({
-            "session": format!("{:#018x}", session.id()),
-            "frames": total,
-            "datagrams_sent": sent,
-            "dropped": dropped,
-            "reordered": reordered,
-            "duplicated": duplicated,
-            "acks": acks,
-            "acks_refused": refused,
-            "last_ack": last_ack.map(|a| serde_json::json!({"accepted": a.accepted, "lost": a.lost, "highest_seq": a.highest_seq})),
-            "duration_s": elapsed,
-        })
-    );
-    Ok(())
-}
-
-/// Prints a new pairing key and its id.
-pub(crate) fn keygen() {
-    let key = Key::generate();
-    eprintln!(
-        "key id {} (safe to share; the key itself is secret: give it to the phone and the receiver only)",
-        key.id()
-    );
-    say!("{}", key.to_hex());
 }

@@ -121,12 +121,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     let receiver = Receiver::start(&key, &soak_file)?;
     let mut session = Session::new(Security::Sealed(key.clone()));
     let total = (a.rate * duration).round() as u64;
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("soak [{bar:30}] {pos}/{len} datagrams, {elapsed} of ~{duration}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
+    let bar = crate::progress::bar("soak", Some(total), "datagrams");
     let (start, period) = (Instant::now(), Duration::from_secs_f64(1.0 / a.rate));
     let mut acks = 0u64;
     for i in 0..total {
@@ -156,12 +151,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     let genuine: Vec<Vec<u8>> = (0..100).map(|i| session.pose_datagram(&packet(i, 30.0))).collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let (mut rejected, mut replays, mut sent) = (0u64, 0u64, 0u64);
-    let bar = indicatif::ProgressBar::new(random);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("garbage [{bar:30}] {pos}/{len} datagrams, {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
+    let bar = crate::progress::bar("garbage", Some(random), "datagrams");
     let send = |d: &[u8], sent: &mut u64| -> Result<()> {
         // Paced so that loopback's queue never overflows: a datagram the kernel drops would
         // never be counted, and the comparison below would fail.

@@ -1,0 +1,166 @@
+//! `jawtrack send`: a phone simulator that replays a recording as datagrams, with deliberate
+//! loss, reordering and duplication for tests and demos.
+
+use super::KeyArgs;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_recording::FrameRecord;
+use jawtrack_wire::{Ack, PosePacket, Session};
+use rand::{Rng, SeedableRng};
+use std::net::{SocketAddr, UdpSocket};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// Arguments of `jawtrack send`.
+#[derive(Args)]
+pub(crate) struct SendArgs {
+    /// The recording to replay (JSON lines from `jawtrack track`, `receive` or the phone).
+    #[arg(long)]
+    replay: PathBuf,
+    /// Where the receiver listens.
+    #[arg(long)]
+    to: SocketAddr,
+    #[command(flatten)]
+    key: KeyArgs,
+    /// Datagrams per second.
+    #[arg(long, default_value_t = 30.0)]
+    rate: f64,
+    /// Send this many datagrams, cycling through the recording (default: each frame once).
+    #[arg(long)]
+    count: Option<u64>,
+    /// Probability of dropping a datagram (its sequence number is used, so the receiver sees
+    /// a gap). The last datagram is always sent, so every loss is visible.
+    #[arg(long, default_value_t = 0.0)]
+    loss: f64,
+    /// Probability of holding a datagram back and sending it after the next one.
+    #[arg(long, default_value_t = 0.0)]
+    reorder: f64,
+    /// Probability of sending a datagram twice.
+    #[arg(long, default_value_t = 0.0)]
+    duplicate: f64,
+    /// Seed of the loss, reorder and duplicate draws.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+pub(crate) fn run(a: &SendArgs) -> Result<()> {
+    let security = a.key.security()?;
+    for (name, p) in [("--loss", a.loss), ("--reorder", a.reorder), ("--duplicate", a.duplicate)] {
+        if !(0.0..1.0).contains(&p) {
+            bail!("{name} must be a probability in [0, 1), got {p}");
+        }
+    }
+    if !(a.rate.is_finite() && a.rate > 0.0) {
+        bail!("--rate must be a positive number of datagrams per second, got {}", a.rate);
+    }
+    let recording = jawtrack_recording::open(&a.replay)?;
+    for (line, why) in &recording.skipped {
+        eprintln!("warning: {} line {line} skipped: {why}", a.replay.display());
+    }
+    let frames: Vec<FrameRecord> = recording.frames;
+    if frames.is_empty() {
+        bail!("{} holds no frames to replay", a.replay.display());
+    }
+    let total = a.count.unwrap_or(frames.len() as u64);
+    let socket =
+        UdpSocket::bind(if a.to.is_ipv4() { "0.0.0.0:0" } else { "[::]:0" }).context("opening a UDP socket")?;
+    socket.set_nonblocking(true)?;
+    let mut session = Session::new(security);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
+    let bar = crate::progress::bar("sending", Some(total), "datagrams");
+    let (mut sent, mut dropped, mut reordered, mut duplicated, mut acks, mut refused) =
+        (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
+    let mut last_ack: Option<Ack> = None;
+    let mut held: Option<Vec<u8>> = None;
+    let period = Duration::from_secs_f64(1.0 / a.rate);
+    let start = Instant::now();
+    let mut buf = [0u8; 2048];
+    let transmit = |d: &[u8], rng: &mut rand_chacha::ChaCha8Rng, sent: &mut u64, duplicated: &mut u64| {
+        let copies = if rng.random_bool(a.duplicate) { 2 } else { 1 };
+        for _ in 0..copies {
+            // Loopback drops nothing; a full socket buffer is retried rather than lost.
+            while let Err(e) = socket.send_to(d, a.to) {
+                if e.kind() != std::io::ErrorKind::WouldBlock {
+                    return Err(e);
+                }
+                std::thread::sleep(Duration::from_micros(200));
+            }
+            *sent += 1;
+        }
+        *duplicated += copies - 1;
+        Ok(())
+    };
+    for i in 0..total {
+        let due = start + period.mul_f64(i as f64);
+        if let Some(wait) = due.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        let mut record = frames[(i % frames.len() as u64) as usize].clone();
+        // Cycled frames keep counting up, as a live session would.
+        record.frame = i;
+        record.t = i as f64 / a.rate;
+        let datagram = session.pose_datagram(&PosePacket::from_record(&record));
+        let last = i + 1 == total;
+        if !last && rng.random_bool(a.loss) {
+            dropped += 1;
+        } else if !last && held.is_none() && rng.random_bool(a.reorder) {
+            held = Some(datagram);
+        } else {
+            transmit(&datagram, &mut rng, &mut sent, &mut duplicated).context("sending")?;
+            if let Some(h) = held.take() {
+                transmit(&h, &mut rng, &mut sent, &mut duplicated).context("sending")?;
+                reordered += 1;
+            }
+        }
+        while let Ok((n, _)) = socket.recv_from(&mut buf) {
+            match session.read_ack(&buf[..n]) {
+                Ok(ack) => {
+                    acks += 1;
+                    last_ack = Some(ack);
+                }
+                Err(_) => refused += 1,
+            }
+        }
+        bar.inc(1);
+    }
+    // Late acknowledgements of the last datagrams.
+    let until = Instant::now() + Duration::from_millis(300);
+    while Instant::now() < until {
+        match socket.recv_from(&mut buf) {
+            Ok((n, _)) => match session.read_ack(&buf[..n]) {
+                Ok(ack) => {
+                    acks += 1;
+                    last_ack = Some(ack);
+                }
+                Err(_) => refused += 1,
+            },
+            Err(_) => std::thread::sleep(Duration::from_millis(10)),
+        }
+    }
+    bar.finish_and_clear();
+    let elapsed = start.elapsed().as_secs_f64();
+    eprintln!(
+        "sent {total} frames as {sent} datagrams in {elapsed:.1} s (session {:#018x}): dropped {dropped}, reordered {reordered}, duplicated {duplicated}; {}",
+        session.id(),
+        match last_ack {
+            Some(ack) => format!("{acks} acknowledgements, the last: {} accepted, {} lost", ack.accepted, ack.lost),
+            None => "no acknowledgement (is the receiver running, with the same key?)".into(),
+        }
+    );
+    say!(
+        "{}",
+        serde_json::json!({
+            "session": format!("{:#018x}", session.id()),
+            "frames": total,
+            "datagrams_sent": sent,
+            "dropped": dropped,
+            "reordered": reordered,
+            "duplicated": duplicated,
+            "acks": acks,
+            "acks_refused": refused,
+            "last_ack": last_ack.map(|a| serde_json::json!({"accepted": a.accepted, "lost": a.lost, "highest_seq": a.highest_seq})),
+            "duration_s": elapsed,
+        })
+    );
+    Ok(())
+}

@@ -1,0 +1,120 @@
+//! `jawtrack synth`: renders a scene of the synthetic rig (`jawtrack_synth`) with its ground
+//! truth, or measures the renderer's own edge accuracy (`--self-check`).
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_marker::Marker;
+use jawtrack_pose::CameraIntrinsics;
+use jawtrack_synth::{Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `jawtrack synth`.
+#[derive(Args)]
+pub(crate) struct SynthArgs {
+    /// Which scene: static, hinge, excursion or chew.
+    #[arg(long)]
+    scene: Option<SceneKind>,
+    /// Output folder.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Frame size: 1080p or 4k.
+    #[arg(long, default_value = "1080p")]
+    resolution: Resolution,
+    /// Seed of everything random (print errors, noise, tremor, clutter).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Camera intrinsics fx,fy,cx,cy[,k1,k2] (px); default: an iPhone wide camera.
+    #[arg(long)]
+    intrinsics: Option<CameraIntrinsics>,
+    /// Marker file (default: the nominal 12.7 mm pair).
+    #[arg(long)]
+    marker: Option<PathBuf>,
+    /// Realism settings as JSON; fields left out keep their defaults.
+    #[arg(long, conflicts_with = "clean")]
+    realism: Option<PathBuf>,
+    /// Exact geometry: no blur, noise, gamma, print error, occluders or glare.
+    #[arg(long)]
+    clean: bool,
+    /// Frames per camera view (static scene).
+    #[arg(long, default_value_t = 2)]
+    frames_per_view: usize,
+    /// Cycles per opening / glide (hinge, excursion, chew).
+    #[arg(long, default_value_t = 2)]
+    cycles: usize,
+    /// Frame rate of the dynamic scenes (frames/s).
+    #[arg(long, default_value_t = 30.0)]
+    fps: f64,
+    /// Keep only every n-th frame.
+    #[arg(long, default_value_t = 1)]
+    stride: usize,
+    /// Stop after this many frames.
+    #[arg(long)]
+    max_frames: Option<usize>,
+    /// Instead of a scene, render a large tag and measure where its edges land (px).
+    #[arg(long, conflicts_with_all = ["scene", "out"])]
+    self_check: bool,
+}
+
+pub(crate) fn load_realism(a: &SynthArgs) -> Result<Realism> {
+    if a.clean {
+        return Ok(Realism::clean());
+    }
+    match &a.realism {
+        None => Ok(Realism::default()),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            serde_json::from_str(&text).with_context(|| format!("{}: not a realism settings file", p.display()))
+        }
+    }
+}
+
+pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfig> {
+    let marker = match &a.marker {
+        Some(p) => Marker::load(p)?,
+        None => Marker::default(),
+    };
+    Ok(SynthConfig {
+        scene,
+        resolution: a.resolution,
+        intrinsics: a.intrinsics,
+        seed: a.seed,
+        realism: load_realism(a)?,
+        options: SceneOptions { frames_per_view: a.frames_per_view, cycles: a.cycles, fps: a.fps },
+        marker,
+        stride: a.stride,
+        max_frames: a.max_frames,
+    })
+}
+
+pub(crate) fn run(a: &SynthArgs) -> Result<()> {
+    if a.self_check {
+        say!("side_px roll_deg rows  max_err_px rms_err_px");
+        let mut worst: f64 = 0.0;
+        for roll in [0.0, 7.0, 30.0, 45.0] {
+            let c = jawtrack_synth::selfcheck::edge_self_check(400.0, roll);
+            say!("{:7.0} {:8.1} {:5} {:10.4} {:10.4}", c.tag_side_px, roll, c.samples, c.max_error_px, c.rms_error_px);
+            worst = worst.max(c.max_error_px);
+        }
+        if worst >= 0.05 {
+            bail!("edge error {worst:.4} px exceeds 0.05 px");
+        }
+        say!("ok: every edge within {worst:.4} px of its projection");
+        return Ok(());
+    }
+    let Some(scene) = a.scene else { bail!("--scene is required (static, hinge, excursion or chew)") };
+    let Some(out) = &a.out else { bail!("--out DIR is required") };
+    let config = synth_config(a, scene)?;
+    let summary = render_with_progress(config, out)?;
+    crate::demo::print_scene_summary(scene, out, &summary);
+    Ok(())
+}
+
+pub(crate) fn render_with_progress(config: SynthConfig, out: &Path) -> Result<jawtrack_synth::SceneSummary> {
+    let bar = crate::progress::bar(&format!("rendering {}", config.scene.name()), Some(0), "frames");
+    let summary = jawtrack_synth::write_scene(config, out, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    Ok(summary)
+}
