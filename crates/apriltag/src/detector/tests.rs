@@ -1,0 +1,139 @@
+//! The detector's unit tests on drawn tags: empty and odd frames, the four turns, a mirrored tag, a region of interest.
+
+use super::*;
+use crate::config::Roi;
+
+/// A tag drawn axis-aligned: `cell` px per cell, one white cell of quiet zone, on grey.
+fn drawn_tag(id: u32, cell: usize, pad: usize) -> (Vec<u8>, usize) {
+    let bm = Tag36h11::bitmap(id).expect("id");
+    let side = 10 * cell + 2 * pad;
+    let mut img = vec![128u8; side * side];
+    for y in 0..10 * cell {
+        for x in 0..10 * cell {
+            let (cx, cy) = (x / cell, y / cell);
+            let white = cx == 0 || cy == 0 || cx == 9 || cy == 9 || bm.is_white(cx - 1, cy - 1);
+            img[(y + pad) * side + x + pad] = if white { 230 } else { 25 };
+        }
+    }
+    (img, side)
+}
+
+fn rotate_cw(img: &[u8], n: usize) -> Vec<u8> {
+    let mut out = vec![0u8; n * n];
+    for y in 0..n {
+        for x in 0..n {
+            out[x * n + (n - 1 - y)] = img[y * n + x];
+        }
+    }
+    out
+}
+
+fn detector() -> Detector {
+    Detector::new(DetectorConfig::default()).expect("defaults")
+}
+
+#[test]
+fn blank_noisy_tiny_and_odd_frames_give_nothing() {
+    let d = detector();
+    for (w, h) in [(1, 1), (2, 3), (3, 2), (5, 7), (17, 13), (64, 64)] {
+        for fill in [0u8, 255] {
+            let img = vec![fill; w * h];
+            let v = ImageView::new(&img, w, h, w).expect("view");
+            assert!(d.detect(&v).expect("runs").is_empty(), "{w}×{h} of {fill}");
+        }
+    }
+    let mut x = 7u32;
+    let noise: Vec<u8> = (0..320 * 240)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 24) as u8
+        })
+        .collect();
+    let v = ImageView::new(&noise, 320, 240, 320).expect("view");
+    assert!(d.detect(&v).expect("runs").is_empty(), "pure noise");
+}
+
+#[test]
+fn all_four_turns_decode_with_corners_in_tag_order() {
+    let (img, n) = drawn_tag(7, 8, 20);
+    let d = detector();
+    let mut turned = img.clone();
+    let mut previous_bl: Option<[f64; 2]> = None;
+    for turn in 0..4 {
+        let v = ImageView::new(&turned, n, n, n).expect("view");
+        let dets = d.detect(&v).expect("runs");
+        assert_eq!(dets.len(), 1, "turn {turn}: {dets:?}");
+        let det = dets[0];
+        assert_eq!((det.id, det.hamming), (7, 0));
+        // The black square spans pad + cell .. pad + 9·cell; its corners sit on pixel edges.
+        let lo = 20.0 + 8.0 - 0.5;
+        let hi = 20.0 + 72.0 - 0.5;
+        for c in det.corners {
+            assert!((c[0] - lo).abs() < 0.3 || (c[0] - hi).abs() < 0.3, "turn {turn}: {c:?}");
+            assert!((c[1] - lo).abs() < 0.3 || (c[1] - hi).abs() < 0.3, "turn {turn}: {c:?}");
+        }
+        // Bottom-left of the upright tag moves a quarter turn clockwise with the image.
+        if let Some(p) = previous_bl {
+            let c = (n as f64 - 1.0) / 2.0;
+            let expected = [c - (p[1] - c), c + (p[0] - c)];
+            let bl = det.corners[0];
+            assert!(
+                (bl[0] - expected[0]).abs() < 0.5 && (bl[1] - expected[1]).abs() < 0.5,
+                "turn {turn}: {bl:?} vs {expected:?}"
+            );
+        } else {
+            // Upright: bottom-left is at low x, high y.
+            assert!(det.corners[0][0] < 40.0 && det.corners[0][1] > 80.0, "{:?}", det.corners);
+        }
+        previous_bl = Some(det.corners[0]);
+        turned = rotate_cw(&turned, n);
+    }
+}
+
+#[test]
+fn a_mirrored_tag_is_not_read() {
+    let (img, n) = drawn_tag(7, 8, 20);
+    let mirrored: Vec<u8> = (0..n * n).map(|i| img[(i / n) * n + (n - 1 - i % n)]).collect();
+    let dets = detector().detect(&ImageView::new(&mirrored, n, n, n).expect("view")).expect("runs");
+    assert!(dets.is_empty(), "{dets:?}");
+}
+
+#[test]
+fn a_region_of_interest_keeps_full_frame_coordinates() {
+    let (tag, n) = drawn_tag(3, 6, 10);
+    let (w, h) = (300, 200);
+    let mut img = vec![128u8; w * h];
+    for y in 0..n {
+        img[(y + 90) * w + 150..(y + 90) * w + 150 + n].copy_from_slice(&tag[y * n..(y + 1) * n]);
+    }
+    let full = detector().detect(&ImageView::new(&img, w, h, w).expect("view")).expect("runs");
+    assert_eq!(full.len(), 1);
+    let roi = Detector::new(DetectorConfig {
+        roi: Some(Roi { x: 140, y: 80, width: 100, height: 100 }),
+        ..DetectorConfig::default()
+    })
+    .expect("roi config");
+    let part = roi.detect(&ImageView::new(&img, w, h, w).expect("view")).expect("runs");
+    assert_eq!(part.len(), 1);
+    for (a, b) in part[0].corners.iter().zip(&full[0].corners) {
+        assert!((a[0] - b[0]).abs() < 0.05 && (a[1] - b[1]).abs() < 0.05, "{a:?} vs {b:?}");
+    }
+    let outside = Detector::new(DetectorConfig {
+        roi: Some(Roi { x: 0, y: 0, width: 100, height: 100 }),
+        ..DetectorConfig::default()
+    })
+    .expect("roi config");
+    assert!(outside.detect(&ImageView::new(&img, w, h, w).expect("view")).expect("runs").is_empty());
+    let too_big = Detector::new(DetectorConfig {
+        roi: Some(Roi { x: 250, y: 0, width: 100, height: 100 }),
+        ..DetectorConfig::default()
+    })
+    .expect("roi config");
+    assert!(too_big.detect(&ImageView::new(&img, w, h, w).expect("view")).is_err());
+    assert!(
+        Detector::new(DetectorConfig { quad_sigma: 5.0, ..DetectorConfig::default() }).is_err(),
+        "a blur wider than 4 px is refused"
+    );
+}
