@@ -3,6 +3,7 @@
 //! found, with corners close to the truth), and the baseline our own detector must beat.
 
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
+use jawtrack_pose::median;
 use jawtrack_synth::GroundTruth;
 use jawtrack_test_support::fixture_sets;
 use std::io::Write as _;
@@ -81,10 +82,6 @@ fn run(params: &ReferenceParams) -> Vec<SetResult> {
     out
 }
 
-fn median(v: &[f64]) -> f64 {
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 /// Prints the reference's recall, false positives and corner error on every set at decimate
 /// 1 and 2 (the baseline for our detector), and checks what validates the renderer: on clean
 /// frames at the library's default decimation every tag seen within
@@ -106,7 +103,7 @@ fn reference_finds_the_tags_where_the_truth_puts_them() {
                 r.found_frontal,
                 r.want_frontal,
                 r.false_positives,
-                median(&r.errors),
+                median(r.errors.iter().copied()).unwrap_or(f64::NAN),
                 r.errors.get(r.errors.len() * 9 / 10).copied().unwrap_or(f64::NAN),
             );
             if r.name.starts_with("clean-") && decimate == 2.0 {
@@ -116,7 +113,8 @@ fn reference_finds_the_tags_where_the_truth_puts_them() {
                     r.name
                 );
                 // Linear light, no blur: the reference's corners sit on the rendered edges.
-                assert!(median(&r.errors) < 0.1, "{}: median corner error {:.3} px", r.name, median(&r.errors));
+                let m = median(r.errors.iter().copied()).unwrap_or(f64::NAN);
+                assert!(m < 0.1, "{}: median corner error {m:.3} px", r.name);
             }
         }
     }

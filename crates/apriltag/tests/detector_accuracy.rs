@@ -8,9 +8,9 @@ use jawtrack_synth::GroundTruth;
 use jawtrack_test_support::fixture_sets;
 use std::io::Write as _;
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+/// The median of a list of errors (NaN for none).
+fn median(v: &[f64]) -> f64 {
+    jawtrack_pose::median(v.iter().copied()).unwrap_or(f64::NAN)
 }
 
 #[test]
@@ -60,7 +60,7 @@ fn check_at(decimate: f32) {
             }
         }
         let name = set.file_name().and_then(|n| n.to_str()).unwrap_or("?").to_owned();
-        let (mo, mc, all) = (median(&mut ours_err), median(&mut c_err), median(&mut ours_all));
+        let (mo, mc, all) = (median(&ours_err), median(&c_err), median(&ours_all));
         let _ = writeln!(
             std::io::stderr(),
             "decimate {decimate}: {name:24} recall ours {ours_found}/{want}, C {c_found}/{want}; median corner error on the tags both find ours {mo:.3} px, C {mc:.3} px (ours on all it finds {all:.3} px)"

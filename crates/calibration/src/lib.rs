@@ -22,7 +22,7 @@
 
 use jawtrack_marker::{BodyKind, Marker, MarkerError, PrintError, Tag};
 use jawtrack_pose::pnp::{perturb, pose_jacobian, projection_jacobian};
-use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, solve_pnp};
+use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix2x3, Matrix3, Point2, Point3, Rotation3, Unit, Vector2, Vector3};
 
 /// A tag seen in a frame.
@@ -458,12 +458,11 @@ fn calibrate_body(
 /// unless that would leave a tag uncalibrated. Returns how many sightings went.
 fn drop_outlier_sightings(views: &mut Vec<View>, models: &[TagModel], options: &CalibrationOptions) -> usize {
     let rms = |v: &View, s: &Seen| (tag_sse(v, s, &models[s.tag], &v.pose, [0, 1, 2, 3]) / 4.0).sqrt();
-    let mut all: Vec<f64> = views.iter().flat_map(|v| v.seen.iter().map(move |s| rms(v, s))).collect();
+    let all: Vec<f64> = views.iter().flat_map(|v| v.seen.iter().map(move |s| rms(v, s))).collect();
     if all.is_empty() {
         return 0;
     }
-    all.sort_by(f64::total_cmp);
-    let limit = (all[all.len() / 2] * options.outlier_ratio).max(options.outlier_px);
+    let limit = (median(all).unwrap_or(0.0) * options.outlier_ratio).max(options.outlier_px);
     // A tag that would be left in too few views (its sightings all oblique, or its views
     // emptied of other tags) keeps its sightings rather than being left nominal: a place
     // fitted to poor sightings is nearer the truth than none.
@@ -542,10 +541,8 @@ fn assembly_check(tags: &[Tag], views: &[View], options: &CalibrationOptions) ->
         // tag spoiled does not decide.
         let rms = |face_tag: usize, turns: usize| -> f64 {
             let order = [turns % 4, (turns + 1) % 4, (turns + 2) % 4, (turns + 3) % 4];
-            let mut per_view: Vec<f64> =
-                poses.iter().map(|(v, s, p)| (tag_sse(v, s, &models[face_tag], p, order) / 4.0).sqrt()).collect();
-            per_view.sort_by(f64::total_cmp);
-            per_view[per_view.len() / 2]
+            median(poses.iter().map(|(v, s, p)| (tag_sse(v, s, &models[face_tag], p, order) / 4.0).sqrt()))
+                .unwrap_or(0.0)
         };
         let nominal = rms(t, 0);
         if nominal <= options.gross_min_px {

@@ -168,9 +168,8 @@ fn status_kb(key: &str) -> Option<f64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-fn median_of(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+fn median_of(v: &[f64]) -> f64 {
+    jawtrack_pose::median(v.iter().copied()).unwrap_or(f64::NAN)
 }
 
 fn run_job(job: &Job) -> Result<Outcome> {
@@ -241,7 +240,7 @@ fn run_job(job: &Job) -> Result<Outcome> {
             dets = detect(img)?;
             times.push(t.elapsed().as_secs_f64());
         }
-        out.seconds += median_of(&mut times);
+        out.seconds += median_of(&times);
         if let Some(truth) = &f.truth {
             out.false_positives += dets.iter().filter(|d| !truth.iter().any(|t| t.id == d.0)).count();
             for t in truth.iter().filter(|t| t.should_be_detected()) {
@@ -282,7 +281,7 @@ fn agreement(ours: &Outcome, c: &Outcome) -> (usize, usize, f64) {
             }
         }
     }
-    (both, c_total, median_of(&mut dist))
+    (both, c_total, median_of(&dist))
 }
 
 fn main() -> Result<()> {
@@ -338,7 +337,7 @@ fn main() -> Result<()> {
                         repeat: args.repeat,
                         min_white_black_diff: args.min_white_black_diff,
                     };
-                    let mut o = spawn(&job)?;
+                    let o = spawn(&job)?;
                     if o.frames == 0 {
                         eprintln!("SKIPPED: set {set} has no frames");
                         break;
@@ -347,8 +346,7 @@ fn main() -> Result<()> {
                     let c_fps = c_out.as_ref().map(|c| c.frames as f64 / c.seconds);
                     let recall = if o.want > 0 { format!("{}/{}", o.found, o.want) } else { "–".into() };
                     let fp = if o.want > 0 { o.false_positives.to_string() } else { "–".into() };
-                    let err =
-                        if o.errors.is_empty() { "–".into() } else { format!("{:.3}", median_of(&mut o.errors)) };
+                    let err = if o.errors.is_empty() { "–".into() } else { format!("{:.3}", median_of(&o.errors)) };
                     let agree = match &c_out {
                         Some(c) => {
                             let (both, n, d) = agreement(&o, c);

@@ -14,7 +14,7 @@
 use jawtrack_occlusion::Mesh;
 use jawtrack_occlusion::contacts::{Arch, ContactSettings, contacts};
 use jawtrack_occlusion::scenes;
-use jawtrack_pose::Pose;
+use jawtrack_pose::{Pose, median};
 use nalgebra::Vector3;
 use parry3d_f64::math::Vector as V;
 use parry3d_f64::query::PointQuery;
@@ -26,11 +26,6 @@ const PASSES: usize = 3;
 fn arg(name: &str, default: usize) -> usize {
     let args: Vec<String> = std::env::args().collect();
     args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).and_then(|v| v.parse().ok()).unwrap_or(default)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 fn to_parry(m: &Mesh) -> parry3d_f64::shape::TriMesh {
@@ -80,7 +75,7 @@ fn run(name: &str, (u, l): (Mesh, Mesh), frames: usize) {
             parry.push(t.elapsed().as_secs_f64() * 1e3);
         }
     }
-    let (ours, parry) = (median(ours), median(parry));
+    let (ours, parry) = (median(ours).unwrap_or(f64::NAN), median(parry).unwrap_or(f64::NAN));
     let c = contacts(&upper, &lower, &poses[0], &settings);
     println!(
         "{name}: {} + {} triangles ({} + {} vertices), {frames} frames, {PASSES} passes each, one core",

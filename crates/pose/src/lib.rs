@@ -1,6 +1,7 @@
 //! Geometry shared by everything that reasons about where things are: rigid transforms in
 //! millimetres ([`Pose`]), the pinhole camera with radial distortion ([`CameraIntrinsics`]),
-//! and the pose of a rigid body from its points in an image ([`pnp`]).
+//! the pose of a rigid body from its points in an image ([`pnp`]), and the median its users
+//! share ([`median`]).
 //!
 //! Conventions: camera frame x right, y down, z forward (OpenCV); pixel centres at integer
 //! coordinates, (0, 0) the centre of the top-left pixel. A transform is named for what it maps:
@@ -9,10 +10,12 @@
 mod camera;
 pub mod pnp;
 mod rigid;
+pub mod stats;
 
 pub use camera::CameraIntrinsics;
 pub use pnp::{BodyPose, Observation, PnpError, PnpOptions, solve_pnp};
 pub use rigid::Pose;
+pub use stats::median;
 
 /// Errors from building geometry out of untrusted numbers.
 #[derive(Debug, thiserror::Error, PartialEq)]

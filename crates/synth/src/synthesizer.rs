@@ -7,7 +7,7 @@ use crate::render::{self, Camera, PlacedBody, Plane, RenderScene, Shape, render_
 use crate::scenes::{FrameSpec, Rig, SceneKind, SceneOptions, scene_frames};
 use crate::truth::{FrameTruth, GroundTruth, PrintErrorTruth, TagTruth};
 use jawtrack_marker::{BodyKind, Marker, PrintError};
-use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_pose::{CameraIntrinsics, Pose, median};
 use nalgebra::{Point2, Point3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -367,9 +367,8 @@ impl Synthesizer {
         // Autofocus locks on what has contrast: the tags facing the camera (median depth).
         let focus_mm = (realism.f_number > 0.0).then(|| {
             realism.focus_distance_mm.unwrap_or_else(|| {
-                let mut z: Vec<f64> = tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z).collect();
-                z.sort_by(f64::total_cmp);
-                z.get(z.len() / 2).copied().unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
+                median(tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z))
+                    .unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
             })
         });
         if let Some(focus) = focus_mm {
@@ -589,7 +588,6 @@ pub fn write_scene(
     let path = dir.join("ground_truth.json");
     let text = serde_json::to_string_pretty(&truth).map_err(|e| io(&path, &e))?;
     std::fs::write(&path, text).map_err(|e| io(&path, &e))?;
-    sides.sort_by(f64::total_cmp);
     let n = counts.len().max(1);
     Ok(SceneSummary {
         frames: counts.len(),
@@ -598,7 +596,7 @@ pub fn write_scene(
             counts.iter().sum::<usize>() as f64 / n as f64,
             counts.iter().copied().max().unwrap_or(0),
         ),
-        median_tag_side_px: sides.get(sides.len() / 2).copied().unwrap_or(0.0),
+        median_tag_side_px: median(sides).unwrap_or(0.0),
         max_mandible_travel_mm: travel,
         seconds: start.elapsed().as_secs_f64(),
     })

@@ -45,9 +45,8 @@ pub struct PipelineArgs {
 }
 
 /// Median of a list (NaN when empty).
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+fn median(v: Vec<f64>) -> f64 {
+    jawtrack_pose::median(v).unwrap_or(f64::NAN)
 }
 
 /// One body's PnP problem as the tracker met it.

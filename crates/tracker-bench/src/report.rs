@@ -2,6 +2,7 @@
 //! both marker files, ours beside the reference stack; the frames that flipped or lost a
 //! body; PnP time per body; and the verdict against the target.
 
+use jawtrack_pose::median;
 use jawtrack_synth::SceneKind;
 use jawtrack_synth::scenes::View;
 use std::fmt::Write as _;
@@ -98,11 +99,6 @@ fn spread(mut v: Vec<f64>) -> Option<Spread> {
     v.sort_by(f64::total_cmp);
     let mean = v.iter().sum::<f64>() / v.len() as f64;
     Some(Spread { mean, median: v[v.len() / 2], max: v[v.len() - 1] })
-}
-
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied()
 }
 
 /// One stack's errors over a group of frames.
@@ -314,12 +310,9 @@ fn timing_table(timings: &[PnpTiming], with_reference: bool) -> String {
         if sel.is_empty() {
             continue;
         }
-        let ours = median(sel.iter().map(|t| t.ours_us).collect());
+        let ours = median(sel.iter().map(|t| t.ours_us));
         let (sq, it) = if with_reference {
-            (
-                us(median(sel.iter().filter_map(|t| t.sqpnp_us).collect())),
-                us(median(sel.iter().filter_map(|t| t.iterative_us).collect())),
-            )
+            (us(median(sel.iter().filter_map(|t| t.sqpnp_us))), us(median(sel.iter().filter_map(|t| t.iterative_us))))
         } else {
             ("skipped".into(), "skipped".into())
         };
