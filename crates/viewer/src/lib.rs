@@ -473,7 +473,9 @@ mod tests {
         let addr = std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port");
         if !page::THREE_EMBEDDED {
             assert!(matches!(LiveServer::start(addr, state), Err(ViewerError::PageMissing)));
-            eprintln!("SKIPPED: serving the embedded page: three.js was not installed when this was built");
+            jawtrack_test_support::say_skipped(
+                "serving the embedded page: three.js was not installed when this was built (npm ci --prefix viewer)",
+            );
             return;
         }
         LiveServer::start(addr, state).expect("serving");
