@@ -1,0 +1,127 @@
+//! Reading meshes: [`Mesh::load`] picks the format by extension (STL binary or ASCII through
+//! `stl_io`, PLY through `ply-rs-bw`, OBJ through `tobj`) and validates the result, so a mesh
+//! that loads is non-empty, finite, well indexed and millimetre-sized.
+
+use crate::{Mesh, MeshError};
+use nalgebra::Point3;
+use std::path::Path;
+
+impl Mesh {
+    /// Reads a mesh by its extension (`.stl`, `.ply`, `.obj`) and checks it is usable in mm.
+    pub fn load(path: &Path) -> Result<Mesh, MeshError> {
+        let name = path.display().to_string();
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let bytes = std::fs::read(path).map_err(|e| MeshError::Io { path: name.clone(), reason: e.to_string() })?;
+        let mesh = match ext.as_deref() {
+            Some("stl") => read_stl(&bytes),
+            Some("ply") => read_ply(&bytes),
+            Some("obj") => read_obj(&bytes),
+            _ => return Err(MeshError::Format { path: name }),
+        }
+        .map_err(|(format, reason)| MeshError::Corrupt { path: name.clone(), format, reason })?;
+        mesh.validate(&name)?;
+        Ok(mesh)
+    }
+}
+
+type ParseResult = Result<Mesh, (&'static str, String)>;
+
+fn read_stl(bytes: &[u8]) -> ParseResult {
+    let indexed = stl_io::read_stl(&mut std::io::Cursor::new(bytes)).map_err(|e| ("STL", e.to_string()))?;
+    let vertices = indexed.vertices.iter().map(|v| Point3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
+    let triangles = indexed.faces.iter().map(|f| f.vertices.map(|i| i as u32)).collect();
+    Ok(Mesh { vertices, triangles })
+}
+
+fn read_obj(bytes: &[u8]) -> ParseResult {
+    let options =
+        tobj::LoadOptions { triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
+    let (models, _) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| Err(tobj::LoadError::MaterialParseError))
+            .map_err(|e| ("OBJ", e.to_string()))?;
+    let mut parts = Vec::with_capacity(models.len());
+    for model in models {
+        let m = model.mesh;
+        let vertices =
+            m.positions.chunks_exact(3).map(|p| Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+        let triangles = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        parts.push(Mesh { vertices, triangles });
+    }
+    Ok(Mesh::concat(&parts).0)
+}
+
+/// A PLY vertex: any of float/double x, y, z; other properties ignored.
+struct PlyVertex([f64; 3]);
+/// A PLY face: its index list, triangulated as a fan.
+struct PlyFace(Vec<u32>);
+
+impl ply_rs_bw::ply::PropertyAccess for PlyVertex {
+    fn new() -> Self {
+        PlyVertex([f64::NAN; 3])
+    }
+    fn set_property(&mut self, key: &str, property: ply_rs_bw::ply::Property) -> ply_rs_bw::ply::PropertyAccessResult {
+        use ply_rs_bw::ply::{Property, PropertyAccessResult};
+        let i = match key {
+            "x" => 0,
+            "y" => 1,
+            "z" => 2,
+            _ => return PropertyAccessResult::Ignored,
+        };
+        self.0[i] = match property {
+            Property::Float(v) => v as f64,
+            Property::Double(v) => v,
+            Property::Int(v) => v as f64,
+            Property::Short(v) => v as f64,
+            _ => return PropertyAccessResult::Ignored,
+        };
+        PropertyAccessResult::Set
+    }
+}
+
+impl ply_rs_bw::ply::PropertyAccess for PlyFace {
+    fn new() -> Self {
+        PlyFace(Vec::new())
+    }
+    fn set_property(&mut self, key: &str, property: ply_rs_bw::ply::Property) -> ply_rs_bw::ply::PropertyAccessResult {
+        use ply_rs_bw::ply::{Property, PropertyAccessResult};
+        if key != "vertex_indices" && key != "vertex_index" {
+            return PropertyAccessResult::Ignored;
+        }
+        // Negative indices become u32::MAX, which validation then reports as out of range.
+        self.0 = match property {
+            Property::ListInt(v) => v.into_iter().map(|i| u32::try_from(i).unwrap_or(u32::MAX)).collect(),
+            Property::ListUInt(v) => v,
+            Property::ListShort(v) => v.into_iter().map(|i| u32::try_from(i).unwrap_or(u32::MAX)).collect(),
+            Property::ListUShort(v) => v.into_iter().map(u32::from).collect(),
+            Property::ListUChar(v) => v.into_iter().map(u32::from).collect(),
+            _ => return PropertyAccessResult::Ignored,
+        };
+        PropertyAccessResult::Set
+    }
+}
+
+fn read_ply(bytes: &[u8]) -> ParseResult {
+    use ply_rs_bw::parser::{Parser, Reader};
+    let err = |e: ply_rs_bw::parser::ParseError| ("PLY", e.to_string());
+    let mut reader = Reader::new(std::io::BufReader::new(std::io::Cursor::new(bytes)));
+    let vertex_parser = Parser::<PlyVertex>::new();
+    let face_parser = Parser::<PlyFace>::new();
+    let header = vertex_parser.read_header(&mut reader).map_err(err)?;
+    let (mut vertices, mut faces) = (Vec::new(), Vec::new());
+    for element in header.elements.values() {
+        match element.name.as_str() {
+            "vertex" => {
+                vertices = vertex_parser.read_payload_for_element(&mut reader, element, &header).map_err(err)?
+            }
+            "face" => faces = face_parser.read_payload_for_element(&mut reader, element, &header).map_err(err)?,
+            // Later elements (edges, materials) cannot be skipped without parsing them.
+            _ => break,
+        }
+    }
+    let vertices = vertices.into_iter().map(|v| Point3::from(v.0)).collect();
+    let triangles = faces
+        .into_iter()
+        .flat_map(|f| (2..f.0.len()).map(move |k| [f.0[0], f.0[k - 1], f.0[k]]).collect::<Vec<_>>())
+        .collect();
+    Ok(Mesh { vertices, triangles })
+}
