@@ -31,7 +31,7 @@ fn write_obj(mesh: &Mesh, path: &Path) {
 /// A 10 mm patch facing down at z = 0, written as STL.
 fn upper_stl(dir: &Path, cells: usize) -> PathBuf {
     let p = dir.join("upper.stl");
-    scenes::patch(10.0, cells, 0.0, true).write_stl(&p).expect("write stl");
+    scenes::patch(10.0, cells, 0.0, true).write_stl_file(&p).expect("write stl");
     p
 }
 

@@ -31,7 +31,7 @@ fn write_scan(body: &Mesh, scan_from_marker: &Pose, keep: impl Fn(&Point3<f64>) 
         .map(|t| body.triangles[t])
         .collect();
     let cut = Mesh { vertices: body.vertices.clone(), triangles };
-    cut.transformed(|p| scan_from_marker.transform_point(p)).write_stl(path).expect("writes the scan");
+    cut.transformed(|p| scan_from_marker.transform_point(p)).write_stl_file(path).expect("writes the scan");
 }
 
 /// The truth turned 5° and shifted 1.5 mm in the marker frame.
@@ -184,7 +184,7 @@ fn bad_inputs_fail_naming_the_problem_and_write_nothing() {
 
     refused(&run(&marker, "maxilla", &dir.path().join("missing.stl"), &good_init, &out), "missing.stl");
     let metres = dir.path().join("metres.stl");
-    body.transformed(|p| Point3::from(p.coords * 0.001)).write_stl(&metres).expect("writes");
+    body.transformed(|p| Point3::from(p.coords * 0.001)).write_stl_file(&metres).expect("writes");
     refused(&run(&marker, "maxilla", &metres, &good_init, &out), "metres");
     let corrupt = dir.path().join("corrupt.stl");
     std::fs::write(&corrupt, b"solid nothing\nfacet normal oops").expect("writes");

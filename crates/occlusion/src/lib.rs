@@ -1,6 +1,7 @@
 //! Occlusal contacts on intra-oral scans.
 //!
-//! - [`mesh`]: reading STL/PLY/OBJ in millimetres and checking them;
+//! - [`mesh`]: the triangle mesh, reading STL/PLY/OBJ in millimetres and checking them: the
+//!   `jawtrack-mesh` crate, re-exported under its old path with its items at the top level;
 //! - [`distance`]: exact signed distances from points to a scan surface, within a reach;
 //! - [`contacts`]: where two arches touch or come within a threshold at one pose, grouped into
 //!   regions, and the contact-frequency map over a motion;
@@ -12,9 +13,9 @@
 pub mod contacts;
 pub mod distance;
 pub mod dynamics;
-pub mod mesh;
 pub mod register;
 pub mod scenes;
 
 pub use distance::{Nearest, Surface, SurfaceIndex, nearest_brute_force};
-pub use mesh::{Mesh, MeshError, MeshReport};
+pub use jawtrack_mesh as mesh;
+pub use jawtrack_mesh::{Mesh, MeshError, MeshReport, PLAUSIBLE_EXTENT_MM};
