@@ -14,7 +14,7 @@
 
 use crate::{HarnessError, HarnessParams, Mesh};
 use jawtrack_marker::{BodyKind, Dodecahedron, Face, Marker};
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Point3, Vector2, Vector3};
 use std::f64::consts::TAU;
 
 /// One of the three faces meeting at the −Z vertex and the part of the post's ring over it.
@@ -290,8 +290,7 @@ struct Builder {
 
 impl Builder {
     fn point(&self, i: u32) -> Vector3<f64> {
-        let p = self.mesh.vertices[i as usize];
-        Vector3::new(p[0], p[1], p[2])
+        self.mesh.vertices[i as usize].coords
     }
 
     fn push(&mut self, a: u32, b: u32, c: u32, outward: &Vector3<f64>) {
@@ -319,17 +318,17 @@ pub fn body_mesh(marker_edge: f64, tag_size: f64, params: &HarnessParams) -> Res
     let centre = 19 + 2 * n;
     let z_end = layout.apex.z - params.post_length;
 
-    let mut vertices: Vec<[f64; 3]> = solid
+    let mut vertices: Vec<Point3<f64>> = solid
         .vertices()
         .iter()
         .enumerate()
         .filter(|&(j, _)| j != layout.apex_index)
-        .map(|(_, v)| [v.x, v.y, v.z])
+        .map(|(_, v)| Point3::from(*v))
         .collect();
     let ring: Vec<Vector3<f64>> = (0..n).map(|k| layout.ring_point(&solid, k, radius)).collect();
-    vertices.extend(ring.iter().map(|p| [p.x, p.y, p.z]));
-    vertices.extend(ring.iter().map(|p| [p.x, p.y, z_end]));
-    vertices.push([0.0, 0.0, z_end]);
+    vertices.extend(ring.iter().map(|p| Point3::from(*p)));
+    vertices.extend(ring.iter().map(|p| Point3::new(p.x, p.y, z_end)));
+    vertices.push(Point3::new(0.0, 0.0, z_end));
     let mut b = Builder { mesh: Mesh { vertices, triangles: Vec::with_capacity(36 + 4 * n) } };
 
     // Mesh index of each of the solid's vertices (the −Z one has none).
@@ -355,8 +354,7 @@ pub fn body_mesh(marker_edge: f64, tag_size: f64, params: &HarnessParams) -> Res
             let flat: Vec<f64> = poly
                 .iter()
                 .flat_map(|&i| {
-                    let p = b.mesh.vertices[i];
-                    let q = face_2d(face, &Vector3::new(p[0], p[1], p[2]));
+                    let q = face_2d(face, &b.mesh.vertices[i].coords);
                     [q.x, q.y]
                 })
                 .collect();
@@ -404,8 +402,8 @@ mod tests {
         body_mesh(DEFAULT_EDGE_MM, default_tag_size(DEFAULT_EDGE_MM), &HarnessParams::default()).expect("defaults fit")
     }
 
-    fn v3(p: [f64; 3]) -> Vector3<f64> {
-        Vector3::new(p[0], p[1], p[2])
+    fn v3(p: Point3<f64>) -> Vector3<f64> {
+        p.coords
     }
 
     /// Every edge is used by exactly two triangles, once in each direction; the surface is a
@@ -464,8 +462,8 @@ mod tests {
 
     fn assert_no_degenerate_triangles(m: &Mesh) {
         for i in 0..m.triangles.len() {
-            let area = 0.5 * v3(m.area_vector(i)).norm();
-            let [a, b, c] = m.triangle(i).map(v3);
+            let area = 0.5 * m.area_normal(i).norm();
+            let [a, b, c] = m.corners(i).map(v3);
             let longest = (b - a).norm().max((c - b).norm()).max((a - c).norm());
             // Height over the longest side: a sliver is as bad as a zero area for a slicer.
             assert!(
@@ -553,9 +551,9 @@ mod tests {
         let m = default_mesh();
         let u = Union::new(DEFAULT_EDGE_MM, &params);
         for i in 0..m.triangles.len() {
-            let [a, b, c] = m.triangle(i).map(v3);
+            let [a, b, c] = m.corners(i).map(v3);
             let centroid = (a + b + c) / 3.0;
-            let n = v3(m.area_vector(i)).normalize();
+            let n = m.area_normal(i).normalize();
             assert!(!u.contains(&(centroid + n * 1e-6)), "triangle {i}: outside side is inside the union");
             assert!(u.contains(&(centroid - n * 1e-6)), "triangle {i}: inside side is outside the union");
         }
@@ -622,7 +620,7 @@ mod tests {
         // The −Z vertex is each bottom face's apex (the mirror plane through Z passes through it).
         assert!(layout.bottom.iter().all(|b| b.at == 0));
         let m = default_mesh();
-        let lowest = m.vertices.iter().map(|v| v[2]).fold(f64::INFINITY, f64::min);
+        let lowest = m.vertices.iter().map(|v| v.z).fold(f64::INFINITY, f64::min);
         assert!((lowest - (layout.apex.z - 25.0)).abs() < 1e-9, "the end cap is 25 mm below the vertex");
     }
 
@@ -637,7 +635,7 @@ mod tests {
         assert_eq!(back.vertices.len(), m.vertices.len(), "no vertices merged or split in single precision");
         back.validate().expect("stl_io finds it closed, consistently wound, without zero-area faces");
         for (i, f) in back.faces.iter().enumerate() {
-            let n = v3(m.area_vector(i)).normalize();
+            let n = m.area_normal(i).normalize();
             let stored = Vector3::new(f.normal[0] as f64, f.normal[1] as f64, f.normal[2] as f64);
             assert!((stored - n).norm() < 1e-6, "stored normal agrees with the winding");
         }

@@ -4,21 +4,20 @@
 //! * [`sheet`]: printable tag sheets, one per jaw body, as SVG in true millimetres — each tag
 //!   printed on a pentagon that is cut out and glued on its face.
 //! * [`body`]: the dodecahedron body fused with a cylindrical mounting post that leaves the
-//!   −Z vertex, as a closed triangle mesh ([`mesh::Mesh`]) written as binary STL.
+//!   −Z vertex, as a closed triangle mesh ([`Mesh`], from [`jawtrack_mesh`]) written as binary STL.
 //! * [`write_harness`]: writes all of it, plus the marker file, into one folder.
 //!
 //! The dodecahedron's geometry comes from [`jawtrack_marker`] and the tag patterns from
 //! [`jawtrack_apriltag`]; nothing here recomputes either. All lengths are millimetres.
 
 pub mod body;
-pub mod mesh;
 pub mod sheet;
 
 use jawtrack_marker::{BodyKind, Marker, MarkerError};
 use std::path::{Path, PathBuf};
 
 pub use body::{body_mesh, max_post_diameter};
-pub use mesh::Mesh;
+pub use jawtrack_mesh::Mesh;
 pub use sheet::{tag_sheet_svg, tag_sheet_svg_with_post};
 
 /// File name of the body mesh written by [`write_harness`].

@@ -18,8 +18,7 @@ use std::time::Instant;
 /// The body with its post, in the marker (body) frame.
 fn harness(marker: &Marker) -> Mesh {
     let size = marker.bodies[0].tags[0].size;
-    let body = body_mesh(marker.edge, size, &HarnessParams::default()).expect("default harness");
-    Mesh { vertices: body.vertices.iter().map(|v| Point3::from(*v)).collect(), triangles: body.triangles }
+    body_mesh(marker.edge, size, &HarnessParams::default()).expect("default harness")
 }
 
 /// Each triangle split into four, `levels` times, sharing edge midpoints (the mesh stays closed).
