@@ -92,11 +92,14 @@ mod tests {
     use super::*;
     use nalgebra::Point3;
 
-    /// A closed mesh with coordinates that do not round evenly, plus a zero-area triangle (a
-    /// repeated corner) and a sliver.
+    /// A closed box turned about an oblique axis, so that no normal is axis-aligned and no
+    /// coordinate rounds evenly, plus a zero-area triangle (a repeated corner) and a sliver.
     fn awkward() -> Mesh {
+        let turn =
+            nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vector3::new(1.0, -2.0, 0.7)), 0.917);
         let mut m = crate::tests::cube().transformed(|p| {
-            Point3::new(p.x * 10.0 / 3.0 + 0.1, p.y * 7.0 / 9.0 - 1e-3, p.z * std::f64::consts::PI + 12.345_678_9)
+            let q = Point3::new(p.x * 10.0 / 3.0 + 0.1, p.y * 7.0 / 9.0 - 1e-3, p.z * std::f64::consts::PI);
+            turn * q + Vector3::new(0.0, 0.0, 12.345_678_9)
         });
         let k = m.vertices.len() as u32;
         m.vertices.push(Point3::new(1.0 / 3.0, 2.0 / 7.0, 1e-7));
