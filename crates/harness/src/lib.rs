@@ -258,6 +258,20 @@ mod tests {
         dir
     }
 
+    /// The checked-in body (`harness-cad/`) is what the defaults write, byte for byte: a
+    /// change to the geometry or the STL writer shows here, and the file is regenerated with
+    /// `jawtrack harness --out harness-cad`.
+    #[test]
+    fn the_checked_in_body_stl_is_what_the_defaults_write() {
+        let checked_in = include_bytes!("../../../harness-cad/dodecahedron-with-post.stl");
+        let marker = Marker::default();
+        let size = common_tag_size(&marker).expect("one tag size");
+        let mesh = body_mesh(marker.edge, size, &HarnessParams::default()).expect("defaults fit");
+        let mut bytes = Vec::new();
+        mesh.write_stl(&mut bytes).expect("write to memory");
+        assert!(bytes == checked_in, "harness-cad/{BODY_STL_NAME} differs from what the defaults write");
+    }
+
     #[test]
     fn write_harness_writes_the_four_files() {
         let dir = temp_dir("write");
