@@ -5,6 +5,8 @@
 //! - [`distance`]: exact signed distances from points to a scan surface, within a reach;
 //! - [`contacts`]: where two arches touch or come within a threshold at one pose, grouped into
 //!   regions, and the contact-frequency map over a motion;
+//! - [`session`]: the contacts of a motion frame by frame, with the tallies and statistics
+//!   over all its frames;
 //! - [`dynamics`]: the mandible as a rigid body sliding over the maxillary teeth;
 //! - [`register`]: ICP of the marker's dodecahedron onto a scan of the printed harness.
 //!
@@ -15,6 +17,7 @@ pub mod distance;
 pub mod dynamics;
 pub mod register;
 pub mod scenes;
+pub mod session;
 
 pub use distance::{Nearest, Surface, SurfaceIndex, nearest_brute_force};
 pub use jawtrack_mesh as mesh;
