@@ -15,16 +15,16 @@
 //! views coloured by frequency, and `summary.json`.
 
 use crate::export::load;
-use crate::occlusal::{self, View};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::Mesh;
 use jawtrack_occlusion::contacts::{Arch, ContactMap, ContactSettings, Side, THRESHOLD_RANGE_MM, contacts};
 use jawtrack_occlusion::dynamics::{self, DynamicsOptions};
+use jawtrack_occlusion::occlusal_view::{self, View};
 use jawtrack_pose::Pose;
 use jawtrack_recording::FrameRecord;
 use jawtrack_tracker::registration::Registration;
-use nalgebra::{Point3, Vector3};
+use nalgebra::Vector3;
 use serde_json::{Value, json};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -318,12 +318,6 @@ fn area_stats(tally: &Tally, arch: usize) -> Value {
     })
 }
 
-/// The centroid of a mesh's vertices.
-fn centroid(mesh: &Mesh) -> Point3<f64> {
-    let n = mesh.vertices.len().max(1) as f64;
-    Point3::from(mesh.vertices.iter().fold(Vector3::zeros(), |s, v| s + v.coords) / n)
-}
-
 pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     let settings = ContactSettings { threshold_mm: a.threshold, max_depth_mm: a.max_depth };
     if let Err(e) = settings.validate() {
@@ -450,13 +444,10 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         }
     }
     // Occlusal views, each from the other arch's side at the first frame's pose.
-    let toward = [
-        first_pose.transform_point(&centroid(&lower.mesh)),
-        first_pose.inverse().transform_point(&centroid(&upper.mesh)),
-    ];
+    let views = View::occlusal_pair(&upper.mesh, &lower.mesh, &first_pose, 800);
     for (k, (arch, name)) in [(&upper, "maxilla"), (&lower, "mandible")].into_iter().enumerate() {
-        let view = View::occlusal(&arch.mesh, &toward[k], 800);
-        let image = occlusal::with_legend(&occlusal::render(&arch.mesh, &tally.map.frequency_colours(k), &view));
+        let image =
+            occlusal_view::with_legend(&occlusal_view::render(&arch.mesh, &tally.map.frequency_colours(k), &views[k]));
         let p = a.out.join(format!("{name}_occlusal.png"));
         image.save(&p).with_context(|| format!("writing {}", p.display()))?;
         written.push(p);

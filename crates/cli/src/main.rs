@@ -22,7 +22,6 @@ mod frames;
 mod link;
 mod marker;
 mod metrics;
-mod occlusal;
 mod progress;
 mod register;
 mod synth;

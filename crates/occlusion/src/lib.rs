@@ -7,6 +7,8 @@
 //!   regions, and the contact-frequency map over a motion;
 //! - [`session`]: the contacts of a motion frame by frame, with the tallies and statistics
 //!   over all its frames;
+//! - [`occlusal_view`]: an arch rendered in its occlusal view with per-vertex colours, and
+//!   the legend of the contact-frequency colours;
 //! - [`dynamics`]: the mandible as a rigid body sliding over the maxillary teeth;
 //! - [`register`]: ICP of the marker's dodecahedron onto a scan of the printed harness.
 //!
@@ -15,6 +17,7 @@
 pub mod contacts;
 pub mod distance;
 pub mod dynamics;
+pub mod occlusal_view;
 pub mod register;
 pub mod scenes;
 pub mod session;

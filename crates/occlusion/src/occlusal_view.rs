@@ -1,10 +1,11 @@
-//! Occlusal views of an arch for `jawtrack contacts`: an orthographic software rendering (a
-//! z-buffer rasteriser with per-vertex colours and Lambert shading) of the arch seen along its
-//! smallest principal axis from the side of the other arch, plus a small colour legend.
+//! Occlusal views of an arch: an orthographic software rendering (a z-buffer rasteriser with
+//! per-vertex colours and Lambert shading) of the arch seen along its smallest principal axis
+//! from the side of the other arch, plus a small legend of the contact-frequency colours.
 
+use crate::Mesh;
+use crate::contacts::{GREY, ramp};
 use image::{Rgb, RgbImage};
-use jawtrack_occlusion::Mesh;
-use jawtrack_occlusion::contacts::{GREY, ramp};
+use jawtrack_pose::Pose;
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 
 /// Background colour.
@@ -12,11 +13,11 @@ const WHITE: Rgb<u8> = Rgb([255, 255, 255]);
 /// The share of the light that does not depend on the surface's orientation.
 const AMBIENT: f64 = 0.35;
 /// Height (px) of the legend strip added under a view by [`with_legend`].
-pub(crate) const LEGEND_PX: u32 = 36;
+pub const LEGEND_PX: u32 = 36;
 
 /// An orthographic camera: image axes in the mesh's frame and the mm → pixel mapping.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct View {
+pub struct View {
     /// The image's x axis (unit, mesh frame).
     pub right: Vector3<f64>,
     /// The image's y axis, pointing down the image (unit, mesh frame).
@@ -37,7 +38,7 @@ impl View {
     /// A view along `forward` with `right` as the image's x axis (both unit and orthogonal),
     /// framing the whole mesh with its longer side `long_side_px` pixels (a small margin
     /// included). The image is not mirrored: (right, down, forward) is right-handed.
-    pub(crate) fn fit(mesh: &Mesh, forward: Vector3<f64>, right: Vector3<f64>, long_side_px: u32) -> View {
+    pub fn fit(mesh: &Mesh, forward: Vector3<f64>, right: Vector3<f64>, long_side_px: u32) -> View {
         let down = forward.cross(&right);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for v in &mesh.vertices {
@@ -70,9 +71,9 @@ impl View {
     /// occlusal plane), looking from the side where `toward` (the other arch's centroid) lies,
     /// with the largest principal axis (the arch's width) across the image. A mesh with no
     /// clearly flattest direction is looked at straight from `toward`.
-    pub(crate) fn occlusal(mesh: &Mesh, toward: &Point3<f64>, long_side_px: u32) -> View {
+    pub fn occlusal(mesh: &Mesh, toward: &Point3<f64>, long_side_px: u32) -> View {
         let n = mesh.vertices.len().max(1) as f64;
-        let centroid = mesh.vertices.iter().fold(Vector3::zeros(), |s, v| s + v.coords) / n;
+        let centroid = centroid(mesh);
         let cov = mesh.vertices.iter().fold(Matrix3::zeros(), |s, v| {
             let d = v.coords - centroid;
             s + d * d.transpose()
@@ -107,6 +108,19 @@ impl View {
         View::fit(mesh, forward, right, long_side_px)
     }
 
+    /// The occlusal views of both arches, `[upper, lower]`, each in its own scan's frame and
+    /// seen from the other arch's side with the lower scan at `maxilla_scan_from_mandible_scan`.
+    pub fn occlusal_pair(
+        upper: &Mesh,
+        lower: &Mesh,
+        maxilla_scan_from_mandible_scan: &Pose,
+        long_side_px: u32,
+    ) -> [View; 2] {
+        let lower_in_upper = maxilla_scan_from_mandible_scan.transform_point(&Point3::from(centroid(lower)));
+        let upper_in_lower = maxilla_scan_from_mandible_scan.inverse().transform_point(&Point3::from(centroid(upper)));
+        [View::occlusal(upper, &lower_in_upper, long_side_px), View::occlusal(lower, &upper_in_lower, long_side_px)]
+    }
+
     /// A mesh point in pixels (x, y) and its depth along `forward` (mm).
     fn project(&self, p: &Point3<f64>) -> [f64; 3] {
         [
@@ -117,10 +131,16 @@ impl View {
     }
 }
 
+/// The mean of a mesh's vertices.
+fn centroid(mesh: &Mesh) -> Vector3<f64> {
+    let n = mesh.vertices.len().max(1) as f64;
+    mesh.vertices.iter().fold(Vector3::zeros(), |s, v| s + v.coords) / n
+}
+
 /// Renders `mesh` with per-vertex `colours` (missing ones grey) through `view`: orthographic,
 /// z-buffered, every triangle drawn from both sides, colours shaded by Lambert's law with the
 /// light at the eye and interpolated across triangles; white background.
-pub(crate) fn render(mesh: &Mesh, colours: &[[u8; 3]], view: &View) -> RgbImage {
+pub fn render(mesh: &Mesh, colours: &[[u8; 3]], view: &View) -> RgbImage {
     let (w, h) = (view.width as usize, view.height as usize);
     let mut image = RgbImage::from_pixel(view.width, view.height, WHITE);
     let mut depth = vec![f64::INFINITY; w * h];
@@ -182,7 +202,7 @@ pub(crate) fn render(mesh: &Mesh, colours: &[[u8; 3]], view: &View) -> RgbImage 
 
 /// `image` with a [`LEGEND_PX`] strip added below: a grey swatch (never in contact), then the
 /// blue → red ramp of the share of frames in contact, labelled 0 % and 100 %.
-pub(crate) fn with_legend(image: &RgbImage) -> RgbImage {
+pub fn with_legend(image: &RgbImage) -> RgbImage {
     let (w, h) = image.dimensions();
     let mut out = RgbImage::from_pixel(w, h + LEGEND_PX, WHITE);
     for (x, y, p) in image.enumerate_pixels() {
@@ -298,7 +318,7 @@ mod tests {
 
     #[test]
     fn the_occlusal_view_looks_at_a_flat_arch_from_the_other_arch() {
-        let patch = jawtrack_occlusion::scenes::patch(10.0, 4, 0.0, true);
+        let patch = crate::scenes::patch(10.0, 4, 0.0, true);
         let below = View::occlusal(&patch, &Point3::new(0.0, 0.0, -3.0), 800);
         assert!((below.forward - Vector3::z()).norm() < 1e-9, "{:?}", below.forward);
         let above = View::occlusal(&patch, &Point3::new(0.0, 0.0, 3.0), 800);
@@ -310,9 +330,22 @@ mod tests {
 
     #[test]
     fn a_round_mesh_is_seen_from_the_other_arch() {
-        let ball = jawtrack_occlusion::scenes::sphere(Point3::new(1.0, 0.0, 0.0), 3.0, 24);
+        let ball = crate::scenes::sphere(Point3::new(1.0, 0.0, 0.0), 3.0, 24);
         let view = View::occlusal(&ball, &Point3::new(1.0, 0.0, 10.0), 400);
         assert!((view.forward + Vector3::z()).norm() < 1e-9, "{:?}", view.forward);
+    }
+
+    #[test]
+    fn each_arch_of_a_pair_is_seen_from_the_other() {
+        let (patch, ball) =
+            (crate::scenes::patch(10.0, 4, 0.0, true), crate::scenes::sphere(Point3::origin(), 3.0, 24));
+        // The ball's scan frame 5 mm below the patch's: the patch is seen from below, the
+        // ball from above.
+        let pose = Pose::from_axis_angle(Vector3::zeros(), Vector3::new(0.0, 0.0, -5.0));
+        let [upper, lower] = View::occlusal_pair(&patch, &ball, &pose, 400);
+        assert!((upper.forward - Vector3::z()).norm() < 1e-9, "{:?}", upper.forward);
+        assert!((lower.forward + Vector3::z()).norm() < 1e-9, "{:?}", lower.forward);
+        assert_eq!(lower.width.max(lower.height), 400);
     }
 
     #[test]
