@@ -18,7 +18,7 @@ use crate::export::load;
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::Mesh;
-use jawtrack_occlusion::contacts::{Arch, ContactMap, ContactSettings, Side, THRESHOLD_RANGE_MM, contacts};
+use jawtrack_occlusion::contacts::{Arch, ContactMap, ContactSettings, Side, THRESHOLD_RANGE_MM, contacts, tooth_name};
 use jawtrack_occlusion::dynamics::{self, DynamicsOptions};
 use jawtrack_occlusion::occlusal_view::{self, View};
 use jawtrack_pose::Pose;
@@ -27,7 +27,7 @@ use jawtrack_tracker::registration::Registration;
 use nalgebra::Vector3;
 use serde_json::{Value, json};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// How the mandible is placed in each frame.
@@ -102,18 +102,6 @@ pub(crate) struct ContactsArgs {
 /// One frame to check: its `frame` number, its time (s) and the lower scan in the upper scan's
 /// frame (`maxilla_scan_from_mandible_scan`).
 pub(crate) type PosedFrame = (u64, f64, Pose);
-
-/// The tooth name of a per-tooth mesh file: `NN` when its stem holds `FDI=NN`, else the stem.
-pub(crate) fn tooth_name(path: &Path) -> String {
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    if let Some(at) = stem.find("FDI=") {
-        let digits: String = stem[at + 4..].chars().take_while(char::is_ascii_digit).collect();
-        if !digits.is_empty() {
-            return digits;
-        }
-    }
-    stem
-}
 
 /// One arch's input: its named parts and their mesh reports (JSON).
 struct ArchInput {
@@ -509,17 +497,4 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         say!("wrote {}", p.display());
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tooth_names_come_from_fdi_tags_or_stems() {
-        assert_eq!(tooth_name(Path::new("dir/lower_FDI=36.stl")), "36");
-        assert_eq!(tooth_name(Path::new("FDI=11_upper.obj")), "11");
-        assert_eq!(tooth_name(Path::new("molar.ply")), "molar");
-        assert_eq!(tooth_name(Path::new("odd_FDI=.ply")), "odd_FDI=");
-    }
 }

@@ -15,6 +15,7 @@ use crate::mesh::{DisjointSets, Mesh};
 use jawtrack_pose::Pose;
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
+use std::path::Path;
 
 /// The range of contact thresholds that make sense, from shimstock (0.01 mm) to 0.5 mm.
 pub const THRESHOLD_RANGE_MM: (f64, f64) = (0.01, 0.5);
@@ -185,6 +186,19 @@ impl Arch {
     fn triangles_around(&self, v: usize) -> &[u32] {
         &self.vertex_triangles[self.vertex_triangle_starts[v] as usize..self.vertex_triangle_starts[v + 1] as usize]
     }
+}
+
+/// The tooth name of a per-tooth mesh file, as scanners export them: `NN` when its stem
+/// holds `FDI=NN`, else the stem.
+pub fn tooth_name(path: &Path) -> String {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    if let Some(at) = stem.find("FDI=") {
+        let digits: String = stem[at + 4..].chars().take_while(char::is_ascii_digit).collect();
+        if !digits.is_empty() {
+            return digits;
+        }
+    }
+    stem
 }
 
 /// A connected patch of one arch in contact.
@@ -746,4 +760,17 @@ pub fn ramp(x: f64) -> [u8; 3] {
         x => (1.0, 4.0 - x, 0.0),
     };
     [(r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tooth_names_come_from_fdi_tags_or_stems() {
+        assert_eq!(tooth_name(Path::new("dir/lower_FDI=36.stl")), "36");
+        assert_eq!(tooth_name(Path::new("FDI=11_upper.obj")), "11");
+        assert_eq!(tooth_name(Path::new("molar.ply")), "molar");
+        assert_eq!(tooth_name(Path::new("odd_FDI=.ply")), "odd_FDI=");
+    }
 }
