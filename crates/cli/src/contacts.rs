@@ -159,17 +159,14 @@ fn resolve_path(
     options: &DynamicsOptions,
     quiet: bool,
 ) -> Result<(Vec<PosedFrame>, Vec<Value>, Value)> {
-    let first = posed.first().map(|p| p.2).context("no frame to resolve")?;
-    let correction = dynamics::resolve_intercuspation(upper, lower, &first, options)
-        .context("dynamic mode: removing the interpenetration at the first frame")?;
     let target: Vec<(f64, Pose)> = posed.iter().map(|&(_, t, p)| (t, p)).collect();
     let bar = if quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar("simulating", posed.len()) };
-    let steps =
-        dynamics::simulate_with_progress(upper, lower, &target, options, &mut |done, _| bar.set_position(done as u64))
-            .context("dynamic mode")?;
+    let path = dynamics::resolve_path(upper, lower, &target, options, &mut |done, _| bar.set_position(done as u64))
+        .context("dynamic mode")?;
     bar.finish_and_clear();
+    let (correction, steps) = (&path.correction, &path.steps);
     let frames =
-        posed.iter().zip(&steps).map(|(&(frame, t, _), s)| (frame, t, s.maxilla_scan_from_mandible_scan)).collect();
+        posed.iter().zip(steps).map(|(&(frame, t, _), s)| (frame, t, s.maxilla_scan_from_mandible_scan)).collect();
     let extras = steps
         .iter()
         .map(|s| {
@@ -182,9 +179,9 @@ fn resolve_path(
             })
         })
         .collect();
-    let peak = steps.iter().map(|s| s.force_n).fold(0.0, f64::max);
-    let residual = steps.iter().map(|s| s.max_penetration_mm).fold(0.0, f64::max);
-    let offset = steps.iter().map(|s| s.target_offset_mm).fold(0.0, f64::max);
+    let peak = path.peak_force_n();
+    let residual = path.max_residual_penetration_mm();
+    let offset = path.max_target_offset_mm();
     say!(
         "dynamic: intercuspation corrected by {:.3} mm and {:.3}°; peak contact force {peak:.3} N; largest offset from the recorded path {offset:.3} mm; residual penetration {residual:.4} mm",
         Vector3::from(correction.shift_mm).norm(),

@@ -12,7 +12,9 @@
 //!    toward the target path by a 6-DoF spring–damper, with contacts that push it back out, so
 //!    that it slides over the upper teeth; one [`Step`] per target sample with the resolved
 //!    pose, the contact force (N) and where it acts;
-//! 3. [`interpolate_path`]: a target path from an initial to a final pose.
+//! 3. [`interpolate_path`]: a target path from an initial to a final pose;
+//! 4. [`resolve_path`]: a recorded path through 1 and 2, with the peak force, residual
+//!    penetration and largest offset from the recording that a report gives.
 //!
 //! # Method
 //!
@@ -61,6 +63,7 @@ mod intercuspation;
 mod options;
 mod path;
 mod projection;
+mod resolve;
 mod solver;
 
 pub use body::RigidBody;
@@ -69,3 +72,4 @@ pub use integrator::{ContactForce, Step, simulate, simulate_with_progress};
 pub use intercuspation::{Correction, resolve_intercuspation};
 pub use options::{DynamicsOptions, MAX_DT_S};
 pub use path::interpolate_path;
+pub use resolve::{ResolveError, ResolvedPath, resolve_path};
