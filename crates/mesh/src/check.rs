@@ -34,6 +34,34 @@ pub struct MeshReport {
     pub components: usize,
 }
 
+/// One line: counts, size (mm), area (mm²) and the checks, e.g. "7082 vertices, 14160
+/// triangles, 6.0 × 6.0 × 6.0 mm, 113 mm², 1 component, 0 boundary loops, 0 degenerate
+/// triangles, 0 non-manifold edges".
+impl std::fmt::Display for MeshReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [lo, hi] = self.bounds;
+        let (v, t) = (self.vertices, self.triangles);
+        write!(
+            f,
+            "{v} vertices, {t} triangles, {:.1} × {:.1} × {:.1} mm",
+            hi[0] - lo[0],
+            hi[1] - lo[1],
+            hi[2] - lo[2]
+        )?;
+        write!(f, ", {:.0} mm²", self.area_mm2)?;
+        let counts = [
+            (self.components, "component"),
+            (self.boundary_loops, "boundary loop"),
+            (self.degenerate_triangles, "degenerate triangle"),
+            (self.non_manifold_edges, "non-manifold edge"),
+        ];
+        for (n, what) in counts {
+            write!(f, ", {n} {what}{}", if n == 1 { "" } else { "s" })?;
+        }
+        Ok(())
+    }
+}
+
 impl Mesh {
     /// Checks the mesh is non-empty, finite, well indexed and millimetre-sized; `name` names it
     /// in the error.
@@ -170,6 +198,13 @@ mod tests {
     fn a_closed_cube_has_no_rim() {
         let r = crate::tests::cube().report();
         assert_eq!((r.boundary_edges, r.boundary_loops, r.components, r.non_manifold_edges), (0, 0, 1, 0));
+    }
+
+    #[test]
+    fn a_report_reads_as_one_line() {
+        let line = square(10.0).report().to_string();
+        let checks = "1 component, 1 boundary loop, 0 degenerate triangles, 0 non-manifold edges";
+        assert_eq!(line, format!("4 vertices, 2 triangles, 10.0 × 10.0 × 0.0 mm, 100 mm², {checks}"));
     }
 
     #[test]
