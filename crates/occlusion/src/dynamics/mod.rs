@@ -72,4 +72,4 @@ pub use integrator::{ContactForce, Step, simulate, simulate_with_progress};
 pub use intercuspation::{Correction, resolve_intercuspation};
 pub use options::{DynamicsOptions, MAX_DT_S};
 pub use path::interpolate_path;
-pub use resolve::{ResolveError, ResolvedPath, resolve_path};
+pub use resolve::{CorrectionSummary, PathSummary, ResolveError, ResolvedPath, StepSummary, resolve_path};
