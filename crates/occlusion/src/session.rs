@@ -8,7 +8,7 @@
 //! [`ContactSession::summary`].
 
 use crate::contacts::{Arch, ContactMap, ContactSettings, Region, Side, contacts};
-use jawtrack_pose::Pose;
+use jawtrack_pose::{Pose, median};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -178,7 +178,7 @@ impl<'a> ContactSession<'a> {
         AreaStats {
             frames_with_contact: areas.iter().filter(|&&a| a > 0.0).count(),
             mean_mm2: areas.iter().sum::<f64>() / n,
-            median_mm2: median(&areas),
+            median_mm2: median(areas.iter().copied()),
             max_mm2: largest.map(|c| c.area_mm2[arch]),
             max_frame: largest.map(|c| c.frame),
             max_t: largest.map(|c| c.t),
@@ -194,17 +194,10 @@ impl<'a> ContactSession<'a> {
             contact_area: PerArch { maxilla: self.area_stats(0), mandible: self.area_stats(1) },
             deepest: self.deepest(),
             depth_colour_full_scale_mm: self.full_depth_mm(),
-            query_ms_median: median(&self.query_ms),
+            query_ms_median: median(self.query_ms.iter().copied()),
             query_ms_max: self.query_ms.iter().copied().reduce(f64::max),
         }
     }
-}
-
-/// The median of `v` (the upper one for an even count), `None` when empty.
-fn median(v: &[f64]) -> Option<f64> {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied()
 }
 
 #[cfg(test)]
@@ -212,13 +205,6 @@ mod tests {
     use super::*;
     use crate::scenes;
     use nalgebra::{Point3, Vector3};
-
-    #[test]
-    fn the_median_is_the_upper_middle_value() {
-        assert_eq!(median(&[]), None);
-        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), Some(3.0));
-    }
 
     /// A 3 mm sphere whose top is 0.2 mm through a downward-facing patch at z = 0, lowered
     /// by each `dz` in turn.
