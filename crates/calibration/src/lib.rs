@@ -21,6 +21,7 @@
 //! The calibrated marker has the nominal file's schema; the tracker loads it as it is.
 
 use jawtrack_marker::{BodyKind, Marker, MarkerError, PrintError, Tag};
+use jawtrack_pose::lm::{self, Damping, damped};
 use jawtrack_pose::pnp::{perturb, pose_jacobian, projection_jacobian};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix2x3, Matrix3, Point2, Point3, Rotation3, Unit, Vector2, Vector3};
@@ -600,9 +601,16 @@ fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: 
         let reg: f64 = free.iter().map(|&t| models[t].e.component_mul(&prior).norm_squared()).sum();
         data + reg
     };
+    let mut state = (views.to_vec(), models.to_vec());
     let mut current = cost(views, models);
-    let mut lambda = 1e-4;
-    for _ in 0..options.max_iterations {
+    let damping = Damping {
+        initial: 1e-4,
+        diagonal_floor: 1e-9,
+        relative_tolerance: 1e-10,
+        max_iterations: options.max_iterations,
+    };
+    let linearise = |state: &(Vec<View>, Vec<TagModel>)| -> Option<(DMatrix<f64>, DVector<f64>)> {
+        let (views, models) = (&state.0, &state.1);
         let mut h = DMatrix::<f64>::zeros(n, n);
         let mut g = DVector::<f64>::zeros(n);
         for (vi, v) in views.iter().enumerate() {
@@ -657,40 +665,22 @@ fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: 
                 g[t0 + j] += prior[j] * prior[j] * models[t].e[j];
             }
         }
-        let mut improved = false;
-        for _ in 0..10 {
-            let mut damped = h.clone();
-            for i in 0..n {
-                damped[(i, i)] += lambda * h[(i, i)].max(1e-9);
-            }
-            let Some(chol) = damped.cholesky() else {
-                lambda *= 10.0;
-                continue;
-            };
-            let step = chol.solve(&(-&g));
-            let mut trial_views = views.to_vec();
-            let mut trial_models = models.to_vec();
-            for (vi, v) in trial_views.iter_mut().enumerate() {
-                let d = step.fixed_rows::<6>(6 * vi).into_owned();
-                v.pose = perturb(&v.pose, &d);
-            }
-            for (k, &t) in free.iter().enumerate() {
-                trial_models[t].e += step.fixed_rows::<3>(6 * nv + 3 * k).into_owned();
-            }
-            let c = cost(&trial_views, &trial_models);
-            if c < current {
-                let converged = current - c <= 1e-10 * current;
-                views.clone_from_slice(&trial_views);
-                models.clone_from_slice(&trial_models);
-                current = c;
-                lambda = (lambda / 10.0).max(1e-12);
-                improved = !converged;
-                break;
-            }
-            lambda *= 10.0;
+        Some((h, g))
+    };
+    let step = |state: &(Vec<View>, Vec<TagModel>), (h, g): &(DMatrix<f64>, DVector<f64>), lambda: f64| {
+        let step = damped(h, lambda, damping.diagonal_floor).cholesky()?.solve(&(-g));
+        let (mut trial_views, mut trial_models) = state.clone();
+        for (vi, v) in trial_views.iter_mut().enumerate() {
+            let d = step.fixed_rows::<6>(6 * vi).into_owned();
+            v.pose = perturb(&v.pose, &d);
         }
-        if !improved {
-            break;
+        for (k, &t) in free.iter().enumerate() {
+            trial_models[t].e += step.fixed_rows::<3>(6 * nv + 3 * k).into_owned();
         }
-    }
+        Some((trial_views, trial_models))
+    };
+    // The normal equations always exist here: no abort, nothing to report.
+    let _ = lm::minimise(&mut state, &mut current, &damping, linearise, step, |(v, m)| cost(v, m));
+    views.clone_from_slice(&state.0);
+    models.clone_from_slice(&state.1);
 }

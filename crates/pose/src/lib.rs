@@ -8,6 +8,7 @@
 //! `camera_from_maxilla` maps maxilla-frame points into the camera frame.
 
 mod camera;
+pub mod lm;
 pub mod pnp;
 mod rigid;
 pub mod stats;

@@ -19,6 +19,7 @@
 //! (rotation vector [rad], translation [mm]), from the Gauss–Newton normal matrix scaled by the
 //! residuals' variance (or by `corner_sigma_px`² when there are too few points to estimate it).
 
+use crate::lm::{self, Damping, damped};
 use crate::{CameraIntrinsics, Pose};
 use nalgebra::{
     Isometry3, Matrix2x3, Matrix3, Matrix6, Point2, Point3, Rotation3, SMatrix, Translation3, UnitQuaternion, Vector2,
@@ -506,34 +507,23 @@ fn refine(
         }
         Some((h, g))
     };
-    let mut lambda = 1e-3;
-    'outer: for _ in 0..options.max_iterations {
-        let (h, g) = normal_equations(&pose)?;
-        for _ in 0..10 {
-            let mut damped = h;
-            for i in 0..6 {
-                damped[(i, i)] += lambda * h[(i, i)].max(1e-12);
-            }
-            let Some(step) = damped.cholesky().map(|c| c.solve(&(-g))) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let candidate = perturb(&pose, &step);
-            let c = cost(points, &candidate, focal, options);
-            if c < current {
-                let converged = current - c <= 1e-6 * current;
-                pose = candidate;
-                current = c;
-                lambda = (lambda / 10.0).max(1e-12);
-                if converged {
-                    break 'outer;
-                }
-                continue 'outer;
-            }
-            lambda *= 10.0;
-        }
-        break; // no step lowers the cost any more
-    }
+    let damping = Damping {
+        initial: 1e-3,
+        diagonal_floor: 1e-12,
+        relative_tolerance: 1e-6,
+        max_iterations: options.max_iterations,
+    };
+    lm::minimise(
+        &mut pose,
+        &mut current,
+        &damping,
+        &normal_equations,
+        |pose, (h, g), lambda| {
+            let step = damped(h, lambda, damping.diagonal_floor).cholesky().map(|c| c.solve(&(-g)))?;
+            Some(perturb(pose, &step))
+        },
+        |candidate| cost(points, candidate, focal, options),
+    )?;
     // Polish with plain Gauss–Newton steps: near the minimum the cost changes by the square of
     // the distance and rounding hides the last 1e-8 of the pose, the gradient does not.
     for _ in 0..3 {
