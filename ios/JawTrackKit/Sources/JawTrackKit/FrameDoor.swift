@@ -1,103 +1,112 @@
-import CoreVideo
 import Foundation
 import JawTrackC
+import JawTrackCore
 
-/// Why a camera frame could not be tracked.
-public struct FramePathError: Error, LocalizedError {
-    /// What went wrong, for the status bar.
-    public let message: String
+/// How a frame's pixels are laid out.
+public enum PixelLayout: Equatable {
+    /// 8-bit luma rows: plane 0 of a full-range 420f frame, read as is.
+    case luma
+    /// 32-bit BGRA rows, converted to luma by the library.
+    case bgra
 
-    public var errorDescription: String? { message }
+    /// Bytes per pixel.
+    public var bytesPerPixel: Int {
+        switch self {
+        case .luma: return 1
+        case .bgra: return 4
+        }
+    }
 }
 
-/// The frame door of the library: hands a camera frame's pixels to `jt_track_luma` or
-/// `jt_track_bgra` in place, so no frame is ever copied on its way to the detector (the uniffi
-/// `Tracker.trackLuma` copies, which is why it is not used here). The full result is then read
-/// with `Tracker.lastResult()`.
-public enum FramePath {
-    /// Tracks `pixelBuffer` (420f: its luma plane as is; BGRA: converted by the library) with
-    /// the tracker reached by `handle`. Call it on the serial queue that owns the tracker.
-    public static func track(
-        _ pixelBuffer: CVPixelBuffer,
-        handle: UInt64,
-        intrinsics: Intrinsics,
-        time: Double
-    ) throws {
-        let format = CVPixelBufferGetPixelFormatType(pixelBuffer)
-        guard CVPixelBufferLockBaseAddress(pixelBuffer, .readOnly) == kCVReturnSuccess else {
-            throw FramePathError(message: "the camera frame could not be locked for reading")
-        }
-        defer { CVPixelBufferUnlockBaseAddress(pixelBuffer, .readOnly) }
+/// A camera frame's pixels, borrowed: valid only while the frame source holds them (inside the
+/// `CVPixelBuffer` lock in the app), so nothing keeps it beyond the call it is passed to.
+public struct FrameBuffer {
+    public let base: UnsafeRawPointer
+    /// Bytes readable from `base`.
+    public let byteCount: Int
+    public let width: Int
+    public let height: Int
+    /// Bytes from one row's start to the next (rows may be padded).
+    public let bytesPerRow: Int
+    public let layout: PixelLayout
 
+    public init(base: UnsafeRawPointer, byteCount: Int, width: Int, height: Int, bytesPerRow: Int, layout: PixelLayout) {
+        self.base = base
+        self.byteCount = byteCount
+        self.width = width
+        self.height = height
+        self.bytesPerRow = bytesPerRow
+        self.layout = layout
+    }
+}
+
+/// One frame as a `FrameSource` delivers it.
+public struct CameraFrame {
+    public let buffer: FrameBuffer
+    /// The frame's time (s): its presentation time stamp.
+    public let time: Double
+    /// How long the sensor exposed it (s), when the camera says.
+    public let exposure: Double?
+    /// The camera's intrinsic matrix for this frame (nine numbers, column-major, in pixels of
+    /// the active format), when delivered.
+    public let cameraMatrix: [Float]?
+    /// The platform's own frame (a `CMSampleBuffer` in the app), handed untouched to the video
+    /// writer; nil in tests.
+    public let native: AnyObject?
+
+    public init(buffer: FrameBuffer, time: Double, exposure: Double?, cameraMatrix: [Float]?, native: AnyObject? = nil) {
+        self.buffer = buffer
+        self.time = time
+        self.exposure = exposure
+        self.cameraMatrix = cameraMatrix
+        self.native = native
+    }
+}
+
+/// Where frames come from (the camera in the app, fixture files in tests). The source calls
+/// `handler` on the pipeline's queue, once per frame, with pixels valid during the call only.
+public protocol FrameSource: AnyObject {
+    func deliverFrames(to handler: @escaping (CameraFrame) -> Void, on queue: DispatchQueue)
+}
+
+/// The frame door of the library: hands a frame's pixels to `jt_track_luma` or `jt_track_bgra`
+/// in place, so no frame is copied on its way to the detector (the uniffi `Tracker.trackLuma`
+/// copies, which is why it is not used here). The full result is then `Tracker.lastResult()`.
+public enum FrameDoor {
+    /// Tracks `buffer` with the tracker reached by `handle`; throws the library's message.
+    public static func track(_ buffer: FrameBuffer, handle: UInt64, intrinsics: Intrinsics, time: Double) throws {
         var camera = JtIntrinsics(
-            fx: intrinsics.fx,
-            fy: intrinsics.fy,
-            cx: intrinsics.cx,
-            cy: intrinsics.cy,
-            k1: intrinsics.k1,
-            k2: intrinsics.k2
+            fx: intrinsics.fx, fy: intrinsics.fy, cx: intrinsics.cx, cy: intrinsics.cy,
+            k1: intrinsics.k1, k2: intrinsics.k2
         )
+        let pixels = buffer.base.assumingMemoryBound(to: UInt8.self)
+        let width = UInt32(clamping: buffer.width)
+        let height = UInt32(clamping: buffer.height)
+        let stride = UInt32(clamping: buffer.bytesPerRow)
         let status: JtStatus
-        switch format {
-        case kCVPixelFormatType_420YpCbCr8BiPlanarFullRange:
-            guard let base = CVPixelBufferGetBaseAddressOfPlane(pixelBuffer, 0) else {
-                throw FramePathError(message: "the camera frame has no luma plane")
-            }
-            let bytesPerRow = CVPixelBufferGetBytesPerRowOfPlane(pixelBuffer, 0)
-            let width = CVPixelBufferGetWidthOfPlane(pixelBuffer, 0)
-            let height = CVPixelBufferGetHeightOfPlane(pixelBuffer, 0)
-            status = jt_track_luma(
-                handle,
-                base.assumingMemoryBound(to: UInt8.self),
-                bytesPerRow * height,
-                UInt32(clamping: width),
-                UInt32(clamping: height),
-                UInt32(clamping: bytesPerRow),
-                &camera,
-                time,
-                nil
-            )
-        case kCVPixelFormatType_32BGRA:
-            guard let base = CVPixelBufferGetBaseAddress(pixelBuffer) else {
-                throw FramePathError(message: "the camera frame has no pixels")
-            }
-            let bytesPerRow = CVPixelBufferGetBytesPerRow(pixelBuffer)
-            let width = CVPixelBufferGetWidth(pixelBuffer)
-            let height = CVPixelBufferGetHeight(pixelBuffer)
-            status = jt_track_bgra(
-                handle,
-                base.assumingMemoryBound(to: UInt8.self),
-                bytesPerRow * height,
-                UInt32(clamping: width),
-                UInt32(clamping: height),
-                UInt32(clamping: bytesPerRow),
-                &camera,
-                time,
-                nil
-            )
-        default:
-            throw FramePathError(message: "unsupported pixel format \(fourCharacterCode(format))")
+        switch buffer.layout {
+        case .luma:
+            status = jt_track_luma(handle, pixels, buffer.byteCount, width, height, stride, &camera, time, nil)
+        case .bgra:
+            status = jt_track_bgra(handle, pixels, buffer.byteCount, width, height, stride, &camera, time, nil)
         }
         guard status == JT_STATUS_OK else {
-            throw FramePathError(message: lastError())
+            throw AppError(message: lastError())
         }
     }
 
     /// The library's message for this thread's last failed call.
-    private static func lastError() -> String {
+    static func lastError() -> String {
         let capacity = 512
         var buffer = [CChar](repeating: 0, count: capacity)
         let length = jt_last_error(&buffer, capacity)
         let bytes = buffer.prefix { $0 != 0 }.map { UInt8(bitPattern: $0) }
         let message = String(decoding: bytes, as: UTF8.self)
-        if message.isEmpty {
-            return "tracking failed (no message, \(length) bytes)"
-        }
-        return message
+        return message.isEmpty ? "tracking failed (no message, \(length) bytes)" : message
     }
 
-    /// A pixel format as its four letters, e.g. `420v`.
-    private static func fourCharacterCode(_ code: OSType) -> String {
+    /// A pixel format code as its four letters, e.g. `420v`.
+    public static func fourCharacterCode(_ code: UInt32) -> String {
         let bytes = [24, 16, 8, 0].map { UInt8(truncatingIfNeeded: code >> $0) }
         return String(decoding: bytes, as: UTF8.self)
     }

@@ -1,0 +1,392 @@
+import Foundation
+import JawTrackCore
+
+/// The camera as the app drives it (AVFoundation's capture session in the app). It is also the
+/// frame source. Calls may block, so the camera does its work on its own queue.
+public protocol CameraControl: FrameSource {
+    /// Sets the camera up for `plan` and `settings`; `completion` gets what the pipeline needs
+    /// and how to make a movie writer for the chosen format (nil when it offers none).
+    func configure(
+        _ plan: CapturePlan,
+        settings: AppSettings,
+        completion: @escaping (Result<(CaptureConfiguration, VideoSinkFactory?), Error>) -> Void
+    )
+    /// Starts the frames; with `lockAfter`, locks exposure and white balance that many seconds
+    /// later. `onProblem` gets what could not be done.
+    func start(lockAfter: Double?, onProblem: @escaping (String) -> Void)
+    func stop()
+}
+
+/// The app's lifecycle, as the screen sees it.
+public enum AppPhase {
+    case active, inactive, background
+}
+
+/// Everything the screen shows.
+public struct ScreenState {
+    public var status = TrackingStatus()
+    /// The last result's overlay (nil: draw nothing).
+    public var overlay: Overlay?
+    public var isRecording = false
+    public var recordedFrames: UInt64 = 0
+    public var isTransmitting = false
+    public var light = AckLight()
+    public var linkProblem: String?
+    public var isCalibrating = false
+    /// Bumped when the camera is configured anew (the preview re-reads its connection).
+    public var configurationID = 0
+    /// The alert on screen, if any.
+    public var message: UserMessage?
+    /// A stopped recording waiting for its name.
+    public var finishedRecording: RecordingFiles?
+    /// The name field's starting text.
+    public var recordingName = ""
+
+    /// The status bar at `now`.
+    public func statusBar(now: Double) -> StatusBar {
+        StatusBar(
+            status: status, transmitting: isTransmitting, light: light, linkProblem: linkProblem,
+            recording: isRecording, recordedFrames: recordedFrames, now: now
+        )
+    }
+
+    /// Settings are locked while recording (a recording has one set of settings).
+    public var canOpenSettings: Bool { !isRecording }
+}
+
+/// The screen's logic: wires camera, pipeline, settings, recording, link and calibration, and
+/// turns every outcome into state or a message. Call it on one thread (the main thread in the
+/// app); results from the pipeline come back through `deliver`. `onChange` gets the state after
+/// every change.
+public final class AppController {
+    public private(set) var state = ScreenState() {
+        didSet { onChange?(state) }
+    }
+    public var onChange: ((ScreenState) -> Void)?
+    public let settings: SettingsStore
+    public let pipeline: FramePipeline
+
+    private let camera: CameraControl
+    private let documents: URL?
+    private let makeTransport: TransportFactory
+    private let deliver: (@escaping () -> Void) -> Void
+    private let clock: () -> Double
+    private var tracker: Tracker?
+    private var linkKeyId: String?
+    private var started = false
+    private var cameraReady = false
+    private var settingsOpen = false
+    private var link: LinkSession?
+
+    /// `documents`: where recordings go and a calibrated `marker.json` is looked for.
+    /// `deliver` runs a closure on the controller's thread (`DispatchQueue.main.async` in the app).
+    public init(
+        settings: SettingsStore,
+        camera: CameraControl,
+        documents: URL?,
+        pipeline: FramePipeline = FramePipeline(),
+        makeTransport: @escaping TransportFactory,
+        clock: @escaping () -> Double = { Date().timeIntervalSince1970 },
+        deliver: @escaping (@escaping () -> Void) -> Void = { DispatchQueue.main.async(execute: $0) }
+    ) {
+        self.settings = settings
+        self.camera = camera
+        self.documents = documents
+        self.pipeline = pipeline
+        self.makeTransport = makeTransport
+        self.clock = clock
+        self.deliver = deliver
+        pipeline.setReportHandler { [weak self] report in
+            deliver { self?.show(report) }
+        }
+        pipeline.attach(camera)
+    }
+
+    // MARK: Camera
+
+    /// First appearance, once the camera permission is known.
+    public func start(cameraAllowed: Bool) {
+        guard !started else {
+            return
+        }
+        started = true
+        if let problem = settings.loadProblem {
+            state.message = UserMessage(title: "Settings", text: problem)
+        }
+        guard cameraAllowed else {
+            state.message = UserMessage(
+                title: "Camera",
+                text: "JawTrack needs the camera to track the markers. Allow it in Settings › Privacy & Security › Camera."
+            )
+            return
+        }
+        startCamera()
+    }
+
+    public func phaseChanged(_ phase: AppPhase) {
+        switch phase {
+        case .background:
+            camera.stop()
+        case .active:
+            if cameraReady, !settingsOpen {
+                startSession()
+            }
+        case .inactive:
+            break
+        }
+    }
+
+    /// The settings screen takes the camera (for the QR scanner).
+    public func settingsOpened() {
+        settingsOpen = true
+        camera.stop()
+    }
+
+    /// Back from the settings screen: the camera again, with the settings as saved.
+    public func settingsClosed() {
+        settingsOpen = false
+        startCamera()
+    }
+
+    private func startCamera() {
+        if tracker == nil {
+            do {
+                let newTracker = try Tracker(settings: settings.settings.tracker, markerJson: try markerJSON())
+                tracker = newTracker
+                pipeline.use(tracker: newTracker)
+            } catch {
+                state.message = UserMessage(title: "Tracker", text: userText(error))
+                return
+            }
+        }
+        cameraReady = false
+        camera.configure(CapturePlan(settings.settings), settings: settings.settings) { [weak self] result in
+            self?.deliver { self?.cameraConfigured(result) }
+        }
+    }
+
+    private func cameraConfigured(_ result: Result<(CaptureConfiguration, VideoSinkFactory?), Error>) {
+        switch result {
+        case .success(let (configuration, makeVideo)):
+            pipeline.use(camera: configuration, makeVideo: makeVideo)
+            cameraReady = true
+            state.configurationID += 1
+            if !settingsOpen {
+                startSession()
+            }
+        case .failure(let error):
+            state.message = UserMessage(title: "Camera", text: userText(error))
+        }
+    }
+
+    private func startSession() {
+        camera.start(lockAfter: CapturePlan(settings.settings).lockExposureAfter) { [weak self] problem in
+            self?.deliver { self?.state.message = UserMessage(title: "Camera", text: problem) }
+        }
+    }
+
+    /// A calibrated marker file put in Documents as `marker.json` (from `jawtrack
+    /// calibrate-marker`, copied with the Files app); nil: the nominal marker.
+    private func markerJSON() throws -> String? {
+        guard let url = documents?.appendingPathComponent("marker.json"),
+              FileManager.default.fileExists(atPath: url.path)
+        else {
+            return nil
+        }
+        do {
+            return try String(contentsOf: url, encoding: .utf8)
+        } catch {
+            throw AppError(message: "marker.json in Documents could not be read: \(error.localizedDescription)")
+        }
+    }
+
+    // MARK: Frames
+
+    private func show(_ report: FrameReport) {
+        var next = state
+        if let result = report.result {
+            next.overlay = result.overlay
+            next.status = TrackingStatus(result: result)
+        } else {
+            next.overlay = nil
+        }
+        next.status.intrinsicsEstimated = report.intrinsicsEstimated
+        next.status.exposure = report.exposure
+        next.status.droppedFrames = report.droppedFrames
+        next.status.problem = report.problem
+        if let frames = report.recordedFrames {
+            next.recordedFrames = frames
+        }
+        if let problem = report.recordingProblem {
+            next.isRecording = false
+            next.message = UserMessage(title: "Recording stopped", text: problem)
+        }
+        state = next
+    }
+
+    // MARK: Settings
+
+    /// Saves settings from the settings screen; the error text, or nil when saved.
+    public func save(_ new: AppSettings) -> String? {
+        do {
+            try settings.save(new)
+        } catch {
+            return userText(error)
+        }
+        pipeline.update(trackerSettings: new.tracker) { [weak self] error in
+            guard let error else {
+                return
+            }
+            let text = userText(error)
+            self?.deliver { self?.state.message = UserMessage(title: "Tracker", text: text) }
+        }
+        if state.isTransmitting {
+            setTransmitting(false)
+            setTransmitting(true)
+        }
+        return nil
+    }
+
+    // MARK: Recording
+
+    public func toggleRecording() {
+        state.isRecording ? stopRecording() : startRecording()
+    }
+
+    private func startRecording() {
+        guard let documents else {
+            state.message = UserMessage(title: "Recording", text: "The app's Documents folder is not available.")
+            return
+        }
+        let current = settings.settings
+        pipeline.startRecording(RecordingRequest(
+            directory: documents,
+            baseName: RecordingFiles.defaultName(at: Date(timeIntervalSince1970: clock())),
+            settingsJSON: StoredSettings(current).headerJSON(),
+            keyId: state.isTransmitting ? linkKeyId : nil,
+            withVideo: current.recordVideo
+        ))
+        state.recordedFrames = 0
+        state.isRecording = true
+    }
+
+    private func stopRecording() {
+        state.isRecording = false
+        pipeline.stopRecording { [weak self] result in
+            self?.deliver { self?.recordingStopped(result) }
+        }
+    }
+
+    private func recordingStopped(_ result: Result<RecordingFiles?, Error>) {
+        switch result {
+        case .success(let files?):
+            state.finishedRecording = files
+            state.recordingName = files.name
+        case .success(.none):
+            state.message = UserMessage(title: "Recording", text: "No frame was recorded.")
+        case .failure(let error):
+            state.message = UserMessage(title: "Recording", text: userText(error))
+        }
+    }
+
+    /// What the naming alert says about where the files are.
+    public static func savedText(_ files: RecordingFiles) -> String {
+        files.video == nil
+            ? "Saved in Files › On My iPhone › JawTrack."
+            : "Saved with its video in Files › On My iPhone › JawTrack."
+    }
+
+    /// Gives the stopped recording its name (nil or blank: keeps the date and time).
+    public func nameRecording(as name: String?) {
+        guard let files = state.finishedRecording else {
+            return
+        }
+        state.finishedRecording = nil
+        do {
+            let saved = try files.renamed(to: name ?? "")
+            if let problem = saved.videoProblem {
+                state.message = UserMessage(title: "Video", text: problem)
+            }
+        } catch {
+            state.message = UserMessage(
+                title: "Recording", text: "Saved as \(files.name), not renamed: \(error.localizedDescription)"
+            )
+        }
+    }
+
+    // MARK: Link
+
+    public func setTransmitting(_ on: Bool) {
+        pipeline.use(link: nil)
+        link = nil
+        state.isTransmitting = false
+        state.light = AckLight()
+        state.linkProblem = nil
+        linkKeyId = nil
+        guard on else {
+            return
+        }
+        let current = settings.settings
+        do {
+            try validateAppSettings(settings: current, streaming: true)
+            let encoder = try LinkEncoder(keyHex: current.pairingKey, insecurePlaintext: false)
+            let deliver = self.deliver
+            let newLink = try LinkSession(
+                host: current.receiverHost,
+                port: current.receiverPort,
+                encoder: encoder,
+                clock: clock,
+                makeTransport: makeTransport,
+                onAck: { [weak self] ack, time in deliver { self?.acknowledged(ack, at: time) } },
+                onProblem: { [weak self] problem in deliver { self?.state.linkProblem = problem } }
+            )
+            newLink.start()
+            pipeline.use(link: newLink)
+            link = newLink
+            linkKeyId = encoder.keyId()
+            state.isTransmitting = true
+        } catch {
+            state.message = UserMessage(title: "Transmit", text: userText(error))
+        }
+    }
+
+    private func acknowledged(_ ack: LinkAck, at time: Double) {
+        guard state.isTransmitting else {
+            return
+        }
+        state.light.acknowledged(ack, at: time)
+    }
+
+    // MARK: Calibration
+
+    /// The maximal-intercuspation step: the patient bites; the library averages the last frames.
+    public func calibrateBite() {
+        state.isCalibrating = true
+        pipeline.calibrate { [weak self] result in
+            self?.deliver { self?.calibrated(result) }
+        }
+    }
+
+    private func calibrated(_ result: Result<IntercuspationResult, Error>) {
+        state.isCalibrating = false
+        switch result {
+        case .success(let bite):
+            state.message = UserMessage(title: "Bite calibrated", text: Self.biteText(bite))
+        case .failure(let error):
+            state.message = UserMessage(title: "Calibration failed", text: userText(error))
+        }
+    }
+
+    /// What the bite calibration tells the clinician.
+    public static func biteText(_ bite: IntercuspationResult) -> String {
+        String(
+            format: "%u frames averaged; spread %.2f mm. The lower scan moved %.2f mm and turned %.2f°.",
+            bite.frames, bite.spreadMm, bite.translationMm, bite.rotationDeg
+        )
+    }
+
+    /// Dismisses the alert.
+    public func dismissMessage() {
+        state.message = nil
+    }
+}

@@ -1,0 +1,212 @@
+import Foundation
+import JawTrackCore
+
+/// What the pipeline made of one frame, for the screen.
+public struct FrameReport {
+    /// The tracker's result, when the frame was tracked.
+    public var result: FrameResult?
+    /// Why the frame was not tracked, or the link refused it.
+    public var problem: String?
+    /// The frame came without the camera's intrinsic matrix; the field-of-view estimate was used.
+    public var intrinsicsEstimated = false
+    /// The frame's exposure (s), when the camera said.
+    public var exposure: Double?
+    /// Frames the camera dropped so far (gaps in the frame times).
+    public var droppedFrames: UInt64 = 0
+    /// Frames in the recording so far, while recording.
+    public var recordedFrames: UInt64?
+    /// Why the recording stopped by itself.
+    public var recordingProblem: String?
+}
+
+/// The per-frame work, on one serial queue that owns the tracker, the recorder and the link:
+/// each frame is tracked in place (`FrameDoor`, no copy) with its own intrinsics, then its
+/// result goes to the recorder, the link and the screen. A frame older than the last one is
+/// dropped, and gaps in the frame times are counted as frames the camera dropped (the capture
+/// output discards frames that arrive while one is being tracked, so the queue never falls
+/// behind).
+public final class FramePipeline {
+    public let queue: DispatchQueue
+
+    private enum Recording {
+        case idle
+        case pending(RecordingRequest)
+        case active(RecordingSession)
+    }
+
+    // Touched on `queue` only.
+    private var onReport: ((FrameReport) -> Void)?
+    private var tracker: Tracker?
+    private var camera: CaptureConfiguration?
+    private var makeVideo: VideoSinkFactory?
+    private var link: LinkSession?
+    private var recording = Recording.idle
+    private var lastTime: Double?
+    private var dropped: UInt64 = 0
+
+    public init(queue: DispatchQueue = DispatchQueue(label: "org.jawtrack.frames", qos: .userInitiated)) {
+        self.queue = queue
+    }
+
+    /// Where each frame's report goes (called on the pipeline's queue).
+    public func setReportHandler(_ handler: @escaping (FrameReport) -> Void) {
+        queue.async { self.onReport = handler }
+    }
+
+    /// Takes frames from `source`, on the pipeline's queue.
+    public func attach(_ source: FrameSource) {
+        source.deliverFrames(to: { [weak self] frame in self?.process(frame) }, on: queue)
+    }
+
+    public func use(tracker: Tracker?) {
+        queue.async {
+            self.tracker = tracker
+            self.lastTime = nil
+        }
+    }
+
+    /// The camera as configured, and how to make a movie writer for its format (nil: none).
+    public func use(camera: CaptureConfiguration?, makeVideo: VideoSinkFactory?) {
+        queue.async {
+            self.camera = camera
+            self.makeVideo = makeVideo
+            self.lastTime = nil
+        }
+    }
+
+    /// Streams results through `link` (nil: stop streaming).
+    public func use(link: LinkSession?) {
+        queue.async {
+            self.link?.stop()
+            self.link = link
+        }
+    }
+
+    public func update(trackerSettings: JawTrackCore.Settings, completion: @escaping (Error?) -> Void) {
+        queue.async {
+            do {
+                try self.tracker?.updateSettings(settings: trackerSettings)
+                completion(nil)
+            } catch {
+                completion(error)
+            }
+        }
+    }
+
+    /// The maximal-intercuspation step over the frames tracked so far.
+    public func calibrate(completion: @escaping (Result<IntercuspationResult, Error>) -> Void) {
+        queue.async {
+            guard let tracker = self.tracker else {
+                completion(.failure(AppError(message: "The tracker is not running.")))
+                return
+            }
+            completion(Result { try tracker.calibrateIntercuspation() })
+        }
+    }
+
+    public func startRecording(_ request: RecordingRequest) {
+        queue.async { self.recording = .pending(request) }
+    }
+
+    /// Ends the recording; its files, or nil when no frame was recorded.
+    public func stopRecording(completion: @escaping (Result<RecordingFiles?, Error>) -> Void) {
+        queue.async {
+            let state = self.recording
+            self.recording = .idle
+            switch state {
+            case .idle, .pending:
+                completion(.success(nil))
+            case .active(let session):
+                session.finish { result in completion(result.map { Optional($0) }) }
+            }
+        }
+    }
+
+    /// Tracks one frame; call on `queue`, while the frame's pixels are held.
+    public func process(_ frame: CameraFrame) {
+        dispatchPrecondition(condition: .onQueue(queue))
+        guard let tracker, let camera else {
+            return
+        }
+        if let lastTime {
+            guard frame.time > lastTime else {
+                dropped += 1
+                return
+            }
+            let frames = (frame.time - lastTime) / camera.frameDuration
+            if frames > 1.5 {
+                dropped += UInt64((frames - 1).rounded())
+            }
+        }
+        lastTime = frame.time
+        var report = FrameReport()
+        report.exposure = frame.exposure
+        report.droppedFrames = dropped
+        var intrinsics: Intrinsics?
+        do {
+            let resolved = try CameraPlanner.intrinsics(
+                cameraMatrix: frame.cameraMatrix, configuration: camera,
+                width: frame.buffer.width, height: frame.buffer.height
+            )
+            report.intrinsicsEstimated = resolved.estimated
+            intrinsics = resolved.intrinsics
+            try FrameDoor.track(frame.buffer, handle: tracker.frameHandle(), intrinsics: resolved.intrinsics, time: frame.time)
+            report.result = tracker.lastResult()
+        } catch {
+            report.problem = userText(error)
+        }
+        record(frame, intrinsics: intrinsics, tracker: tracker, camera: camera, report: &report)
+        if let link, let result = report.result {
+            do {
+                try link.send(result)
+            } catch {
+                report.problem = userText(error)
+            }
+        }
+        onReport?(report)
+    }
+
+    /// Opens a pending recording, then appends the frame (video) and its result (poses).
+    private func record(
+        _ frame: CameraFrame,
+        intrinsics: Intrinsics?,
+        tracker: Tracker,
+        camera: CaptureConfiguration,
+        report: inout FrameReport
+    ) {
+        if case .pending(let request) = recording {
+            guard let intrinsics else {
+                return
+            }
+            let info = RecordingInfo(
+                device: camera.deviceDescription,
+                intrinsics: intrinsics,
+                markerJson: tracker.markerJson(),
+                settingsJson: request.settingsJSON,
+                keyId: request.keyId
+            )
+            do {
+                recording = .active(try RecordingSession(request: request, info: info, makeVideo: makeVideo))
+            } catch {
+                recording = .idle
+                report.recordingProblem = userText(error)
+                return
+            }
+        }
+        guard case .active(let session) = recording else {
+            return
+        }
+        session.appendVideo(frame)
+        guard let result = report.result else {
+            return
+        }
+        do {
+            try session.append(result)
+            report.recordedFrames = session.framesWritten
+        } catch {
+            recording = .idle
+            session.finish { _ in }
+            report.recordingProblem = "\(userText(error)) What was recorded is in Files."
+        }
+    }
+}
