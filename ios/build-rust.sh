@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds the Rust library for the iPhone (device, and the simulator on Apple-silicon Macs),
-# generates its Swift bindings and packs both into the JawTrackCore Swift package:
-#   ios/JawTrackCore/JawTrackFFI.xcframework          static libraries + C headers + module map
-#   ios/JawTrackCore/Sources/JawTrackCore/jawtrack.swift   uniffi's Swift bindings
+# generates its Swift bindings and packs both into the JawTrackKit Swift package:
+#   ios/JawTrackKit/JawTrackFFI.xcframework               static libraries + C headers + module map
+#   ios/JawTrackKit/Sources/JawTrackCore/jawtrack.swift   uniffi's Swift bindings (target JawTrackCore)
 # Needs a Mac with Xcode and rustup. Runs from the repository root, ios/ or anywhere else.
 set -euo pipefail
 
@@ -18,7 +18,7 @@ for tool in rustup cargo xcodebuild; do
 done
 
 target_dir="${CARGO_TARGET_DIR:-$repo/target}"
-package_dir="$ios_dir/JawTrackCore"
+package_dir="$ios_dir/JawTrackKit"
 generated="$target_dir/ios/bindings"
 headers="$target_dir/ios/headers"
 xcframework="$package_dir/JawTrackFFI.xcframework"

@@ -23,11 +23,13 @@ work="$repo/target/swift"
 step="starting"
 mounted=()
 
+reported=no
 fail() {
   echo "swift-on-linux: FAILED at step '$step': $*" >&2
+  reported=yes
   exit 1
 }
-trap 'status=$?; if [ $status -ne 0 ] && [ "$step" != done ]; then echo "swift-on-linux: FAILED at step '"'"'$step'"'"' (exit $status)" >&2; fi; unmount_all' EXIT
+trap 'status=$?; if [ $status -ne 0 ] && [ "$step" != done ] && [ $reported = no ]; then echo "swift-on-linux: FAILED at step '"'"'$step'"'"' (exit $status)" >&2; fi; unmount_all' EXIT
 
 unmount_all() {
   local i

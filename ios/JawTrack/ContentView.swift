@@ -1,86 +1,73 @@
-import JawTrackCore
+// Adapts SwiftUI to JawTrackKit's ScreenState and AppController: lays out the camera screen
+// (preview and overlay, status bar, Record / Transmit / Calibrate bite / Settings, the alerts)
+// and forwards every tap and scene phase to the controller.
+import JawTrackKit
 import SwiftUI
 
-/// The camera screen: the preview with the overlay, the status bar, and the controls (record,
-/// transmit, calibrate the bite, settings).
 @MainActor
 struct ContentView: View {
     @ObservedObject var model: AppModel
     @Environment(\.scenePhase) private var scenePhase
     @State private var showingSettings = false
+    /// The naming alert's field.
+    @State private var name = ""
+
+    private var state: ScreenState { model.state }
+    private var controller: AppController { model.controller }
 
     var body: some View {
         ZStack {
-            PreviewView(session: model.camera.session, overlay: model.overlay, configurationID: model.configurationID)
+            PreviewView(session: model.camera.session, overlay: state.overlay, configurationID: state.configurationID)
                 .ignoresSafeArea()
             VStack(spacing: 0) {
-                StatusBarView(
-                    status: model.status,
-                    isTransmitting: model.isTransmitting,
-                    lastAckAt: model.lastAckAt,
-                    lastAck: model.lastAck,
-                    linkProblem: model.linkProblem,
-                    isRecording: model.isRecording,
-                    recordedFrames: model.recordedFrames
-                )
-                .frame(maxWidth: .infinity, alignment: .leading)
-                .padding(.horizontal, 8)
+                StatusBarView(state: state)
+                    .frame(maxWidth: .infinity, alignment: .leading)
+                    .padding(.horizontal, 8)
                 Spacer()
                 controls
             }
         }
         .onAppear { model.start() }
         .onChange(of: scenePhase) { phase in
-            model.scenePhaseChanged(phase)
+            controller.phaseChanged(phase == .active ? .active : (phase == .background ? .background : .inactive))
         }
-        .sheet(isPresented: $showingSettings, onDismiss: { model.settingsClosed() }) {
-            SettingsView(initial: model.settingsStore.settings) { model.save($0) }
+        .onChange(of: state.finishedRecording) { _ in name = state.recordingName }
+        .sheet(isPresented: $showingSettings, onDismiss: { controller.settingsClosed() }) {
+            SettingsView(settings: controller.settings.settings) { controller.save($0) }
         }
-        .alert(model.message?.title ?? "", isPresented: messageShown, presenting: model.message) { _ in
+        .alert(state.message?.title ?? "", isPresented: messageShown, presenting: state.message) { _ in
             Button("OK", role: .cancel) {}
         } message: { message in
-            Text(verbatim: message.text)
+            Text(message.text)
         }
     }
 
     private var controls: some View {
         HStack(spacing: 10) {
-            Button {
-                model.toggleRecording()
-            } label: {
-                Label(model.isRecording ? "Stop" : "Record", systemImage: model.isRecording ? "stop.circle.fill" : "record.circle")
+            Button { controller.toggleRecording() } label: {
+                Label(state.isRecording ? "Stop" : "Record", systemImage: state.isRecording ? "stop.circle.fill" : "record.circle")
             }
-            .tint(model.isRecording ? Color.red : Color.accentColor)
-            .alert("Name the recording", isPresented: $model.isNamingRecording, presenting: model.finishedRecording) { files in
-                TextField("Name", text: $model.recordingName)
-                Button("Save") { model.nameRecording(files, as: model.recordingName) }
-                Button("Keep the date", role: .cancel) { model.nameRecording(files, as: nil) }
+            .tint(state.isRecording ? Color.red : Color.accentColor)
+            .alert("Name the recording", isPresented: naming, presenting: state.finishedRecording) { _ in
+                TextField("Name", text: $name)
+                Button("Save") { controller.nameRecording(as: name) }
+                Button("Keep the date", role: .cancel) { controller.nameRecording(as: nil) }
             } message: { files in
-                Text(verbatim: files.video == nil
-                    ? "Saved in Files › On My iPhone › JawTrack."
-                    : "Saved with its video in Files › On My iPhone › JawTrack.")
+                Text(AppController.savedText(files))
             }
-
-            Toggle(isOn: transmitting) {
+            Toggle(isOn: Binding(get: { state.isTransmitting }, set: { controller.setTransmitting($0) })) {
                 Label("Transmit", systemImage: "antenna.radiowaves.left.and.right")
             }
             .toggleStyle(.button)
-
+            Button { controller.calibrateBite() } label: { Label("Calibrate bite", systemImage: "mouth") }
+                .disabled(state.isCalibrating)
             Button {
-                model.calibrateBite()
-            } label: {
-                Label("Calibrate bite", systemImage: "mouth")
-            }
-            .disabled(model.isCalibrating)
-
-            Button {
-                model.settingsOpened()
+                controller.settingsOpened()
                 showingSettings = true
             } label: {
-                Label("Settings", systemImage: "gearshape")
-                    .labelStyle(.iconOnly)
+                Label("Settings", systemImage: "gearshape").labelStyle(.iconOnly)
             }
-            .disabled(model.isRecording)
+            .disabled(!state.canOpenSettings)
         }
         .font(.footnote)
         .buttonStyle(.borderedProminent)
@@ -89,15 +76,10 @@ struct ContentView: View {
         .padding(.bottom, 8)
     }
 
-    private var transmitting: Binding<Bool> {
-        Binding(get: { model.isTransmitting }, set: { model.setTransmitting($0) })
+    private var messageShown: Binding<Bool> {
+        Binding(get: { state.message != nil }, set: { shown in if !shown { controller.dismissMessage() } })
     }
 
-    private var messageShown: Binding<Bool> {
-        Binding(get: { model.message != nil }, set: { shown in
-            if !shown {
-                model.message = nil
-            }
-        })
-    }
+    /// Shown while a stopped recording waits for its name; its buttons name it (or not).
+    private var naming: Binding<Bool> { Binding(get: { state.finishedRecording != nil }, set: { _ in }) }
 }

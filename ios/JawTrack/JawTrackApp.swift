@@ -1,14 +1,10 @@
+// Adapts SwiftUI's App to JawTrackKit: one window, the camera screen over the AppModel.
 import SwiftUI
 
-/// The app: one window, the camera screen.
 @main
 @MainActor
 struct JawTrackApp: App {
     @StateObject private var model = AppModel()
 
-    var body: some Scene {
-        WindowGroup {
-            ContentView(model: model)
-        }
-    }
+    var body: some Scene { WindowGroup { ContentView(model: model) } }
 }

@@ -1,236 +1,115 @@
+// Adapts SwiftUI's Form to JawTrackKit's SettingsForm: lays out its choices, ranges, pairing note
+// and problems, runs the QR scanner for it, and hands the draft to `onSave` (the controller's
+// `save`, which answers with the library's refusal or nil).
 import JawTrackCore
+import JawTrackKit
 import SwiftUI
 
-/// The settings screen. It edits a copy; what is valid is the library's call
-/// (`validateAppSettings`, whose message is shown as is), and a scanned or typed pairing is read
-/// by `parsePairing`. Save hands the copy to `onSave`, which answers with an error text or nil.
 @MainActor
 struct SettingsView: View {
     @Environment(\.dismiss) private var dismiss
-    @State private var draft: AppSettings
+    @State private var form: SettingsForm
     @State private var scanning = false
-    @State private var pairingNote: String?
     @State private var saveError: String?
     private let onSave: (AppSettings) -> String?
 
-    private static let decimations: [Float] = [1, 1.5, 2, 3, 4]
-
-    init(initial: AppSettings, onSave: @escaping (AppSettings) -> String?) {
-        _draft = State(initialValue: initial)
+    init(settings: AppSettings, onSave: @escaping (AppSettings) -> String?) {
+        _form = State(initialValue: SettingsForm(settings))
         self.onSave = onSave
     }
 
     var body: some View {
         NavigationStack {
             Form {
-                if let problem {
-                    Section {
-                        Text(verbatim: problem)
-                            .foregroundColor(.red)
-                    }
+                if let problem = form.problem { Text(problem).foregroundColor(.red) }
+                Section("Camera") {
+                    picker("Camera", $form.draft.camera, SettingsForm.cameras)
+                    picker("Resolution", $form.draft.resolution, SettingsForm.resolutions)
+                    picker("Frame rate", $form.draft.fps, SettingsForm.frameRates)
+                    picker("Focus", $form.draft.focus, SettingsForm.focusModes)
+                    if form.showsLensPosition { slider("Lens", $form.draft.lensPosition, SettingsForm.lensPosition) }
+                    Toggle("Lock exposure and white balance", isOn: $form.draft.exposureLocked)
+                    Toggle("BGRA frames (converted, slower)", isOn: $form.draft.bgra)
                 }
-                cameraSection
-                detectorSection
-                receiverSection
-                Section("Recording") {
-                    Toggle("Record the video too (.mov)", isOn: $draft.recordVideo)
+                Section("Detector") {
+                    picker("Decimation", $form.draft.tracker.decimate, SettingsForm.decimations)
+                    slider("Quad sigma", $form.draft.tracker.quadSigma, SettingsForm.quadSigma)
+                    stepper($form.draft.tracker.maxHamming, SettingsForm.maxHamming)
+                    stepper($form.draft.tracker.threads, SettingsForm.threads)
+                    Toggle("Fit edges in linear light", isOn: $form.draft.tracker.linearEdges)
+                    Toggle("Search near the markers", isOn: $form.draft.tracker.regionSearch)
+                    Toggle("Smooth the pose", isOn: $form.draft.tracker.smooth)
                 }
+                receiver
+                Section("Recording") { Toggle("Record the video too (.mov)", isOn: $form.draft.recordVideo) }
             }
             .navigationTitle("Settings")
             .navigationBarTitleDisplayMode(.inline)
             .toolbar {
-                ToolbarItem(placement: .cancellationAction) {
-                    Button("Cancel") { dismiss() }
-                }
-                ToolbarItem(placement: .confirmationAction) {
-                    Button("Save") { save() }
-                        .disabled(problem != nil)
-                }
+                ToolbarItem(placement: .cancellationAction) { Button("Cancel") { dismiss() } }
+                ToolbarItem(placement: .confirmationAction) { Button("Save") { save() }.disabled(form.problem != nil) }
             }
             .sheet(isPresented: $scanning) {
-                scanner
+                QRScannerView(
+                    onCode: { text in scanning = false; form.scanned(text) },
+                    onFailure: { text in scanning = false; form.scanFailed(text) }
+                )
+                .ignoresSafeArea()
             }
             .alert("Not saved", isPresented: saveErrorShown, presenting: saveError) { _ in
                 Button("OK", role: .cancel) {}
             } message: { text in
-                Text(verbatim: text)
+                Text(text)
             }
         }
     }
 
-    private var cameraSection: some View {
-        Section("Camera") {
-            Picker("Camera", selection: $draft.camera) {
-                Text("Back wide").tag(JawTrackCore.Camera.backWide)
-                Text("Back telephoto").tag(JawTrackCore.Camera.backTele)
-                Text("Front").tag(JawTrackCore.Camera.front)
-            }
-            Picker("Resolution", selection: $draft.resolution) {
-                Text("720p").tag(Resolution.hd720)
-                Text("1080p").tag(Resolution.hd1080)
-                Text("4K").tag(Resolution.uhd4k)
-            }
-            Picker("Frame rate", selection: $draft.fps) {
-                Text("30 fps").tag(UInt32(30))
-                Text("60 fps").tag(UInt32(60))
-            }
-            Picker("Focus", selection: $draft.focus) {
-                Text("Auto").tag(FocusMode.auto)
-                Text("Manual").tag(FocusMode.manual)
-            }
-            if draft.focus == .manual {
-                HStack {
-                    Text("Lens")
-                    Slider(value: $draft.lensPosition, in: 0...1)
-                    Text(verbatim: String(format: "%.2f", draft.lensPosition))
-                        .monospacedDigit()
-                }
-            }
-            Toggle("Lock exposure", isOn: $draft.exposureLocked)
-            Toggle("BGRA frames (converted, slower)", isOn: $draft.bgra)
-        }
-    }
-
-    private var detectorSection: some View {
-        Section("Detector") {
-            Picker("Decimation", selection: $draft.tracker.decimate) {
-                ForEach(Self.decimations, id: \.self) { value in
-                    Text(verbatim: String(format: "%g", Double(value))).tag(value)
-                }
-            }
-            HStack {
-                Text("Quad sigma")
-                Slider(value: $draft.tracker.quadSigma, in: 0...0.8, step: 0.1)
-                Text(verbatim: String(format: "%.1f", draft.tracker.quadSigma))
-                    .monospacedDigit()
-            }
-            Stepper(value: $draft.tracker.maxHamming, in: 0...2) {
-                Text(verbatim: "Max Hamming distance: \(draft.tracker.maxHamming)")
-            }
-            Stepper(value: $draft.tracker.threads, in: 1...8) {
-                Text(verbatim: "Threads: \(draft.tracker.threads)")
-            }
-            Toggle("Fit edges in linear light", isOn: $draft.tracker.linearEdges)
-            Toggle("Search near the markers", isOn: $draft.tracker.regionSearch)
-            Toggle("Smooth the pose", isOn: $draft.tracker.smooth)
-        }
-    }
-
-    private var receiverSection: some View {
+    private var receiver: some View {
         Section {
-            TextField("Host, e.g. 192.168.1.20", text: $draft.receiverHost)
+            TextField("Host, e.g. 192.168.1.20", text: $form.draft.receiverHost)
                 .keyboardType(.URL)
                 .textInputAutocapitalization(.never)
                 .autocorrectionDisabled()
-            TextField("UDP port", text: portText)
-                .keyboardType(.numberPad)
-            TextField("Pairing key (64 hex digits)", text: $draft.pairingKey, axis: .vertical)
+            TextField("UDP port", text: $form.portText).keyboardType(.numberPad)
+            TextField("Pairing key (64 hex digits)", text: $form.draft.pairingKey, axis: .vertical)
                 .font(.footnote.monospaced())
                 .textInputAutocapitalization(.never)
                 .autocorrectionDisabled()
-            Button {
-                scanning = true
-            } label: {
-                Label("Scan the receiver's QR code", systemImage: "qrcode.viewfinder")
-            }
-            if let keyId {
-                LabeledContent("Key id", value: keyId)
-            }
+            Button { scanning = true } label: { Label("Scan the receiver's QR code", systemImage: "qrcode.viewfinder") }
+            if let keyId = form.keyId { LabeledContent("Key id", value: keyId) }
         } header: {
             Text("Receiver")
         } footer: {
             VStack(alignment: .leading, spacing: 4) {
-                if let pairingNote {
-                    Text(verbatim: pairingNote)
-                }
-                if let streamingProblem {
-                    Text(verbatim: "To transmit: \(streamingProblem)")
-                }
+                if let note = form.pairingNote { Text(note) }
+                if let problem = form.streamingProblem { Text(problem) }
             }
         }
-    }
-
-    private var scanner: some View {
-        NavigationStack {
-            QRScannerView(onCode: { text in scanned(text) }, onFailure: { text in
-                scanning = false
-                pairingNote = text
-            })
-            .ignoresSafeArea()
-            .navigationTitle("Scan the pairing code")
-            .navigationBarTitleDisplayMode(.inline)
-            .toolbar {
-                ToolbarItem(placement: .cancellationAction) {
-                    Button("Cancel") { scanning = false }
-                }
-            }
-        }
-    }
-
-    /// The first settings problem (nil: the settings can be saved).
-    private var problem: String? {
-        do {
-            try validateAppSettings(settings: draft, streaming: false)
-            return nil
-        } catch {
-            return userText(error)
-        }
-    }
-
-    /// What is still missing for transmitting (host, port, key).
-    private var streamingProblem: String? {
-        do {
-            try validateAppSettings(settings: draft, streaming: true)
-            return nil
-        } catch {
-            return userText(error)
-        }
-    }
-
-    private var keyId: String? {
-        guard !draft.pairingKey.isEmpty else {
-            return nil
-        }
-        return try? pairingKeyId(text: draft.pairingKey)
-    }
-
-    private var portText: Binding<String> {
-        Binding(
-            get: { draft.receiverPort == 0 ? "" : String(draft.receiverPort) },
-            set: { text in draft.receiverPort = UInt32(text.filter { ("0"..."9").contains($0) }) ?? 0 }
-        )
     }
 
     private var saveErrorShown: Binding<Bool> {
-        Binding(get: { saveError != nil }, set: { shown in
-            if !shown {
-                saveError = nil
-            }
-        })
-    }
-
-    private func scanned(_ text: String) {
-        scanning = false
-        do {
-            let pairing = try parsePairing(text: text)
-            draft.pairingKey = pairing.keyHex
-            if let host = pairing.host {
-                draft.receiverHost = host
-            }
-            if let port = pairing.port {
-                draft.receiverPort = port
-            }
-            pairingNote = "Paired: key id \(pairing.keyId)."
-        } catch {
-            pairingNote = "Not a JawTrack pairing code: \(userText(error))"
-        }
+        Binding(get: { saveError != nil }, set: { shown in if !shown { saveError = nil } })
     }
 
     private func save() {
-        if let error = onSave(draft) {
-            saveError = error
-        } else {
-            dismiss()
+        if let error = onSave(form.draft) { saveError = error } else { dismiss() }
+    }
+
+    private func picker<Value: Hashable>(_ title: String, _ selection: Binding<Value>, _ choices: [Choice<Value>]) -> some View {
+        Picker(title, selection: selection) {
+            ForEach(choices, id: \.value) { choice in Text(choice.label).tag(choice.value) }
         }
+    }
+
+    private func slider(_ title: String, _ value: Binding<Float>, _ range: NumberRange) -> some View {
+        HStack {
+            Text(title)
+            Slider(value: value, in: range.floats, step: range.floatStep)
+            Text(range.text(Double(value.wrappedValue))).monospacedDigit()
+        }
+    }
+
+    private func stepper(_ value: Binding<UInt32>, _ range: NumberRange) -> some View {
+        Stepper(value: value, in: range.counts, step: range.countStep) { Text(range.text(Double(value.wrappedValue))) }
     }
 }

@@ -11,9 +11,10 @@ public protocol CameraControl: FrameSource {
         settings: AppSettings,
         completion: @escaping (Result<(CaptureConfiguration, VideoSinkFactory?), Error>) -> Void
     )
-    /// Starts the frames; with `lockAfter`, locks exposure and white balance that many seconds
-    /// later. `onProblem` gets what could not be done.
-    func start(lockAfter: Double?, onProblem: @escaping (String) -> Void)
+    /// Starts the frames.
+    func start()
+    /// Locks exposure and white balance where they are now; `onProblem` gets what could not be done.
+    func lockExposureAndWhiteBalance(onProblem: @escaping (String) -> Void)
     func stop()
 }
 
@@ -70,7 +71,11 @@ public final class AppController {
     private let documents: URL?
     private let makeTransport: TransportFactory
     private let deliver: (@escaping () -> Void) -> Void
+    private let schedule: (Double, @escaping () -> Void) -> Void
     private let clock: () -> Double
+    /// Bumped whenever the camera starts, stops or is configured: a pending exposure lock of an
+    /// earlier session must not fire in a later one (whose settings may not want it).
+    private var cameraGeneration = 0
     private var tracker: Tracker?
     private var linkKeyId: String?
     private var started = false
@@ -79,7 +84,8 @@ public final class AppController {
     private var link: LinkSession?
 
     /// `documents`: where recordings go and a calibrated `marker.json` is looked for.
-    /// `deliver` runs a closure on the controller's thread (`DispatchQueue.main.async` in the app).
+    /// `deliver` runs a closure on the controller's thread (`DispatchQueue.main.async` in the app),
+    /// `schedule` after a delay in seconds on that thread.
     public init(
         settings: SettingsStore,
         camera: CameraControl,
@@ -87,7 +93,10 @@ public final class AppController {
         pipeline: FramePipeline = FramePipeline(),
         makeTransport: @escaping TransportFactory,
         clock: @escaping () -> Double = { Date().timeIntervalSince1970 },
-        deliver: @escaping (@escaping () -> Void) -> Void = { DispatchQueue.main.async(execute: $0) }
+        deliver: @escaping (@escaping () -> Void) -> Void = { DispatchQueue.main.async(execute: $0) },
+        schedule: @escaping (Double, @escaping () -> Void) -> Void = { delay, work in
+            DispatchQueue.main.asyncAfter(deadline: .now() + delay, execute: work)
+        }
     ) {
         self.settings = settings
         self.camera = camera
@@ -96,6 +105,7 @@ public final class AppController {
         self.makeTransport = makeTransport
         self.clock = clock
         self.deliver = deliver
+        self.schedule = schedule
         pipeline.setReportHandler { [weak self] report in
             deliver { self?.show(report) }
         }
@@ -126,7 +136,7 @@ public final class AppController {
     public func phaseChanged(_ phase: AppPhase) {
         switch phase {
         case .background:
-            camera.stop()
+            stopCamera()
         case .active:
             if cameraReady, !settingsOpen {
                 startSession()
@@ -139,6 +149,11 @@ public final class AppController {
     /// The settings screen takes the camera (for the QR scanner).
     public func settingsOpened() {
         settingsOpen = true
+        stopCamera()
+    }
+
+    private func stopCamera() {
+        cameraGeneration += 1
         camera.stop()
     }
 
@@ -160,6 +175,7 @@ public final class AppController {
             }
         }
         cameraReady = false
+        cameraGeneration += 1
         camera.configure(CapturePlan(settings.settings), settings: settings.settings) { [weak self] result in
             self?.deliver { self?.cameraConfigured(result) }
         }
@@ -179,9 +195,22 @@ public final class AppController {
         }
     }
 
+    /// Starts the frames; when the settings ask, locks exposure and white balance once
+    /// auto-exposure has had time to settle, unless the camera stopped or changed meanwhile.
     private func startSession() {
-        camera.start(lockAfter: CapturePlan(settings.settings).lockExposureAfter) { [weak self] problem in
-            self?.deliver { self?.state.message = UserMessage(title: "Camera", text: problem) }
+        cameraGeneration += 1
+        camera.start()
+        guard let delay = CapturePlan(settings.settings).lockExposureAfter else {
+            return
+        }
+        let generation = cameraGeneration
+        schedule(delay) { [weak self] in
+            guard let self, self.cameraGeneration == generation else {
+                return
+            }
+            self.camera.lockExposureAndWhiteBalance { [weak self] problem in
+                self?.deliver { self?.state.message = UserMessage(title: "Camera", text: problem) }
+            }
         }
     }
 

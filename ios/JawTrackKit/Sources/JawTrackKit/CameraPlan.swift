@@ -153,3 +153,11 @@ public enum CameraPlanner {
         return (intrinsics, cameraMatrix == nil)
     }
 }
+
+extension CameraPlanner {
+    /// The codec the movie is written with, among the four-character codes the capture output
+    /// offers for a .mov: HEVC (`hvc1`) when offered, else H.264 (`avc1`), else none.
+    public static func videoCodec(among available: [String]) -> String? {
+        ["hvc1", "avc1"].first { available.contains($0) }
+    }
+}

@@ -111,3 +111,22 @@ public enum FrameDoor {
         return String(decoding: bytes, as: UTF8.self)
     }
 }
+
+extension PixelLayout {
+    /// The CoreVideo pixel format of the layout: `420f` (kCVPixelFormatType_420YpCbCr8BiPlanarFullRange)
+    /// or `BGRA` (kCVPixelFormatType_32BGRA).
+    public var pixelFormat: UInt32 {
+        switch self {
+        case .luma: return 0x3432_3066
+        case .bgra: return 0x4247_5241
+        }
+    }
+
+    /// The layout of frames in `pixelFormat`; nil for any other format.
+    public init?(pixelFormat: UInt32) {
+        guard let layout = [PixelLayout.luma, .bgra].first(where: { $0.pixelFormat == pixelFormat }) else {
+            return nil
+        }
+        self = layout
+    }
+}

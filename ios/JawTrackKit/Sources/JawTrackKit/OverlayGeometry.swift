@@ -92,3 +92,19 @@ public struct OverlayGeometry: Equatable {
             }
     }
 }
+
+extension OverlayGeometry {
+    /// The overlay's stroke layers, in the order of `strokes`: the maxilla's tag outlines, the
+    /// mandible's, then the x, y and z axes. Their widths in points.
+    public static let strokeWidths: [Double] = [2, 2, 3, 3, 3]
+
+    /// The polylines each stroke layer draws, in `strokeWidths` order; an outline ends at its
+    /// first corner again, so it is drawn closed.
+    public var strokes: [[[ViewPoint]]] {
+        let closedOutlines: [[[ViewPoint]]] = ["maxilla", "mandible"].map { body in
+            (outlines[body] ?? []).map { corners in corners + Array(corners.prefix(1)) }
+        }
+        let axisLines: [[[ViewPoint]]] = axes.map { segments in segments.map { [$0.0, $0.1] } }
+        return closedOutlines + axisLines
+    }
+}

@@ -101,3 +101,17 @@ public struct SettingsForm {
         }
     }
 }
+
+extension NumberRange {
+    /// The range for a slider over a `Float` setting.
+    public var floats: ClosedRange<Float> { Float(range.lowerBound)...Float(range.upperBound) }
+    public var floatStep: Float { Float(step) }
+    /// The range for a stepper over a counting (`UInt32`) setting.
+    public var counts: ClosedRange<UInt32> { UInt32(range.lowerBound)...UInt32(range.upperBound) }
+    public var countStep: Int { Int(step) }
+
+    /// `value` printed with the range's format.
+    public func text(_ value: Double) -> String {
+        String(format: format, value)
+    }
+}

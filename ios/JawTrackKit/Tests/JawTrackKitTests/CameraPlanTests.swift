@@ -75,4 +75,46 @@ final class CameraPlanTests: XCTestCase {
         XCTAssertEqual(geometry.axes[0][0].1, ViewPoint(x: 60, y: 100))
         XCTAssertEqual(OverlayGeometry(nil) { $0 }, OverlayGeometry())
     }
+
+    func testTheAppleLayerAsksForTheFormatsAndCodecDecidedHere() {
+        XCTAssertEqual(FrameDoor.fourCharacterCode(PixelLayout.luma.pixelFormat), "420f")
+        XCTAssertEqual(FrameDoor.fourCharacterCode(PixelLayout.bgra.pixelFormat), "BGRA")
+        XCTAssertEqual(PixelLayout(pixelFormat: PixelLayout.bgra.pixelFormat), .bgra)
+        XCTAssertNil(PixelLayout(pixelFormat: 0x3432_3076), "420v (video range) is not read as luma")
+        XCTAssertEqual(CameraPlanner.videoCodec(among: ["avc1", "hvc1", "jpeg"]), "hvc1")
+        XCTAssertEqual(CameraPlanner.videoCodec(among: ["jpeg", "avc1"]), "avc1")
+        XCTAssertNil(CameraPlanner.videoCodec(among: ["jpeg"]))
+    }
+
+    func testTheOverlaysStrokesCloseEachOutline() {
+        let overlay = Overlay(
+            tags: [TagOverlay(id: 14, body: "mandible", corners: [0.1, 0.1, 0.2, 0.1, 0.2, 0.2, 0.1, 0.2], center: [0.15, 0.15])],
+            axes: [AxisOverlay(body: "mandible", origin: [0.5, 0.5], ends: [0.6, 0.5, 0.5, 0.6, 0.55, 0.55])]
+        )
+        let strokes = OverlayGeometry(overlay) { $0 }.strokes
+        XCTAssertEqual(strokes.count, OverlayGeometry.strokeWidths.count)
+        XCTAssertTrue(strokes[0].isEmpty, "no maxilla tag")
+        XCTAssertEqual(strokes[1].count, 1)
+        XCTAssertEqual(strokes[1][0].count, 5)
+        XCTAssertEqual(strokes[1][0].first, strokes[1][0].last)
+        XCTAssertEqual(strokes[4], [[ViewPoint(x: 0.5, y: 0.5), ViewPoint(x: 0.55, y: 0.55)]])
+    }
+
+    func testTheSettingsRangesInTheControlsTypes() {
+        XCTAssertEqual(SettingsForm.quadSigma.floats, 0...0.8)
+        XCTAssertEqual(SettingsForm.quadSigma.text(0.4), "0.4")
+        XCTAssertEqual(SettingsForm.threads.counts, 1...8)
+        XCTAssertEqual(SettingsForm.threads.countStep, 1)
+        XCTAssertEqual(SettingsForm.threads.text(3), "Threads: 3")
+        XCTAssertEqual(SettingsForm.lensPosition.floatStep, 0.01)
+    }
+
+    func testPlatformRefusalsAreWordedHere() {
+        XCTAssertEqual(PlatformText.keychain(status: -25308, text: nil).message, "Keychain: error -25308")
+        XCTAssertEqual(PlatformText.keychain(status: -25308, text: "User interaction is not allowed.").message,
+                       "Keychain: User interaction is not allowed.")
+        XCTAssertEqual(PlatformText.pixelFormatUnavailable(.luma).message, "This camera does not deliver 420f frames.")
+        XCTAssertEqual(PlatformText.noManualFocus(.front).message, "The front camera has no manual focus; choose auto.")
+        XCTAssertTrue(PlatformText.exposureNotLocked(AppError(message: "busy")).hasSuffix("busy"))
+    }
 }

@@ -13,6 +13,8 @@ final class ScreenTests: XCTestCase {
     /// Fulfilled when the link makes its transport (on the link's queue).
     private var transportMade: XCTestExpectation?
     private var now = 1_795_600_000.0
+    /// Work the controller scheduled (delay, work), run by the test.
+    private var scheduled: [(Double, () -> Void)] = []
 
     override func setUpWithError() throws {
         set = try FixtureSet.load()
@@ -34,7 +36,8 @@ final class ScreenTests: XCTestCase {
                 return transport
             },
             clock: { [unowned self] in now },
-            deliver: { $0() }
+            deliver: { $0() },
+            schedule: { [unowned self] delay, work in scheduled.append((delay, work)) }
         )
     }
 
@@ -56,7 +59,8 @@ final class ScreenTests: XCTestCase {
     func testFramesReachTheStatusBarAndTheOverlay() throws {
         controller.start(cameraAllowed: true)
         XCTAssertEqual(camera.configured.count, 1)
-        XCTAssertEqual(camera.starts, [nil], "exposure stays automatic unless asked")
+        XCTAssertEqual(camera.starts, 1)
+        XCTAssertTrue(scheduled.isEmpty, "exposure stays automatic unless asked")
         XCTAssertEqual(controller.state.configurationID, 1)
         play(2)
         let state = controller.state
@@ -82,24 +86,43 @@ final class ScreenTests: XCTestCase {
         controller.phaseChanged(.background)
         XCTAssertEqual(camera.stops, 1)
         controller.phaseChanged(.active)
-        XCTAssertEqual(camera.starts.count, 2)
+        XCTAssertEqual(camera.starts, 2)
         controller.settingsOpened()
         XCTAssertEqual(camera.stops, 2)
         controller.phaseChanged(.active)
-        XCTAssertEqual(camera.starts.count, 2, "not restarted under the settings screen")
+        XCTAssertEqual(camera.starts, 2, "not restarted under the settings screen")
         var locked = controller.settings.settings
         locked.exposureLocked = true
         XCTAssertNil(controller.save(locked))
         controller.settingsClosed()
         XCTAssertEqual(camera.configured.count, 2)
-        XCTAssertEqual(camera.starts.last, 1.0, "exposure and white balance locked a second after starting")
+        XCTAssertEqual(camera.starts, 3)
+        XCTAssertEqual(scheduled.map(\.0), [1], "exposure and white balance locked a second after starting")
+        scheduled[0].1()
+        XCTAssertEqual(camera.locks, 1)
+    }
+
+    func testAnExposureLockOfAnEarlierSessionDoesNotFire() {
+        var locked = controller.settings.settings
+        locked.exposureLocked = true
+        XCTAssertNil(controller.save(locked))
+        controller.start(cameraAllowed: true)
+        XCTAssertEqual(scheduled.count, 1)
+        controller.phaseChanged(.background)
+        scheduled[0].1()
+        XCTAssertEqual(camera.locks, 0, "the camera stopped before the lock was due")
+        controller.phaseChanged(.active)
+        camera.lockFailure = "This camera cannot lock its exposure."
+        scheduled[1].1()
+        XCTAssertEqual(camera.locks, 1)
+        XCTAssertEqual(controller.state.message, UserMessage(title: "Camera", text: "This camera cannot lock its exposure."))
     }
 
     func testACameraThatCannotBeConfiguredIsShown() {
         camera.failure = CameraPlanner.missingCamera(.backTele)
         controller.start(cameraAllowed: true)
         XCTAssertEqual(controller.state.message, UserMessage(title: "Camera", text: "This iPhone has no back telephoto camera."))
-        XCTAssertTrue(camera.starts.isEmpty)
+        XCTAssertEqual(camera.starts, 0)
     }
 
     func testABadMarkerFileInDocumentsIsTheLibrarysError() throws {

@@ -176,7 +176,9 @@ class MemoryFrameSource: FrameSource {
 /// A camera for the screen model's tests: records what it was asked, and is a frame source.
 final class FakeCamera: MemoryFrameSource, CameraControl {
     var configured: [CapturePlan] = []
-    var starts: [Double?] = []
+    var starts = 0
+    var locks = 0
+    var lockFailure: String?
     var stops = 0
     var configuration: CaptureConfiguration?
     var failure: AppError?
@@ -195,8 +197,15 @@ final class FakeCamera: MemoryFrameSource, CameraControl {
         }
     }
 
-    func start(lockAfter: Double?, onProblem: @escaping (String) -> Void) {
-        starts.append(lockAfter)
+    func start() {
+        starts += 1
+    }
+
+    func lockExposureAndWhiteBalance(onProblem: @escaping (String) -> Void) {
+        locks += 1
+        if let lockFailure {
+            onProblem(lockFailure)
+        }
     }
 
     func stop() {
