@@ -8,7 +8,8 @@
 #   bash ios/swift-on-linux.sh run CMD...   run CMD inside the root, in /repo
 #   bash ios/swift-on-linux.sh test         build the Rust library, generate and compile the
 #                                           uniffi bindings, prepare the fixtures, then
-#                                           `swift build` and `swift test` of JawTrackKit
+#                                           `swift build` and `swift test` of JawTrackKit, and
+#                                           check that the tests ran every library call it makes
 #   bash ios/swift-on-linux.sh lines        the app's hand-written Swift: JawTrackKit vs the Apple layer
 #
 # Needs root (debootstrap, chroot, mount) and the network the first time (about 3 minutes and
@@ -158,8 +159,14 @@ case "${1:-}" in
     inside swift build --package-path ios/JawTrackKit --scratch-path /repo/target/swift/build "${linker[@]}" \
       || fail "swift build failed"
     step="swift test (JawTrackKit's XCTest cases against the real library)"
-    inside swift test --package-path ios/JawTrackKit --scratch-path /repo/target/swift/build "${linker[@]}" \
-      || fail "swift test failed"
+    inside swift test --enable-code-coverage --package-path ios/JawTrackKit --scratch-path /repo/target/swift/build \
+      "${linker[@]}" || fail "swift test failed"
+    step="checking that the Swift tests run every call JawTrackKit makes into the library"
+    inside /usr/libexec/swift/bin/llvm-cov show target/swift/build/debug/JawTrackKitPackageTests.xctest \
+      -instr-profile=target/swift/build/debug/codecov/default.profdata ios/JawTrackKit/Sources/JawTrackKit \
+      >"$work/coverage.txt" || fail "llvm-cov show failed"
+    python3 "$ios_dir/check-library-calls.py" "$work/bindings/jawtrack.swift" "$repo/crates/ffi/include/jawtrack.h" \
+      "$work/coverage.txt" || fail "a library call of JawTrackKit is never run by the tests"
     lines_split
     ;;
   *)
