@@ -76,7 +76,7 @@ setup() {
       || fail "apt-get install debootstrap failed"
   fi
   step="debootstrap --variant=minbase trixie into $root"
-  echo "== making the Debian trixie root for Swift (once; about 3 minutes): $root"
+  echo "== making the Debian trixie root for Swift (once; about a minute and 3.3 GB): $root"
   rm -rf "$root.partial"
   mkdir -p "$(dirname "$root")"
   debootstrap --variant=minbase trixie "$root.partial" http://deb.debian.org/debian >"$work-debootstrap.log" 2>&1 \
