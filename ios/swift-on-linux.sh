@@ -99,9 +99,17 @@ mount_inside() {
     mount -t proc proc "$root/proc" || fail "mount -t proc failed (swift needs /proc/self/exe)"
     mounted+=("$root/proc")
   fi
+  # The repository read-only, only target/swift (builds, fixtures, test output) writable: the
+  # root lives under target/, so were a mount ever left behind (a killed run), `cargo clean` or
+  # `rm -rf target` would reach the sources through it; read-only, they stay.
   if ! mountpoint -q "$root/repo"; then
     mount --bind "$repo" "$root/repo" || fail "mount --bind of the repository failed"
     mounted+=("$root/repo")
+    mount -o remount,bind,ro "$root/repo" || fail "remounting the repository read-only failed"
+  fi
+  if ! mountpoint -q "$root/repo/target/swift"; then
+    mount --bind "$work" "$root/repo/target/swift" || fail "mount --bind of target/swift failed"
+    mounted+=("$root/repo/target/swift")
   fi
 }
 
