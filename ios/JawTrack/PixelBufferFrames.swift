@@ -4,7 +4,6 @@
 import AVFoundation
 import ImageIO
 import JawTrackKit
-import simd
 
 final class PixelBufferFrames: NSObject, AVCaptureVideoDataOutputSampleBufferDelegate {
     private let handler: (CameraFrame) -> Void
@@ -30,19 +29,10 @@ final class PixelBufferFrames: NSObject, AVCaptureVideoDataOutputSampleBufferDel
             ),
             time: CMSampleBufferGetPresentationTimeStamp(sampleBuffer).seconds,
             exposure: exif?[kCGImagePropertyExifExposureTime as String] as? Double,
-            cameraMatrix: Self.intrinsicMatrix(of: sampleBuffer),
+            cameraMatrix: CameraPlanner.cameraMatrix(fromAttachment: CMGetAttachment(
+                sampleBuffer, key: kCMSampleBufferAttachmentKey_CameraIntrinsicMatrix, attachmentModeOut: nil
+            ) as? Data),
             native: sampleBuffer
         ))
-    }
-
-    /// AVFoundation's intrinsic matrix for this frame: a `matrix_float3x3` in a CFData,
-    /// column-major, as nine numbers.
-    private static func intrinsicMatrix(of sampleBuffer: CMSampleBuffer) -> [Float]? {
-        let attachment = CMGetAttachment(sampleBuffer, key: kCMSampleBufferAttachmentKey_CameraIntrinsicMatrix, attachmentModeOut: nil)
-        guard let data = attachment as? Data, data.count >= MemoryLayout<matrix_float3x3>.size else { return nil }
-        var matrix = matrix_float3x3()
-        _ = withUnsafeMutableBytes(of: &matrix) { data.copyBytes(to: $0) }
-        let (c0, c1, c2) = matrix.columns
-        return [c0.x, c0.y, c0.z, c1.x, c1.y, c1.z, c2.x, c2.y, c2.z]
     }
 }

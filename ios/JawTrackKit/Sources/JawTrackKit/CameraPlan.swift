@@ -135,6 +135,25 @@ public enum CameraPlanner {
         AppError(message: "This iPhone has no \(title(of: camera)) camera.")
     }
 
+    /// The nine numbers (column-major) of AVFoundation's per-frame intrinsic matrix attachment,
+    /// a `matrix_float3x3` in a CFData: three columns of a `simd_float3` each, and a
+    /// `simd_float3` takes 16 bytes (the fourth lane is padding), so 48 bytes, not 36. Nil when
+    /// the data is too short or not finite.
+    public static func cameraMatrix(fromAttachment data: Data?) -> [Float]? {
+        guard let data, data.count >= 48 else {
+            return nil
+        }
+        let bytes = [UInt8](data.prefix(48))
+        let matrix = (0..<3).flatMap { column in
+            (0..<3).map { row -> Float in
+                let at = column * 16 + row * 4
+                let bits = (0..<4).reduce(UInt32(0)) { $0 | UInt32(bytes[at + $1]) << (8 * UInt32($1)) }
+                return Float(bitPattern: bits)
+            }
+        }
+        return matrix.allSatisfy(\.isFinite) ? matrix : nil
+    }
+
     /// The frame's intrinsics in its own pixels: the delivered matrix when there is one (scaled
     /// from the active format to the frame by the library), else the field-of-view estimate.
     public static func intrinsics(

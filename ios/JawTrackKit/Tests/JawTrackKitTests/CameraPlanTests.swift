@@ -117,4 +117,22 @@ final class CameraPlanTests: XCTestCase {
         XCTAssertEqual(PlatformText.noManualFocus(.front).message, "The front camera has no manual focus; choose auto.")
         XCTAssertTrue(PlatformText.exposureNotLocked(AppError(message: "busy")).hasSuffix("busy"))
     }
+
+    func testTheIntrinsicMatrixAttachmentIsReadWithItsPaddedColumns() {
+        func bytes(_ columns: [[Float]]) -> Data {
+            var data = Data()
+            for column in columns {
+                for value in column + [Float.nan] {
+                    data += withUnsafeBytes(of: value.bitPattern.littleEndian) { Data($0) }
+                }
+            }
+            return data
+        }
+        let attachment = bytes([[1500, 0, 0], [0, 1501, 0], [960, 540, 1]])
+        XCTAssertEqual(attachment.count, 48)
+        XCTAssertEqual(CameraPlanner.cameraMatrix(fromAttachment: attachment), [1500, 0, 0, 0, 1501, 0, 960, 540, 1])
+        XCTAssertNil(CameraPlanner.cameraMatrix(fromAttachment: attachment.prefix(36)), "a packed 3×3 is not the layout")
+        XCTAssertNil(CameraPlanner.cameraMatrix(fromAttachment: nil))
+        XCTAssertNil(CameraPlanner.cameraMatrix(fromAttachment: bytes([[.infinity, 0, 0], [0, 1, 0], [0, 0, 1]])))
+    }
 }
