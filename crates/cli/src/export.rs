@@ -97,6 +97,8 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
         for f in &rec.frames {
             writeln!(out, "{}", f.to_line())?;
         }
+        // Dropping a BufWriter swallows its last write's error: a full disk must not pass.
+        out.flush()?;
     } else {
         let incisor = Incisor::standard();
         let mut w = csv::Writer::from_writer(out);

@@ -1,15 +1,26 @@
 //! `jawtrack`: the command line of JawTrack. Each subcommand is a thin layer over a library
 //! crate; this file only parses arguments, reports progress and prints results.
 
-/// `println!` that ends the program quietly when stdout is closed (`jawtrack … | head`)
-/// instead of panicking.
+/// `println!` that ends the program quietly when stdout is closed (`jawtrack … | head`), and
+/// with an error (exit 1) when the write fails otherwise (a full disk, a bad redirect): a
+/// pairing key or a clinical number that did not reach its file must not look written.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        if writeln!(std::io::stdout(), $($arg)*).is_err() {
-            std::process::exit(0);
+        if let Err(e) = writeln!(std::io::stdout(), $($arg)*) {
+            crate::stdout_failed(&e);
         }
     }};
+}
+
+/// Ends the program after a failed write to standard output: quietly for a closed pipe, as an
+/// error otherwise.
+fn stdout_failed(e: &std::io::Error) -> ! {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(0);
+    }
+    eprintln!("error: writing to standard output: {e}");
+    std::process::exit(1);
 }
 
 mod bench;
@@ -22,6 +33,7 @@ mod frames;
 mod link;
 mod marker;
 mod metrics;
+mod output;
 mod progress;
 mod register;
 mod synth;

@@ -75,10 +75,26 @@ pub(crate) fn harness(a: &HarnessArgs) -> Result<()> {
 
 pub(crate) fn check_marker(file: &Path) -> Result<()> {
     let m = Marker::load(file)?;
+    require_both_bodies(&m, file)?;
     say!("{}: valid marker file, edge {} mm", file.display(), m.edge);
     for b in &m.bodies {
         let ids: Vec<String> = b.tags.iter().map(|t| t.id.to_string()).collect();
         say!("  {}: {} tags, ids {}", b.kind, b.tags.len(), ids.join(" "));
+    }
+    Ok(())
+}
+
+/// A jaw pose needs both markers: a file describing one body reads, but can never track a jaw.
+pub(crate) fn require_both_bodies(m: &Marker, file: &Path) -> Result<()> {
+    let missing: Vec<&str> =
+        jawtrack_marker::BodyKind::ALL.iter().filter(|&&k| m.body(k).is_none()).map(|k| k.name()).collect();
+    if !missing.is_empty() {
+        anyhow::bail!(
+            "{}: has no {} body; tracking the jaw needs both the maxilla and the mandible \
+             (`jawtrack marker` writes a complete nominal file)",
+            file.display(),
+            missing.join(" or ")
+        );
     }
     Ok(())
 }

@@ -9,7 +9,7 @@ use clap::Args;
 use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter, create_file};
+use jawtrack_recording::{RecordingHeader, RecordingWriter, create_file};
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -50,6 +50,8 @@ pub(crate) struct TrackArgs {
     /// Output file (JSON lines); `-` for standard output.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
     /// A video file to track instead of images (needs ffmpeg and ffprobe on the PATH).
     #[arg(long, conflicts_with = "frames")]
     video: Option<PathBuf>,
@@ -66,7 +68,11 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     }
     a.intrinsics.validate().context("--intrinsics")?;
     let marker = match &a.marker {
-        Some(p) => Marker::load(p).with_context(|| format!("marker file {}", p.display()))?,
+        Some(p) => {
+            let m = Marker::load(p).with_context(|| format!("marker file {}", p.display()))?;
+            crate::marker::require_both_bodies(&m, p)?;
+            m
+        }
         None => {
             eprintln!("note: no --marker given; using the nominal 12.7 mm marker (calibrate yours for sub-0.1 mm)");
             Marker::default()
@@ -93,7 +99,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let out: Box<dyn Write> = if a.out.as_os_str() == "-" {
         Box::new(std::io::stdout())
     } else {
-        Box::new(create_file(&a.out, Overwrite::Replace)?)
+        Box::new(create_file(&a.out, a.force.overwrite()).map_err(|e| a.force.explain(e))?)
     };
     let mut header = RecordingHeader::new("jawtrack track");
     header.intrinsics = Some(a.intrinsics);

@@ -317,3 +317,49 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     assert!(after.0 < before.0 / 4.0 && after.1 < before.1 / 4.0, "{before:?} → {after:?}");
     assert!(after.0 < 0.07 && after.1 < 0.15, "{after:?}");
 }
+
+#[test]
+fn track_never_overwrites_a_recording_unless_forced() {
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/static-1080p");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("session.jsonl");
+    std::fs::write(&out, "a patient's session\n").expect("write");
+    let out = out.to_str().expect("utf-8 path");
+    let args = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", out, set];
+    let o = jawtrack(&args);
+    refused(&o, "already exists");
+    assert!(stderr(&o).contains("--force"), "says how to replace it: {}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(out).expect("read"), "a patient's session\n", "left as it was");
+    let o = jawtrack(&[&args[..], &["--force"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(out).expect("read").lines().count(), 7, "replaced: a header and six frames");
+}
+
+#[test]
+fn a_marker_file_with_one_body_is_refused_before_tracking() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let full = dir.path().join("m.json");
+    let full = full.to_str().expect("utf-8 path");
+    assert!(jawtrack(&["marker", "--out", full]).status.success());
+    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(full).expect("read")).expect("json");
+    doc["bodies"].as_array_mut().expect("bodies").retain(|b| b["name"] == "maxilla");
+    let half = dir.path().join("maxilla-only.json");
+    std::fs::write(&half, doc.to_string()).expect("write");
+    let half = half.to_str().expect("utf-8 path");
+    refused(&jawtrack(&["check-marker", half]), "no mandible body");
+    let out = dir.path().join("poses.jsonl");
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/static-1080p");
+    let o = jawtrack(&[
+        "track",
+        "--intrinsics",
+        "1500,1500,959.5,539.5",
+        "--marker",
+        half,
+        "--out",
+        out.to_str().expect("utf-8 path"),
+        set,
+    ]);
+    refused(&o, "no mandible body");
+    assert!(!out.exists(), "refused before writing anything");
+    assert!(jawtrack(&["check-marker", full]).status.success(), "the complete file still passes");
+}

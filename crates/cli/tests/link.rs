@@ -216,3 +216,44 @@ fn the_link_commands_refuse_bad_input_clearly() {
     let hex = String::from_utf8_lossy(&key.stdout).trim().to_owned();
     assert!(hex.parse::<Key>().is_ok(), "keygen prints a key: {hex}");
 }
+
+#[test]
+fn receive_never_overwrites_and_a_run_that_cannot_start_leaves_no_file() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let existing = dir.path().join("session.jsonl");
+    std::fs::write(&existing, "a patient's session\n").expect("write");
+    let o = bin()
+        .args(["receive", "--listen", "127.0.0.1:0", "--key", KEY, "--duration", "0.2", "--out"])
+        .arg(&existing)
+        .output()
+        .expect("runs");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("already exists") && e.contains("--force"), "{e}");
+    assert_eq!(std::fs::read_to_string(&existing).expect("read"), "a patient's session\n", "left as it was");
+
+    // The viewer's port is taken: the receiver cannot serve it and must not leave a recording.
+    let busy = std::net::TcpListener::bind("127.0.0.1:0").expect("a port");
+    let port = busy.local_addr().expect("address").port();
+    let fresh = dir.path().join("fresh.jsonl");
+    let o = bin()
+        .args(["receive", "--listen", "127.0.0.1:0", "--key", KEY, "--duration", "0.2"])
+        .args(["--serve", &format!("127.0.0.1:{port}"), "--out"])
+        .arg(&fresh)
+        .output()
+        .expect("runs");
+    assert!(!o.status.success(), "a busy viewer port is an error: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(!fresh.exists(), "no header-only recording left behind");
+}
+
+#[test]
+fn a_key_that_cannot_be_written_is_an_error() {
+    // /dev/full takes nothing: every write fails with "no space left on device".
+    let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
+        jawtrack_test_support::say_skipped("no /dev/full here: the full-disk check of keygen");
+        return;
+    };
+    let o = bin().arg("keygen").stdout(full).output().expect("runs");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "keygen on a full disk must fail: {e}");
+    assert!(e.contains("writing to standard output"), "{e}");
+}

@@ -51,8 +51,9 @@ struct Receiver {
 impl Receiver {
     fn start(key: &Key, out: &Path) -> Result<Receiver> {
         let port = UdpSocket::bind("127.0.0.1:0")?.local_addr()?.port();
+        // The bench's own scratch recording, replaced on every run: hence --force.
         let mut child = Command::new(std::env::current_exe().context("finding this program")?)
-            .args(["receive", "--listen", &format!("127.0.0.1:{port}"), "--idle-exit", "2", "--out"])
+            .args(["receive", "--listen", &format!("127.0.0.1:{port}"), "--idle-exit", "2", "--force", "--out"])
             .arg(out)
             .env("JAWTRACK_KEY", key.to_hex())
             .stdout(Stdio::piped())

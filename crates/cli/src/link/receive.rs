@@ -7,7 +7,7 @@ use super::{KeyArgs, key_id};
 use crate::viewer::ViewerArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
+use jawtrack_recording::{RecordingHeader, RecordingWriter};
 use jawtrack_viewer::{LiveServer, LiveState};
 use jawtrack_wire::link::{Counters, Link, LinkConfig, Verdict};
 use jawtrack_wire::{Ack, Key, Message, Security, decode, encode_ack, unix_ms};
@@ -28,6 +28,8 @@ pub(crate) struct ReceiveArgs {
     /// The recording to write (JSON lines, the schema of `jawtrack track`).
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
     /// Serve the live viewer at this address, e.g. 127.0.0.1:8080.
     #[arg(long)]
     serve: Option<SocketAddr>,
@@ -138,13 +140,13 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     header.session = None;
     header.key_id = key_id(&security);
     header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
-    let mut out = RecordingWriter::create(&a.out, header, Overwrite::Replace)?;
-
+    // The viewer's port before the file: a run that cannot start leaves no empty recording.
     let live = Arc::new(LiveState::new(&a.viewer.options(), "live")?);
     let _server = match a.serve {
         Some(addr) => Some(LiveServer::start(addr, live.clone())?),
         None => None,
     };
+    let mut out = RecordingWriter::create(&a.out, header, a.force.overwrite()).map_err(|e| a.force.explain(e))?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
