@@ -52,9 +52,21 @@ pub(crate) struct PlotArgs {
 
 /// Reads a recording, warns about unreadable lines, orders the frames by sequence.
 pub(crate) fn load(path: &Path) -> Result<Recording> {
+    /// Skipped lines named one by one; past that, counted (a foreign file has thousands).
+    const NAMED: usize = 10;
     let mut rec = jawtrack_recording::open(path)?;
-    for (line, why) in &rec.skipped {
+    for (line, why) in rec.skipped.iter().take(NAMED) {
         eprintln!("warning: {} line {line} skipped: {why}", path.display());
+    }
+    if rec.skipped.len() > NAMED {
+        eprintln!("warning: {} more lines of {} skipped", rec.skipped.len() - NAMED, path.display());
+    }
+    if rec.frames.is_empty() {
+        bail!(
+            "{}: the file has no frames that could be read ({} lines skipped): is it a recording of `jawtrack track`, `receive` or the phone?",
+            path.display(),
+            rec.skipped.len()
+        );
     }
     rec.sort_by_capture();
     Ok(rec)

@@ -52,9 +52,6 @@ fn parse_point(s: &str) -> Result<Point3<f64>, String> {
 pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     let name = a.recording.display();
     let rec = load(&a.recording)?;
-    if rec.frames.is_empty() {
-        bail!("{name}: the recording has no frames ({} unreadable lines skipped)", rec.skipped.len());
-    }
     let Some(rest) = rest_pose(&rec.frames, a.rest_frame)? else {
         bail!("{name}: no frame has a jaw pose (both markers tracked), nothing to measure");
     };

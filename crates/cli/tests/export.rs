@@ -115,4 +115,35 @@ fn export_and_plot_refuse_what_they_cannot_use() {
     check(jawtrack(&["export", "/nonexistent.jsonl", "--csv"]), "/nonexistent.jsonl");
     check(jawtrack(&["export", empty.to_str().expect("utf-8")]), "--csv");
     check(jawtrack(&["export", empty.to_str().expect("utf-8"), "--csv", "--rest-frame", "4"]), "no such frame");
+
+    // Not a recording, an empty file, and a pose that cannot be: refused, not "exported 0 frames"
+    // or a NaN opening.
+    let foreign = dir.path().join("notes.jsonl");
+    std::fs::write(&foreign, (0..50).map(|i| format!("{{\"note\": {i}}}\n")).collect::<String>()).expect("write");
+    let o = jawtrack(&["export", foreign.to_str().expect("utf-8"), "--csv"]);
+    check(
+        jawtrack(&["export", foreign.to_str().expect("utf-8"), "--csv"]),
+        "has no frames that could be read (50 lines skipped)",
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("40 more lines"), "the warnings are capped");
+    let blank = dir.path().join("blank.jsonl");
+    std::fs::write(&blank, "").expect("write");
+    check(jawtrack(&["export", blank.to_str().expect("utf-8"), "--csv"]), "has no frames that could be read");
+    let absurd = dir.path().join("absurd.jsonl");
+    let identity = |t: &str| format!("[1,0,0,{t},0,1,0,0,0,0,1,0,0,0,0,1]");
+    std::fs::write(
+        &absurd,
+        format!(
+            "{{\"frame\":0,\"t\":0,\"maxilla\":null,\"mandible\":null,\"maxilla_from_mandible\":{}}}\n",
+            identity("1e308")
+        ),
+    )
+    .expect("write");
+    for command in ["export", "metrics"] {
+        let o =
+            jawtrack(&[command, absurd.to_str().expect("utf-8"), "--csv"][..if command == "export" { 3 } else { 2 }]);
+        check(o, "has no frames that could be read");
+    }
+    let o = jawtrack(&["metrics", absurd.to_str().expect("utf-8")]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("implausible pose"), "says why the line was skipped");
 }

@@ -33,7 +33,7 @@ mod schema;
 mod write;
 
 pub use flag::Flag;
-pub use read::{Recording, open, read_recording};
+pub use read::{MAX_TRANSLATION_MM, Recording, open, read_recording};
 pub use schema::{
     BodyRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader, SessionId, TimingsRecord,
 };

@@ -79,11 +79,37 @@ fn read_named(reader: impl BufRead, name: &str) -> Result<Recording, RecordingEr
             continue;
         }
         match serde_path_to_error::deserialize::<_, FrameRecord>(value) {
-            Ok(f) => rec.frames.push(f),
+            Ok(f) => match implausible(&f) {
+                None => rec.frames.push(f),
+                Some(why) => rec.skipped.push((i + 1, why)),
+            },
             Err(e) => rec.skipped.push((i + 1, format!("not a frame: field `{}`: {}", e.path(), e.inner()))),
         }
     }
     Ok(rec)
+}
+
+/// Farther than any camera films a jaw from, or any jaw moves (mm): a pose beyond it comes from a
+/// corrupt or foreign line, and every number computed from it would be infinite or NaN.
+pub const MAX_TRANSLATION_MM: f64 = 10_000.0;
+
+/// Why a frame that parses cannot be a tracked frame, if it cannot.
+fn implausible(f: &FrameRecord) -> Option<String> {
+    let poses = [
+        ("maxilla.camera_from_body", f.maxilla.as_ref().map(|b| b.camera_from_body)),
+        ("mandible.camera_from_body", f.mandible.as_ref().map(|b| b.camera_from_body)),
+        ("maxilla_from_mandible", f.maxilla_from_mandible),
+        ("maxilla_scan_from_mandible_scan", f.maxilla_scan_from_mandible_scan),
+    ];
+    for (name, pose) in poses {
+        let distance = pose.map_or(0.0, |p| p.translation().norm());
+        if !distance.is_finite() || distance > MAX_TRANSLATION_MM {
+            return Some(format!(
+                "implausible pose: field `{name}` moves {distance:.3e} mm (more than {MAX_TRANSLATION_MM} mm)"
+            ));
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -168,5 +194,17 @@ mod tests {
         };
         rec.sort_by_capture();
         assert_eq!(rec.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![5, 0]);
+    }
+
+    #[test]
+    fn a_frame_with_an_absurd_pose_is_skipped_with_the_reason() {
+        let good = frame(0, Some(Pose::from_axis_angle(Vector3::zeros(), Vector3::new(0.0, 40.0, 0.0))));
+        let far = frame(1, Some(Pose::from_axis_angle(Vector3::zeros(), Vector3::new(1e308, 0.0, 0.0))));
+        let text = format!("{}\n{}\n", good.to_line(), far.to_line());
+        let rec = read_recording(text.as_bytes()).expect("reads");
+        assert_eq!(rec.frames.len(), 1, "only the plausible frame");
+        assert_eq!(rec.skipped.len(), 1);
+        assert_eq!(rec.skipped[0].0, 2);
+        assert!(rec.skipped[0].1.contains("implausible pose: field `maxilla_from_mandible`"), "{}", rec.skipped[0].1);
     }
 }
