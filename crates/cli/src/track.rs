@@ -83,6 +83,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         None => None,
     };
     let mut source = open_frames(a.video.as_deref(), &a.frames, a.fps)?;
+    if a.video.is_none() && a.fps.is_none() {
+        eprintln!("note: image files carry no time: frame times assume 30 fps (--fps sets the rate)");
+    }
     let config = TrackerConfig {
         detector: DetectorConfig {
             quad_decimate: a.decimate,

@@ -49,7 +49,19 @@ pub(crate) struct ViewArgs {
     duration: Option<f64>,
 }
 
+/// Says so when the viewer is served beyond this computer: it has no password, so anyone who
+/// can reach the address sees the patient's poses (and, live, can press Calibrate).
+pub(crate) fn warn_if_exposed(addr: SocketAddr) {
+    if !addr.ip().is_loopback() {
+        eprintln!(
+            "warning: the viewer at {addr} is open to the network with no password: anyone who can reach it \
+             sees the poses (and, live, can press Calibrate); serve on 127.0.0.1 unless the network is trusted"
+        );
+    }
+}
+
 pub(crate) fn view(a: &ViewArgs) -> Result<()> {
+    warn_if_exposed(a.serve);
     let rec = jawtrack_recording::open(&a.recording)?;
     for (line, why) in &rec.skipped {
         eprintln!("warning: {} line {line} skipped: {why}", a.recording.display());

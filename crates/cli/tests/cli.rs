@@ -129,6 +129,7 @@ fn track_writes_one_line_per_frame_with_the_jaw_pose() {
     let o = jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", out, set]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("tracked 6 frames"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("assume 30 fps"), "says what the frame times rest on: {}", stderr(&o));
     let text = std::fs::read_to_string(out).expect("poses written");
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(Path::new(set).join("ground_truth.json")).expect("truth"))

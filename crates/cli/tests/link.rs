@@ -257,3 +257,23 @@ fn a_key_that_cannot_be_written_is_an_error() {
     assert!(!o.status.success(), "keygen on a full disk must fail: {e}");
     assert!(e.contains("writing to standard output"), "{e}");
 }
+
+#[test]
+fn a_viewer_served_beyond_this_computer_is_warned_about() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let o = bin()
+        .args(["receive", "--listen", "127.0.0.1:0", "--key", KEY, "--duration", "0.2", "--serve", "0.0.0.0:0"])
+        .arg("--out")
+        .arg(dir.path().join("session.jsonl"))
+        .output()
+        .expect("runs");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("open to the network with no password"), "{e}");
+    let o = bin()
+        .args(["receive", "--listen", "127.0.0.1:0", "--key", KEY, "--duration", "0.2", "--serve", "127.0.0.1:0"])
+        .arg("--out")
+        .arg(dir.path().join("local.jsonl"))
+        .output()
+        .expect("runs");
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("open to the network"), "no warning on loopback");
+}

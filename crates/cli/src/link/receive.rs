@@ -127,6 +127,9 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             bail!("{name} must be a positive number of seconds, got {v}");
         }
     }
+    if let Some(addr) = a.serve {
+        crate::viewer::warn_if_exposed(addr);
+    }
     let socket = UdpSocket::bind(a.listen).with_context(|| format!("listening on {}", a.listen))?;
     if a.qr {
         match &security {
