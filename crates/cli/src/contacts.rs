@@ -13,7 +13,7 @@
 //! written), per arch a PLY coloured by contact frequency and one by depth, PNG occlusal
 //! views coloured by frequency, and `summary.json`.
 
-use crate::export::load;
+use crate::export::{SessionArg, load};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::Mesh;
@@ -53,6 +53,8 @@ impl Mode {
 /// Arguments of `jawtrack contacts`.
 #[derive(Args)]
 pub(crate) struct ContactsArgs {
+    #[command(flatten)]
+    session: SessionArg,
     /// The upper arch's scan (STL, PLY or OBJ, mm). Several files: one mesh per tooth, named
     /// by `NN` when the file name holds `FDI=NN`, else by the file name's stem.
     #[arg(long, required = true, num_args = 1.., action = ArgAction::Append, value_name = "MESH")]
@@ -195,13 +197,7 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         )),
         None => PoseSource::Direct,
     };
-    let rec = load(&a.poses)?;
-    if rec.frames.is_empty() {
-        bail!(
-            "{}: no frames (each line should be a frame such as {{\"frame\":0,\"t\":0,\"maxilla_from_mandible\":[16 numbers]}})",
-            a.poses.display()
-        );
-    }
+    let rec = load(&a.poses, a.session)?;
     let source = match source {
         PoseSource::Direct if rec.frames.iter().any(|f| f.maxilla_scan_from_mandible_scan.is_some()) => {
             PoseSource::Recorded

@@ -11,7 +11,7 @@ use clap::{ArgGroup, Args};
 use jawtrack_kinematics::{Displacement, Incisor};
 use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_pose::Pose;
-use jawtrack_recording::{FrameRecord, Recording, RecordingHeader};
+use jawtrack_recording::{FrameRecord, Recording, RecordingHeader, SessionId};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -31,6 +31,8 @@ pub(crate) struct ExportArgs {
     /// Output file; `-` for standard output.
     #[arg(long, default_value = "-")]
     out: PathBuf,
+    #[command(flatten)]
+    session: SessionArg,
     /// The frame (its `frame` number) whose jaw pose is the rest position; default: the first
     /// frame with one.
     #[arg(long)]
@@ -48,13 +50,50 @@ pub(crate) struct PlotArgs {
     /// The frame whose jaw pose is the rest position; default: the first frame with one.
     #[arg(long)]
     rest_frame: Option<u64>,
+    #[command(flatten)]
+    session: SessionArg,
 }
 
 /// Reads a recording, warns about unreadable lines, orders the frames by sequence.
-pub(crate) fn load(path: &Path) -> Result<Recording> {
+/// `--session`, for the commands that read a recording: one session's frames. A file holding
+/// several sessions (a receiver that ran while the phone started and stopped transmitting) is
+/// refused without it, since their frames would mix.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub(crate) struct SessionArg {
+    /// Read only this session's frames (its 16-hex-digit id, as `"session"` in every frame);
+    /// needed when the file holds several.
+    #[arg(long, value_name = "ID")]
+    pub(crate) session: Option<SessionId>,
+}
+
+pub(crate) fn load(path: &Path, only: SessionArg) -> Result<Recording> {
     /// Skipped lines named one by one; past that, counted (a foreign file has thousands).
     const NAMED: usize = 10;
     let mut rec = jawtrack_recording::open(path)?;
+    let sessions = rec.sessions();
+    match only.session {
+        Some(wanted) => {
+            if !sessions.contains(&wanted) {
+                let ids: Vec<String> = sessions.iter().map(ToString::to_string).collect();
+                bail!("{}: no frame of session {wanted}; its sessions: {}", path.display(), ids.join(", "));
+            }
+            rec.frames.retain(|f| f.session == Some(wanted));
+        }
+        None if sessions.len() > 1 => {
+            let counts: Vec<String> = sessions
+                .iter()
+                .map(|&s| format!("{s} ({} frames)", rec.frames.iter().filter(|f| f.session == Some(s)).count()))
+                .collect();
+            bail!(
+                "{}: holds {} sessions, whose frames must not be mixed: {}; choose one with --session ID \
+                 (`jawtrack export FILE --session ID --jsonl --out ONE.jsonl` writes it alone)",
+                path.display(),
+                sessions.len(),
+                counts.join(", ")
+            );
+        }
+        None => {}
+    }
     for (line, why) in rec.skipped.iter().take(NAMED) {
         eprintln!("warning: {} line {line} skipped: {why}", path.display());
     }
@@ -94,7 +133,7 @@ fn displacements(frames: &[FrameRecord], rest: &Pose) -> Vec<Timed> {
 }
 
 pub(crate) fn export(a: &ExportArgs) -> Result<()> {
-    let rec = load(&a.recording)?;
+    let rec = load(&a.recording, a.session)?;
     let rest = rest_pose(&rec.frames, a.rest_frame)?;
     let mut out: Box<dyn Write> = if a.out.as_os_str() == "-" {
         Box::new(std::io::stdout().lock())
@@ -174,7 +213,7 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
 }
 
 pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
-    let rec = load(&a.recording)?;
+    let rec = load(&a.recording, a.session)?;
     let Some(rest) = rest_pose(&rec.frames, a.rest_frame)? else {
         bail!("{}: no frame has a jaw pose (both markers tracked), nothing to plot", a.recording.display());
     };

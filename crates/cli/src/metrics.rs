@@ -6,7 +6,7 @@
 //! The recording is read as `export` and `plot` read it (sequence order, displacements from the
 //! rest position); frames without a jaw pose are skipped and counted.
 
-use crate::export::{load, rest_pose};
+use crate::export::{SessionArg, load, rest_pose};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::metrics::{frontal, sagittal};
@@ -21,6 +21,8 @@ use std::path::{Path, PathBuf};
 pub(crate) struct MetricsArgs {
     /// The recording (JSON lines).
     recording: PathBuf,
+    #[command(flatten)]
+    session: SessionArg,
     /// The incisal point X,Y,Z in the mandible marker's frame (mm); default: the standard
     /// harness mounting's.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
@@ -51,7 +53,7 @@ fn parse_point(s: &str) -> Result<Point3<f64>, String> {
 /// Runs `jawtrack metrics`.
 pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     let name = a.recording.display();
-    let rec = load(&a.recording)?;
+    let rec = load(&a.recording, a.session)?;
     let Some(rest) = rest_pose(&rec.frames, a.rest_frame)? else {
         bail!("{name}: no frame has a jaw pose (both markers tracked), nothing to measure");
     };

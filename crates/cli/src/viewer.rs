@@ -1,7 +1,7 @@
 //! `jawtrack view` and the viewer flags `receive --serve` shares: a recording replayed in the
 //! web viewer (`jawtrack_viewer`), served until Ctrl-C or `--duration`.
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use jawtrack_viewer::{LiveServer, LiveState, ViewerOptions};
 use std::net::SocketAddr;
@@ -39,6 +39,8 @@ impl ViewerArgs {
 pub(crate) struct ViewArgs {
     /// The recording to replay (JSON lines).
     recording: PathBuf,
+    #[command(flatten)]
+    session: crate::export::SessionArg,
     /// Address to serve the page at.
     #[arg(long, default_value = "127.0.0.1:8080")]
     serve: SocketAddr,
@@ -62,13 +64,7 @@ pub(crate) fn warn_if_exposed(addr: SocketAddr) {
 
 pub(crate) fn view(a: &ViewArgs) -> Result<()> {
     warn_if_exposed(a.serve);
-    let rec = jawtrack_recording::open(&a.recording)?;
-    for (line, why) in &rec.skipped {
-        eprintln!("warning: {} line {line} skipped: {why}", a.recording.display());
-    }
-    if rec.frames.is_empty() {
-        bail!("{} holds no frames", a.recording.display());
-    }
+    let rec = crate::export::load(&a.recording, a.session)?;
     let header = rec.header.as_ref().and_then(|h| serde_json::to_value(h).ok());
     let state = Arc::new(LiveState::replay(&a.viewer.options(), header, &rec.frames)?);
     LiveServer::start(a.serve, state)?;

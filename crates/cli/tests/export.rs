@@ -147,3 +147,38 @@ fn export_and_plot_refuse_what_they_cannot_use() {
     let o = jawtrack(&["metrics", absurd.to_str().expect("utf-8")]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("implausible pose"), "says why the line was skipped");
 }
+
+#[test]
+fn two_sessions_in_one_file_are_never_mixed() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("received.jsonl");
+    let pose = |y: f64| format!("[1,0,0,0,0,1,0,{y},0,0,1,0,0,0,0,1]");
+    let line = |session: &str, frame: u32, y: f64| {
+        format!(
+            "{{\"frame\":{frame},\"session\":\"{session}\",\"t\":{frame},\"maxilla\":null,\"mandible\":null,\"maxilla_from_mandible\":{}}}\n",
+            pose(y)
+        )
+    };
+    let (a, b) = ("00000000000000aa", "00000000000000bb");
+    let text = [line(a, 0, 40.0), line(b, 0, 10.0), line(a, 1, 45.0), line(b, 1, 12.0), line(a, 2, 50.0)].concat();
+    std::fs::write(&file, text).expect("write");
+    let file = file.to_str().expect("utf-8");
+    let check = |o: Output, needle: &str| {
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!o.status.success() && e.contains(needle) && !e.contains("panicked"), "wanted '{needle}': {e}");
+    };
+    for command in [&["metrics", file][..], &["export", file, "--csv"], &["plot", file, "--out", "/tmp/never"]] {
+        check(jawtrack(command), "holds 2 sessions");
+    }
+    let one = ok(&jawtrack(&["export", file, "--session", a, "--jsonl"]));
+    let frames: Vec<serde_json::Value> = one
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("json"))
+        .filter(|v| v.get("frame").is_some())
+        .collect();
+    assert_eq!(frames.len(), 3, "session aa's three frames");
+    assert!(frames.iter().all(|f| f["session"] == a));
+    assert!(jawtrack(&["metrics", file, "--session", b]).status.success());
+    check(jawtrack(&["metrics", file, "--session", "00000000000000cc"]), "no frame of session 00000000000000cc");
+    check(jawtrack(&["metrics", file, "--session", "xyz"]), "16 hex digits");
+}
