@@ -11,6 +11,7 @@
 #                                           `swift build` and `swift test` of JawTrackKit, and
 #                                           check that the tests ran every library call it makes
 #   bash ios/swift-on-linux.sh lines        the app's hand-written Swift: JawTrackKit vs the Apple layer
+#   bash ios/swift-on-linux.sh remove       unmount anything left inside the root, then delete it
 #
 # Needs root (debootstrap, chroot, mount) and the network the first time (about 3 minutes and
 # 3.3 GB). JAWTRACK_SWIFT_ROOT overrides where the root lives. Every failure names its step.
@@ -65,6 +66,22 @@ if [ "${1:-}" = lines ]; then
 fi
 
 [ "$(id -u)" -eq 0 ] || fail "needs root (debootstrap, chroot and mount); run it with sudo"
+
+if [ "${1:-}" = remove ]; then
+  step="removing the root $root"
+  # Never delete through a mount: a bind of the repository inside would take the sources with it.
+  for dir in "$root/repo/target/swift" "$root/repo" "$root/proc"; do
+    if mountpoint -q "$dir"; then
+      umount "$dir" || umount -l "$dir" || fail "cannot unmount $dir; not deleting"
+    fi
+  done
+  if grep -q " $root/" /proc/mounts; then
+    fail "something is still mounted under $root; not deleting"
+  fi
+  rm -rf "$root" "$root.partial"
+  step=done
+  exit 0
+fi
 
 setup() {
   if [ -f "$root/.jawtrack-ready" ]; then
@@ -178,7 +195,7 @@ case "${1:-}" in
     lines_split
     ;;
   *)
-    fail "usage: bash ios/swift-on-linux.sh setup | run CMD... | test | lines"
+    fail "usage: bash ios/swift-on-linux.sh setup | run CMD... | test | lines | remove"
     ;;
 esac
 step=done
