@@ -134,8 +134,7 @@ fn dynamic_frames(
     lower: &Arch,
     posed: &[PosedFrame],
 ) -> Result<(Vec<PosedFrame>, Vec<Value>, Value)> {
-    let options =
-        DynamicsOptions { mass_kg: a.mass, natural_frequency_hz: a.spring_hz, dt_s: a.dt, ..Default::default() };
+    let options = dynamics_options(a);
     let target: Vec<(f64, Pose)> = posed.iter().map(|&(_, t, p)| (t, p)).collect();
     let bar = if a.quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar("simulating", posed.len()) };
     let path = dynamics::resolve_path(upper, lower, &target, &options, &mut |done, _| bar.set_position(done as u64))
@@ -184,7 +183,40 @@ impl PoseSource {
     }
 }
 
+/// The dynamic mode's options from the flags.
+fn dynamics_options(a: &ContactsArgs) -> DynamicsOptions {
+    DynamicsOptions { mass_kg: a.mass, natural_frequency_hz: a.spring_hz, dt_s: a.dt, ..Default::default() }
+}
+
+/// The checks that need no input file, made before anything is read or indexed (indexing two
+/// arches takes seconds to tens of seconds): the output folder and the dynamic mode's options,
+/// each refusal naming the flag to change.
+fn check_options(a: &ContactsArgs) -> Result<()> {
+    if a.out.exists() && !a.out.is_dir() {
+        bail!("--out {}: exists and is not a folder (contacts writes a folder of results)", a.out.display());
+    }
+    if a.mode == Mode::Dynamic {
+        let options = dynamics_options(a);
+        if let Err(e) = options.validate() {
+            // The flag whose value alone fails, with the others at their defaults; else the pair.
+            let d = DynamicsOptions::default();
+            let flag = if (DynamicsOptions { mass_kg: a.mass, ..d }).validate().is_err() {
+                "--mass"
+            } else if (DynamicsOptions { natural_frequency_hz: a.spring_hz, ..d }).validate().is_err() {
+                "--spring-hz"
+            } else if (DynamicsOptions { dt_s: a.dt, ..d }).validate().is_err() {
+                "--dt"
+            } else {
+                "--dt with --spring-hz"
+            };
+            bail!("{flag}: {e}");
+        }
+    }
+    Ok(())
+}
+
 pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
+    check_options(a)?;
     let settings = ContactSettings { threshold_mm: a.threshold, max_depth_mm: a.max_depth };
     if let Err(e) = settings.validate() {
         let (lo, hi) = THRESHOLD_RANGE_MM;

@@ -419,3 +419,21 @@ fn dynamic_mode_slides_the_sphere_out_of_the_plane_and_reports_the_force() {
         correction["shift_mm"].as_array().expect("3-vector").iter().map(|x| f(x).powi(2)).sum::<f64>().sqrt();
     assert!((shift - 0.2).abs() < 0.01, "{correction}");
 }
+
+#[test]
+fn options_are_refused_before_any_input_is_read() {
+    // The inputs do not exist: a refusal naming the option shows it came before reading them
+    // (and before the seconds of indexing that follow).
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("results.txt");
+    std::fs::write(&file, "not a folder").expect("write");
+    let base = ["contacts", "--maxilla", "/nonexistent/upper.stl", "--mandible", "/nonexistent/lower.stl"];
+    let with = |extra: &[&str]| jawtrack(&[&base[..], &["--poses", "/nonexistent/poses.jsonl"], extra].concat());
+    refused(&with(&["--out", file.to_str().expect("utf-8")]), "--out");
+    let out = dir.path().join("out");
+    let out = out.to_str().expect("utf-8");
+    refused(&with(&["--out", out, "--mode", "dynamic", "--mass", "0"]), "--mass: ");
+    refused(&with(&["--out", out, "--mode", "dynamic", "--dt", "10"]), "--dt: ");
+    refused(&with(&["--out", out, "--mode", "dynamic", "--spring-hz", "-1"]), "--spring-hz: ");
+    assert!(!Path::new(out).exists(), "nothing written");
+}
