@@ -6,7 +6,7 @@
 use crate::frames::{FrameSource, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
+use jawtrack_apriltag::{Detector, DetectorConfig};
 use jawtrack_calibration::{Calibration, CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
@@ -67,19 +67,32 @@ pub(crate) fn detect_views(
     let detector = Detector::new(DetectorConfig { linear_edges, ..DetectorConfig::default() })?;
     let bar = crate::progress::bar("detecting", source.len().map(|n| n as u64), "frames");
     let mut frames = Vec::new();
+    let mut unreadable = 0;
     while let Some(frame) = source.next_frame()? {
-        let view =
-            ImageView::new(&frame.luma, frame.width, frame.height, frame.width).with_context(|| frame.name.clone())?;
+        bar.inc(1);
+        let image = match frame.image {
+            Ok(image) => image,
+            Err(why) => {
+                unreadable += 1;
+                bar.suspend(|| eprintln!("warning: {}: {why}; skipped", frame.name));
+                continue;
+            }
+        };
         let tags = detector
-            .detect(&view)?
+            .detect(&image.view().with_context(|| frame.name.clone())?)?
             .into_iter()
             .filter(|d| marker.find_tag(d.id).is_some())
             .map(|d| SeenTag { id: d.id, corners: d.corners })
             .collect();
         frames.push(CalibrationFrame { camera: *camera, tags });
-        bar.inc(1);
+    }
+    if unreadable > 0 {
+        eprintln!("warning: {unreadable} frames could not be read and were left out");
     }
     bar.finish_and_clear();
+    if frames.is_empty() {
+        bail!("none of the frames could be read: nothing to calibrate from");
+    }
     Ok(frames)
 }
 

@@ -2,12 +2,13 @@
 //! a video decoded to luma by ffmpeg. Shared by `jawtrack track` and `jawtrack calibrate-marker`.
 
 use anyhow::{Context, Result, bail};
-use std::io::Read;
+use jawtrack_apriltag::{DetectError, ImageView};
+use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 /// The frames of a video (`--video`) or of image files and folders, `fps` (default 30 for
-/// images, the video's own rate) giving each frame's time.
+/// images) giving each image's time; a video's frames carry their own times.
 pub(crate) fn open_frames(video: Option<&Path>, images: &[PathBuf], fps: Option<f64>) -> Result<Box<dyn FrameSource>> {
     Ok(match video {
         Some(v) => Box::new(VideoFrames::open(v, fps)?),
@@ -15,20 +16,33 @@ pub(crate) fn open_frames(video: Option<&Path>, images: &[PathBuf], fps: Option<
     })
 }
 
-/// A decoded frame: 8-bit luma, tightly packed.
+/// A frame as it came: its name, its time, and its pixels or why there are none.
 pub(crate) struct Frame {
     pub name: String,
     pub t: f64,
+    /// The decoded image, or why it could not be decoded (the run goes on without it).
+    pub image: Result<Luma, String>,
+}
+
+/// 8-bit luma, tightly packed.
+pub(crate) struct Luma {
     pub width: usize,
     pub height: usize,
-    pub luma: Vec<u8>,
+    pub pixels: Vec<u8>,
+}
+
+impl Luma {
+    /// The image as the detector reads it.
+    pub(crate) fn view(&self) -> Result<ImageView<'_>, DetectError> {
+        ImageView::new(&self.pixels, self.width, self.height, self.width)
+    }
 }
 
 /// Where frames come from.
 pub(crate) trait FrameSource {
     /// How many frames, when known.
     fn len(&self) -> Option<usize>;
-    /// The next frame, or `None` at the end.
+    /// The next frame, or `None` at the end; an error only when nothing more can be read.
     fn next_frame(&mut self) -> Result<Option<Frame>>;
 }
 
@@ -45,26 +59,35 @@ impl FrameSource for ImageFrames {
 
     fn next_frame(&mut self) -> Result<Option<Frame>> {
         let Some(path) = self.files.get(self.next) else { return Ok(None) };
-        let img = image::open(path).with_context(|| format!("reading {}", path.display()))?.to_luma8();
-        let frame = Frame {
-            name: path.display().to_string(),
-            t: self.next as f64 / self.fps,
-            width: img.width() as usize,
-            height: img.height() as usize,
-            luma: img.into_raw(),
-        };
+        let image = image::open(path)
+            .map(|img| {
+                let img = img.to_luma8();
+                Luma { width: img.width() as usize, height: img.height() as usize, pixels: img.into_raw() }
+            })
+            .map_err(|e| e.to_string());
+        let frame = Frame { name: path.display().to_string(), t: self.next as f64 / self.fps, image };
         self.next += 1;
         Ok(Some(frame))
     }
 }
 
-/// A video decoded to luma by an ffmpeg child process.
+/// A video decoded to luma by an ffmpeg child process. Frames are read as stored, not turned
+/// by the file's rotation flag: the camera's intrinsics describe the sensor's buffers. Each
+/// frame's time is its presentation time (so variable frame rates are timed right), which
+/// ffmpeg's `showinfo` filter reports on stderr as the frame passes.
 struct VideoFrames {
     child: std::process::Child,
     stdout: std::process::ChildStdout,
+    /// Presentation times (s) from the stderr reader, one per frame, in output order.
+    times: std::sync::mpsc::Receiver<f64>,
+    /// ffmpeg's other stderr lines, for the error message if it fails.
+    log: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
     width: usize,
     height: usize,
-    fps: f64,
+    /// `--fps`: times `index / fps` instead of the stored ones.
+    fps: Option<f64>,
+    /// The first frame's presentation time: times count from the first frame.
+    start: Option<f64>,
     frames: Option<usize>,
     next: usize,
     name: String,
@@ -77,7 +100,7 @@ impl VideoFrames {
         }
         let probe = Command::new("ffprobe")
             .args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
-            .arg("stream=width,height,avg_frame_rate,nb_frames")
+            .arg("stream=width,height,nb_frames:stream_tags=rotate:stream_side_data=rotation")
             .args(["-of", "json"])
             .arg(path)
             .output()
@@ -92,34 +115,87 @@ impl VideoFrames {
         let (Some(width), Some(height)) = (stream["width"].as_u64(), stream["height"].as_u64()) else {
             bail!("{} has no video stream", path.display());
         };
-        let rate = stream["avg_frame_rate"].as_str().and_then(|r| {
-            let (n, d) = r.split_once('/')?;
-            let (n, d): (f64, f64) = (n.parse().ok()?, d.parse().ok()?);
-            (n > 0.0 && d > 0.0).then(|| n / d)
-        });
-        let Some(fps) = fps.or(rate) else {
-            bail!("{}: the video does not say its frame rate; give --fps", path.display());
-        };
+        if let Some(degrees) = rotation(stream).filter(|d| d.rem_euclid(360.0) != 0.0) {
+            eprintln!(
+                "note: {} is flagged to be shown turned {degrees}°; its frames are tracked as stored \
+                 ({width}×{height}), which is what --intrinsics must describe",
+                path.display()
+            );
+        }
         let frames = stream["nb_frames"].as_str().and_then(|n| n.parse().ok());
         let mut child = Command::new("ffmpeg")
-            .args(["-v", "error", "-nostdin", "-i"])
+            .args(["-hide_banner", "-nostats", "-nostdin", "-v", "info", "-noautorotate", "-i"])
             .arg(path)
+            .args(["-map", "0:v:0", "-vf", "showinfo", "-fps_mode", "passthrough"])
             .args(["-f", "rawvideo", "-pix_fmt", "gray", "-"])
             .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
             .spawn()
             .context("starting ffmpeg")?;
         let stdout = child.stdout.take().context("ffmpeg's output")?;
+        let stderr = child.stderr.take().context("ffmpeg's messages")?;
+        let (send, times) = std::sync::mpsc::channel();
+        let log = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let kept = log.clone();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+                match showinfo_time(&line) {
+                    // A frame without a readable time still gets its turn: NaN says so.
+                    Some(t) if send.send(t.unwrap_or(f64::NAN)).is_err() => break,
+                    Some(_) => {}
+                    None if !line.contains("Parsed_showinfo") => {
+                        if let Ok(mut log) = kept.lock() {
+                            log.push(line);
+                        }
+                    }
+                    None => {}
+                }
+            }
+        });
         Ok(VideoFrames {
             child,
             stdout,
+            times,
+            log,
             width: width as usize,
             height: height as usize,
             fps,
+            start: None,
             frames,
             next: 0,
             name: path.display().to_string(),
         })
     }
+
+    /// ffmpeg's last lines that are errors or warnings, for a failure's message.
+    fn complaint(&self) -> String {
+        let log = self.log.lock().map(|l| l.clone()).unwrap_or_default();
+        let bad: Vec<&String> =
+            log.iter().filter(|l| l.to_ascii_lowercase().contains("error") || l.contains("Invalid")).collect();
+        let lines = if bad.is_empty() { log.iter().rev().take(3).rev().collect() } else { bad };
+        lines.into_iter().map(String::as_str).collect::<Vec<_>>().join("; ")
+    }
+}
+
+/// The rotation a video stream is flagged with (degrees), from its display matrix or, in older
+/// files, its `rotate` tag.
+fn rotation(stream: &serde_json::Value) -> Option<f64> {
+    let side = stream["side_data_list"].as_array().into_iter().flatten().find_map(|d| d["rotation"].as_f64());
+    side.or_else(|| stream["tags"]["rotate"].as_str().and_then(|r| r.parse().ok()))
+}
+
+/// For a `showinfo` line describing a frame (`… n:   3 pts:   3000 pts_time:0.1 …`), its
+/// presentation time if readable; `None` for every other line (showinfo writes several per
+/// frame).
+fn showinfo_time(line: &str) -> Option<Option<f64>> {
+    if !(line.contains("Parsed_showinfo") && line.contains(" n:") && line.contains(" pts:")) {
+        return None;
+    }
+    let time = line
+        .split_once(" pts_time:")
+        .and_then(|(_, rest)| rest.split_whitespace().next()?.parse::<f64>().ok())
+        .filter(|t| t.is_finite());
+    Some(time)
 }
 
 impl FrameSource for VideoFrames {
@@ -128,10 +204,10 @@ impl FrameSource for VideoFrames {
     }
 
     fn next_frame(&mut self) -> Result<Option<Frame>> {
-        let mut luma = vec![0u8; self.width * self.height];
+        let mut pixels = vec![0u8; self.width * self.height];
         let mut filled = 0;
-        while filled < luma.len() {
-            match self.stdout.read(&mut luma[filled..]).context("reading ffmpeg's frames")? {
+        while filled < pixels.len() {
+            match self.stdout.read(&mut pixels[filled..]).context("reading ffmpeg's frames")? {
                 0 => break,
                 n => filled += n,
             }
@@ -139,20 +215,28 @@ impl FrameSource for VideoFrames {
         if filled == 0 {
             let status = self.child.wait().context("waiting for ffmpeg")?;
             if !status.success() {
-                bail!("ffmpeg failed decoding {} ({status})", self.name);
+                bail!(
+                    "ffmpeg failed decoding {} after {} frames ({status}): {}",
+                    self.name,
+                    self.next,
+                    self.complaint()
+                );
             }
             return Ok(None);
         }
-        if filled < luma.len() {
-            bail!("{}: frame {} is cut short ({filled} of {} bytes)", self.name, self.next, luma.len());
-        }
-        let frame = Frame {
-            name: format!("{}#{}", self.name, self.next),
-            t: self.next as f64 / self.fps,
-            width: self.width,
-            height: self.height,
-            luma,
+        // showinfo reports a frame before ffmpeg writes it, so its time is already sent.
+        let stored = self.times.recv().ok();
+        let t = match (self.fps, stored) {
+            (Some(fps), _) => self.next as f64 / fps,
+            (None, Some(pts)) if pts.is_finite() => pts - *self.start.get_or_insert(pts),
+            _ => bail!("{}: frame {} carries no time; give --fps to time frames by their index", self.name, self.next),
         };
+        let image = if filled < pixels.len() {
+            Err(format!("cut short ({filled} of {} bytes)", pixels.len()))
+        } else {
+            Ok(Luma { width: self.width, height: self.height, pixels })
+        };
+        let frame = Frame { name: format!("{}#{}", self.name, self.next), t, image };
         self.next += 1;
         Ok(Some(frame))
     }

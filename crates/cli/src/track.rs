@@ -6,10 +6,10 @@
 use crate::frames::open_frames;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_apriltag::{DetectorConfig, ImageView};
+use jawtrack_apriltag::DetectorConfig;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_recording::{RecordingHeader, RecordingWriter, create_file};
+use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -28,7 +28,8 @@ pub(crate) struct TrackArgs {
     /// `maxilla_scan_from_mandible_scan` to every line.
     #[arg(long)]
     registration: Option<PathBuf>,
-    /// Frame rate, for each frame's time `t` (s); default 30 for images, the video's own rate.
+    /// Frame rate, timing frame `i` at `i / fps` s; default 30 for images, while a video's
+    /// frames keep their own presentation times (right for variable frame rates too).
     #[arg(long)]
     fps: Option<f64>,
     /// Decimation for quad finding: 1, 1.5, 2, 3 or 4.
@@ -52,7 +53,8 @@ pub(crate) struct TrackArgs {
     out: PathBuf,
     #[command(flatten)]
     force: crate::output::ForceArgs,
-    /// A video file to track instead of images (needs ffmpeg and ffprobe on the PATH).
+    /// A video file to track instead of images (needs ffmpeg and ffprobe on the PATH). Frames
+    /// are read as stored, whatever rotation the file asks players to show them with.
     #[arg(long, conflicts_with = "frames")]
     video: Option<PathBuf>,
     /// Frames: image files (PNG, JPEG) or folders of them, taken in name order.
@@ -116,15 +118,33 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let mut summary = Summary::default();
     let mut index = 0;
     while let Some(frame) = source.next_frame()? {
-        let view =
-            ImageView::new(&frame.luma, frame.width, frame.height, frame.width).with_context(|| frame.name.clone())?;
-        let r = tracker.track(&view, &a.intrinsics, frame.t).with_context(|| frame.name.clone())?;
-        summary.add(&r);
-        out.append(&r.to_record(index, Some(&frame.name)))?;
+        // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
+        let tracked = frame.image.and_then(|image| {
+            let view = image.view().map_err(|e| e.to_string())?;
+            tracker.track(&view, &a.intrinsics, frame.t).map_err(|e| e.to_string())
+        });
+        let record = match tracked {
+            Ok(r) => {
+                summary.add(&r);
+                r.to_record(index, Some(&frame.name))
+            }
+            Err(why) => {
+                bar.suspend(|| summary.unreadable(&frame.name, &why));
+                FrameRecord::unreadable(index as u64, Some(&frame.name), frame.t)
+            }
+        };
+        out.append(&record)?;
         bar.inc(1);
         index += 1;
     }
     bar.finish_and_clear();
+    if summary.read == 0 {
+        bail!(
+            "none of the {index} frames could be read{}: nothing tracked ({} lists them, flagged `unreadable`)",
+            if index == 0 { "" } else { " or tracked" },
+            a.out.display()
+        );
+    }
     eprintln!("tracked {index} frames: {}; poses in {}", summary.describe(), a.out.display());
     for (id, seen, dropped) in tracker.mismatched_tags(5) {
         eprintln!(
@@ -139,6 +159,10 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
 /// Counts over a run, for the closing line.
 #[derive(Default)]
 struct Summary {
+    /// Frames tracked (readable).
+    read: usize,
+    /// Frames skipped as unreadable.
+    unreadable: usize,
     both: usize,
     flags: BTreeMap<String, usize>,
     detection_s: Vec<f64>,
@@ -146,6 +170,7 @@ struct Summary {
 
 impl Summary {
     fn add(&mut self, r: &FrameResult) {
+        self.read += 1;
         self.both += usize::from(r.maxilla_from_mandible.is_some());
         for f in &r.flags {
             *self.flags.entry(f.name()).or_default() += 1;
@@ -153,12 +178,27 @@ impl Summary {
         self.detection_s.push(r.timings.detection_s + r.timings.pose_s);
     }
 
+    /// Counts a skipped frame and says why, for the first few.
+    fn unreadable(&mut self, name: &str, why: &str) {
+        const SAID: usize = 10;
+        self.unreadable += 1;
+        if self.unreadable <= SAID {
+            eprintln!("warning: {name}: {why}; skipped (its line is flagged `unreadable`)");
+        } else if self.unreadable == SAID + 1 {
+            eprintln!("warning: more frames could not be read; the summary counts them");
+        }
+    }
+
     fn describe(&mut self) -> String {
         let flags: Vec<String> = self.flags.iter().map(|(k, v)| format!("{k} ×{v}")).collect();
         self.detection_s.sort_by(f64::total_cmp);
         let median = self.detection_s.get(self.detection_s.len() / 2).copied().unwrap_or(0.0);
         format!(
-            "jaw pose in {}; flags: {}; median {:.1} ms per frame",
+            "{}jaw pose in {}; flags: {}; median {:.1} ms per frame",
+            match self.unreadable {
+                0 => String::new(),
+                n => format!("{n} unreadable and skipped; "),
+            },
             self.both,
             if flags.is_empty() { "none".to_owned() } else { flags.join(", ") },
             median * 1e3

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::process::Command;
 mod common;
-use common::{jawtrack, refused, stderr};
+use common::{jawtrack, ok, refused, s, stderr};
 
 #[test]
 fn marker_writes_a_valid_file_with_the_computed_tag_size() {
@@ -219,9 +219,7 @@ fn track_with_a_registration_writes_the_scans_pose_and_names_a_bad_field() {
 
 #[test]
 fn track_reads_a_video_through_ffmpeg_as_it_reads_the_frames() {
-    let have = |tool: &str| Command::new(tool).arg("-version").output().is_ok_and(|o| o.status.success());
-    if !(have("ffmpeg") && have("ffprobe")) {
-        let _ = std::io::Write::write_all(&mut std::io::stderr(), b"SKIPPED: ffmpeg/ffprobe not installed\n");
+    if !have_ffmpeg() {
         return;
     }
     let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p");
@@ -237,7 +235,9 @@ fn track_reads_a_video_through_ffmpeg_as_it_reads_the_frames() {
     assert!(made.status.success(), "{}", stderr(&made));
     let from_video = dir.path().join("v.jsonl");
     let from_images = dir.path().join("i.jsonl");
-    let args = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--out"];
+    // Matroska keeps milliseconds: --fps times both by index, so that the motion model sees
+    // the same times.
+    let args = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--fps", "30", "--out"];
     let o = jawtrack(
         &[&args[..], &[from_video.to_str().expect("utf-8"), "--video", video.to_str().expect("utf-8")]].concat(),
     );
@@ -256,6 +256,125 @@ fn track_reads_a_video_through_ffmpeg_as_it_reads_the_frames() {
     assert_eq!(v.len(), 5);
     assert_eq!(v, i, "the video's frames track exactly as the PNGs");
     refused(&jawtrack(&[&args[..], &["x.jsonl", "--video", "/nonexistent.mp4"]].concat()), "/nonexistent.mp4");
+}
+
+/// Whether ffmpeg and ffprobe run; says the test skipped if not.
+fn have_ffmpeg() -> bool {
+    let have = |tool: &str| Command::new(tool).arg("-version").output().is_ok_and(|o| o.status.success());
+    let both = have("ffmpeg") && have("ffprobe");
+    if !both {
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), b"SKIPPED: ffmpeg/ffprobe not installed\n");
+    }
+    both
+}
+
+/// Runs ffmpeg with `args`, asserting it succeeded.
+fn ffmpeg(args: &[&str]) {
+    let o = Command::new("ffmpeg").args(["-v", "error", "-y"]).args(args).output().expect("ffmpeg runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Each frame line's time and jaw pose.
+fn times_and_poses(p: &Path) -> Vec<(f64, serde_json::Value)> {
+    std::fs::read_to_string(p)
+        .expect("poses")
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            (v["t"].as_f64().expect("t"), v["maxilla_from_mandible"].clone())
+        })
+        .collect()
+}
+
+#[test]
+fn a_portrait_video_is_tracked_as_stored_and_timed_by_its_own_clock() {
+    if !have_ffmpeg() {
+        return;
+    }
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (plain, turned, vfr) = (dir.path().join("h.mkv"), dir.path().join("turned.mov"), dir.path().join("vfr.mkv"));
+    let pngs = format!("{set}/frame_%04d.png");
+    ffmpeg(&["-framerate", "30", "-i", &pngs, "-c:v", "ffv1", "-pix_fmt", "gray", s(&plain)]);
+    // A phone held upright stores landscape buffers and a 90° display rotation.
+    ffmpeg(&["-i", s(&plain), "-c", "copy", "-metadata:s:v:0", "rotate=90", s(&turned)]);
+    // Frames 3 and 4 come 100 ms late, as a variable-rate phone video's may.
+    ffmpeg(&[
+        "-framerate",
+        "30",
+        "-i",
+        &pngs,
+        "-vf",
+        "setpts='N/(30*TB)+if(gte(N,3),0.1/TB,0)'",
+        "-fps_mode",
+        "vfr",
+        "-c:v",
+        "ffv1",
+        "-pix_fmt",
+        "gray",
+        s(&vfr),
+    ]);
+    // --fps times frames by index, as the images are timed, so the motion model sees equal times.
+    let args = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--fps", "30", "--out"];
+    let images = dir.path().join("i.jsonl");
+    ok(&jawtrack(&[&args[..], &[s(&images), set]].concat()));
+    let from_images = times_and_poses(&images);
+    assert!(from_images.iter().all(|(_, p)| p.is_array()), "every PNG gives a jaw pose");
+
+    let out = dir.path().join("turned.jsonl");
+    let o = jawtrack(&[&args[..], &[s(&out), "--video", s(&turned)]].concat());
+    assert!(stderr(&o).contains("turned 90°") && stderr(&o).contains("1920×1080"), "{}", stderr(&o));
+    let poses: Vec<_> = times_and_poses(&out).into_iter().map(|(_, p)| p).collect();
+    assert_eq!(poses, from_images.iter().map(|(_, p)| p.clone()).collect::<Vec<_>>(), "read as stored");
+
+    let out = dir.path().join("vfr.jsonl");
+    let stored = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--out"];
+    ok(&jawtrack(&[&stored[..], &[s(&out), "--video", s(&vfr)]].concat()));
+    let times: Vec<f64> = times_and_poses(&out).into_iter().map(|(t, _)| t).collect();
+    let expected = [0.0, 1.0 / 30.0, 2.0 / 30.0, 0.2, 0.2 + 1.0 / 30.0];
+    assert_eq!(times.len(), expected.len());
+    for (t, e) in times.iter().zip(expected) {
+        // Matroska keeps milliseconds.
+        assert!((t - e).abs() < 1e-3, "frame times {times:?}, wanted {expected:?}");
+    }
+}
+
+#[test]
+fn an_unreadable_frame_is_skipped_and_flagged_and_a_run_with_none_readable_fails() {
+    let set = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p"));
+    let dir = tempfile::tempdir().expect("temp dir");
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).expect("frames dir");
+    for i in 1..=3 {
+        let name = format!("frame_000{i}.png");
+        std::fs::copy(set.join(&name), frames.join(&name)).expect("copy");
+    }
+    std::fs::write(frames.join("frame_0002.png"), b"not a PNG").expect("damage one");
+    let out = dir.path().join("o.jsonl");
+    let o = jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", s(&out), s(&frames)]);
+    assert!(o.status.success(), "one bad frame does not end the run: {}", stderr(&o));
+    assert!(stderr(&o).contains("frame_0002.png") && stderr(&o).contains("1 unreadable"), "{}", stderr(&o));
+    let lines: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+        .expect("written")
+        .lines()
+        .skip(1)
+        .map(|l| serde_json::from_str(l).expect("json"))
+        .collect();
+    assert_eq!(lines.len(), 3, "every frame keeps its line");
+    assert_eq!(lines[1]["flags"], serde_json::json!(["unreadable"]));
+    assert!(lines[1]["maxilla_from_mandible"].is_null());
+    assert!(lines[0]["maxilla_from_mandible"].is_array() && lines[2]["maxilla_from_mandible"].is_array());
+    let csv = dir.path().join("o.csv");
+    let o = jawtrack(&["export", s(&out), "--csv", "--out", s(&csv)]);
+    assert!(stderr(&o).contains("exported 3 frames"), "{}", stderr(&o));
+
+    let bad = dir.path().join("bad");
+    std::fs::create_dir(&bad).expect("dir");
+    std::fs::write(bad.join("a.png"), b"not a PNG").expect("bad frame");
+    let o =
+        jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", s(&dir.path().join("b.jsonl")), s(&bad)]);
+    refused(&o, "none of the 1 frames could be read");
 }
 
 /// Mean (translation mm, rotation °) error of `jawtrack track`'s jaw poses against a fixture's truth.

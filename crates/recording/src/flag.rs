@@ -18,12 +18,15 @@ pub enum Flag {
     HighReprojectionError(BodyKind),
     /// Some of a body's tags disagreed with the rest and were dropped.
     RejectedTags(BodyKind),
+    /// The frame could not be decoded or tracked (a damaged image file, a frame of another
+    /// size): it was skipped, and its line holds no pose.
+    Unreadable,
 }
 
 impl Flag {
     /// Every flag, in the order of their datagram bits (`docs/wire.md`): a flag added later
     /// goes at the end.
-    pub const ALL: [Flag; 11] = [
+    pub const ALL: [Flag; 12] = [
         Flag::NoTags,
         Flag::Lost(BodyKind::Maxilla),
         Flag::Lost(BodyKind::Mandible),
@@ -35,6 +38,7 @@ impl Flag {
         Flag::HighReprojectionError(BodyKind::Mandible),
         Flag::RejectedTags(BodyKind::Maxilla),
         Flag::RejectedTags(BodyKind::Mandible),
+        Flag::Unreadable,
     ];
 
     /// A short machine-readable name, e.g. `mandible:lost`.
@@ -46,6 +50,7 @@ impl Flag {
             Flag::Ambiguous(b) => format!("{b}:ambiguous"),
             Flag::HighReprojectionError(b) => format!("{b}:high_reprojection_error"),
             Flag::RejectedTags(b) => format!("{b}:rejected_tags"),
+            Flag::Unreadable => "unreadable".into(),
         }
     }
 

@@ -176,6 +176,26 @@ pub struct FrameRecord {
 }
 
 impl FrameRecord {
+    /// The line of a frame that could not be decoded or tracked: it keeps the frame's place,
+    /// name and time, holds no pose, and is flagged [`Flag::Unreadable`](crate::Flag::Unreadable).
+    pub fn unreadable(frame: u64, path: Option<&str>, t: f64) -> FrameRecord {
+        FrameRecord {
+            frame,
+            session: None,
+            path: path.map(str::to_owned),
+            t,
+            maxilla: None,
+            mandible: None,
+            maxilla_from_mandible: None,
+            maxilla_scan_from_mandible_scan: None,
+            flags: vec![crate::Flag::Unreadable.name()],
+            searched: None,
+            timings_s: None,
+            seq: None,
+            received_unix_s: None,
+        }
+    }
+
     /// The record as its JSON line (without the newline).
     pub fn to_line(&self) -> String {
         serde_json::to_string(self).unwrap_or_else(|e| unreachable!("a frame record always serialises: {e}"))
