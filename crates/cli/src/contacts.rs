@@ -5,8 +5,10 @@
 //!
 //! Where the pose comes from: with `--registration`, from each frame's `maxilla_from_mandible`
 //! through the registration; without, from the frames' recorded `maxilla_scan_from_mandible_scan`
-//! when the recording was tracked with a registration, else `maxilla_from_mandible` is taken
-//! as the scan pose itself (scans exported in occlusion checked with an identity poses file).
+//! when the recording was tracked with a registration. A poses file without a recording header
+//! (written by hand, e.g. an identity pose for scans exported in occlusion) has its
+//! `maxilla_from_mandible` taken as the scan pose itself; a tracked recording without scan poses
+//! is refused, as its poses are the markers'.
 //! Frames without the pose are skipped and counted.
 //!
 //! Outputs in `--out`: `contacts.jsonl` (a header line, then one line per frame, flushed as
@@ -234,6 +236,14 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         PoseSource::Direct if rec.frames.iter().any(|f| f.maxilla_scan_from_mandible_scan.is_some()) => {
             PoseSource::Recorded
         }
+        // A tracked recording (it has a header) holds marker poses: taken as scan poses they
+        // put the arches tens of millimetres apart and report "no contact" as a finding.
+        PoseSource::Direct if rec.header.is_some() => bail!(
+            "{}: its poses place the mandible's marker in the maxilla's marker, not the scans in \
+             occlusion; give --registration FILE (from `jawtrack register`), or track with \
+             --registration so that every frame carries maxilla_scan_from_mandible_scan",
+            a.poses.display()
+        ),
         s => s,
     };
     let with_pose: Vec<PosedFrame> =
@@ -366,7 +376,14 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
             say!("deepest penetration {:.3} mm at frame {} (t {:.3} s)", d.depth_mm, d.frame, d.t)
         }
         Some(d) => say!("no penetration; smallest gap {:.3} mm at frame {} (t {:.3} s)", -d.depth_mm, d.frame, d.t),
-        None => say!("no contact within {t} mm"),
+        None => {
+            say!("no contact within {t} mm");
+            eprintln!(
+                "warning: the arches never came within {t} mm in any of the {checked} frames checked: a recording \
+                 that includes the bite always touches; check that the scans and the poses ({}) belong together",
+                source.describe()
+            );
+        }
     }
     say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), setup_ms);
     for p in &written {

@@ -175,9 +175,9 @@ fn moving_the_sphere_away_gives_decreasing_contact_then_none_and_frames_without_
     let upper = upper_stl(dir.path(), 100);
     let lower = lower_obj(dir.path(), 0.2, 60);
     let poses = dir.path().join("session.jsonl");
-    let header = jawtrack_recording::RecordingHeader::new("contacts test").to_line();
     let steps = [(0.0, Some(0.0)), (0.1, None), (0.2, Some(-0.1)), (0.3, Some(-0.2)), (0.4, None), (0.5, Some(-0.25))];
-    let mut text = vec![header];
+    // Scan poses written by hand: no recording header (a tracked recording's are the markers').
+    let mut text = vec![];
     text.extend(steps.iter().enumerate().map(|(k, (t, dz))| frame(k as u64, *t, *dz)));
     text.push(frame(6, 0.6, Some(-0.5)));
     std::fs::write(&poses, text.join("\n") + "\n").expect("write poses");
@@ -336,6 +336,40 @@ fn bad_input_is_refused_with_a_message_saying_what_is_wrong() {
     let reg = dir.path().join("reg.json");
     std::fs::write(&reg, "{\"version\":1}").expect("write");
     refused(&run(&upper, &lower, &poses, &["--registration", s(&reg)]), "reg.json");
+}
+
+#[test]
+fn a_tracked_recording_without_a_registration_is_refused_and_arches_that_never_meet_are_warned_of() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let upper = upper_stl(dir.path(), 20);
+    let lower = lower_obj(dir.path(), 0.2, 16);
+    // A tracked recording: its poses are the markers', 44 mm apart as on a patient.
+    let poses = dir.path().join("tracked.jsonl");
+    let header = jawtrack_recording::RecordingHeader::new("jawtrack track").to_line();
+    std::fs::write(&poses, header + "\n" + &frame(0, 0.0, Some(-44.0)) + "\n").expect("write");
+    let run = |poses: &Path, out: &str| {
+        jawtrack(&[
+            "contacts",
+            "--maxilla",
+            s(&upper),
+            "--mandible",
+            s(&lower),
+            "--poses",
+            s(poses),
+            "--out",
+            s(&dir.path().join(out)),
+        ])
+    };
+    let o = run(&poses, "refused");
+    refused(&o, "tracked.jsonl: its poses place the mandible's marker");
+    refused(&o, "--registration");
+    assert!(!dir.path().join("refused").exists(), "nothing written");
+    // Hand-written scan poses that keep the arches apart give no contact, and a warning.
+    let apart = dir.path().join("apart.jsonl");
+    std::fs::write(&apart, frame(0, 0.0, Some(-44.0)) + "\n").expect("write");
+    let o = run(&apart, "apart");
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(common::stderr(&o).contains("never came within 0.1 mm"), "{}", common::stderr(&o));
 }
 
 #[test]
