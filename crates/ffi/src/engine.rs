@@ -139,11 +139,10 @@ impl Engine {
         })
     }
 
+    /// Keeps the bodies' motion, the registration and the recent jaw poses: a settings change
+    /// mid-session must not make the next lone tag ambiguous.
     pub(crate) fn update_settings(&mut self, settings: Settings) -> Result<(), JawTrackError> {
-        let registration = self.tracker.registration().copied();
-        let mut tracker = Tracker::new(self.tracker.marker().clone(), settings.tracker_config()?)?;
-        tracker.set_registration(registration);
-        self.tracker = tracker;
+        self.tracker.set_config(settings.tracker_config()?)?;
         self.settings = settings;
         Ok(())
     }
@@ -334,5 +333,71 @@ pub fn intrinsics_from_camera_matrix(
 impl From<&CameraIntrinsics> for Intrinsics {
     fn from(c: &CameraIntrinsics) -> Self {
         Intrinsics { fx: c.fx, fy: c.fy, cx: c.cx, cy: c.cy, k1: c.k1, k2: c.k2 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::default_settings;
+    use jawtrack_apriltag::Detection;
+    use nalgebra::UnitQuaternion;
+
+    /// Noise-free detections of `ids` seen through `camera_from_body`.
+    fn detections(marker: &Marker, ids: &[u32], camera_from_body: &Pose, camera: &CameraIntrinsics) -> Vec<Detection> {
+        ids.iter()
+            .map(|&id| {
+                let (_, tag) = marker.find_tag(id).expect("marker tag");
+                let corners = tag.corners.map(|c| {
+                    let p = camera.project(&camera_from_body.transform_point(&Point3::from(c))).expect("in front");
+                    [p.x, p.y]
+                });
+                let center =
+                    [corners.iter().map(|c| c[0]).sum::<f64>() / 4.0, corners.iter().map(|c| c[1]).sum::<f64>() / 4.0];
+                Detection { id, hamming: 0, decision_margin: 100.0, center, corners, homography: [0.0; 9] }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn new_settings_keep_the_motion() {
+        let marker = Marker::default();
+        let camera = CameraIntrinsics::pinhole(1500.0, 1500.0, 959.5, 539.5);
+        let facing = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::PI)
+            * UnitQuaternion::from_scaled_axis(Vector3::new(0.25, 0.15, 0.0));
+        let maxilla = Pose::from_parts(facing, Vector3::new(2.0, -22.0, 100.0));
+        let mandible = Pose::from_parts(
+            facing * UnitQuaternion::from_scaled_axis(Vector3::new(0.2, 0.0, 0.0)),
+            Vector3::new(1.0, 22.0, 104.0),
+        );
+        let frame = |mandible_ids: &[u32]| {
+            let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+            d.extend(detections(&marker, mandible_ids, &mandible, &camera));
+            d
+        };
+        // Flags of a lone mandible tag's frame after two frames with three tags per body, with
+        // the settings changed in between or not (`None`).
+        let lone_frame = |lone: u32, new: Option<Settings>| {
+            let mut engine = Engine::new(marker.clone(), default_settings()).expect("engine");
+            for i in 0..2 {
+                engine.tracker.solve(frame(&[12, 13, 14]), &camera, f64::from(i) / 30.0);
+            }
+            if let Some(settings) = new {
+                engine.update_settings(settings).expect("valid settings");
+            }
+            engine.tracker.solve(frame(&[lone]), &camera, 2.0 / 30.0).flags
+        };
+        // A tag whose pose alone has a mirror solution: ambiguous on a fresh tracker.
+        let ambiguous = Flag::Ambiguous(BodyKind::Mandible);
+        let lone = (12..24)
+            .find(|&id| {
+                let mut engine = Engine::new(marker.clone(), default_settings()).expect("engine");
+                engine.tracker.solve(frame(&[id]), &camera, 0.0).flags.contains(&ambiguous)
+            })
+            .expect("some single tag is ambiguous");
+        let kept = lone_frame(lone, None);
+        assert!(!kept.contains(&ambiguous), "{kept:?}");
+        let changed = Settings { decimate: 1.0, threads: 2, region_search: false, smooth: true, ..default_settings() };
+        assert_eq!(lone_frame(lone, Some(changed)), kept, "the settings change lost the motion");
     }
 }

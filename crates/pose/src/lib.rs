@@ -14,7 +14,7 @@ mod rigid;
 pub mod stats;
 
 pub use camera::CameraIntrinsics;
-pub use pnp::{BodyPose, Observation, PnpError, PnpOptions, solve_pnp};
+pub use pnp::{Alternative, BodyPose, Observation, PnpError, PnpOptions, solve_pnp};
 pub use rigid::Pose;
 pub use stats::median;
 

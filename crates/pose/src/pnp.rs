@@ -8,12 +8,13 @@
 //! 1e-8 of the pose; the gradient does not). When tracking several tags, the previous pose
 //! refined to a good fit is taken at once (15 µs per body instead of 75). From three tags up,
 //! a tag the others disagree with (held out, it misses the pose they give by more than
-//! `outlier_px` and four times their own error) is dropped and the pose solved again. With a single tag the planar ambiguity is real: where the mirror
-//! solution is a minimum of its own it is returned beside the best
-//! ([`BodyPose::alternative`]) for the caller to settle with the other body or the previous
-//! frame — never silently flipped. Near head-on, one 10 mm tag at 100 mm fixes orientation
-//! only to tens of degrees at 0.3 px noise, and the covariance (a linearisation) understates
-//! that: a lone tag is a weak measurement whatever the solver.
+//! `outlier_px` and four times their own error) is dropped and the pose solved again. With a
+//! single tag the planar ambiguity is real: where the mirror solution is a minimum of its own
+//! it is returned beside the best, with its own fit and covariance ([`BodyPose::alternative`]),
+//! for the caller to settle with the other body or the previous frame — never silently flipped.
+//! Near head-on, one 10 mm tag at 100 mm fixes orientation only to tens of degrees at 0.3 px
+//! noise, and the covariance (a linearisation) understates that: a lone tag is a weak
+//! measurement whatever the solver.
 //!
 //! The covariance is that of a left perturbation of `camera_from_body` in the camera frame,
 //! (rotation vector [rad], translation [mm]), from the Gauss–Newton normal matrix scaled by the
@@ -77,8 +78,20 @@ pub struct BodyPose {
     pub tags: Vec<u32>,
     /// Tags dropped as inconsistent with the others.
     pub rejected_tags: Vec<u32>,
-    /// With a single tag: the other planar solution, refined, and its RMS error (px).
-    pub alternative: Option<(Pose, f64)>,
+    /// With a single tag: the other planar solution, refined.
+    pub alternative: Option<Alternative>,
+}
+
+/// A single tag's other planar solution, with its own fit and covariance: a caller that takes
+/// it must report its covariance, not the best solution's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Alternative {
+    /// Maps body points into the camera frame (mm).
+    pub camera_from_body: Pose,
+    /// Covariance at this pose, as [`BodyPose::covariance`].
+    pub covariance: Matrix6<f64>,
+    /// RMS reprojection error over the points used (px).
+    pub rms_px: f64,
 }
 
 /// Why no pose could be computed.
@@ -143,6 +156,11 @@ pub fn solve_pnp(
             continue;
         }
         let (pose, rms) = best;
+        let alternative = alternative.map(|(p, rms_px)| Alternative {
+            camera_from_body: Pose::from_isometry(p),
+            covariance: covariance(&points, &p, &focal, options),
+            rms_px,
+        });
         let covariance = covariance(&points, &pose, &focal, options);
         let mut tags: Vec<u32> = per_tag.iter().map(|t| t.0).collect();
         tags.sort_unstable();
@@ -153,7 +171,7 @@ pub fn solve_pnp(
             rms_px: rms,
             tags,
             rejected_tags: rejected,
-            alternative: alternative.map(|(p, r)| (Pose::from_isometry(p), r)),
+            alternative,
         });
     }
 }

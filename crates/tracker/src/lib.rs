@@ -9,13 +9,16 @@
 //! a detector's centre is the corners' homography at (0, 0), so it adds no information and
 //! would make the covariance overconfident.
 //!
-//! A body seen through one tag has two planar solutions; the tracker takes the one nearer its
-//! recent pose, else the one that keeps the other body's last relative pose, and otherwise
-//! flags the body `ambiguous` rather than guess silently. A tag that appears beside tags
-//! already tracked and fits the pose far worse than they do is dropped for that frame (a
-//! one-frame flicker, e.g. a misread glare patch). Quality flags say what went wrong in a
-//! frame; a frame without tags is a result with flags, not an error, and a pose that is not
-//! finite is never returned.
+//! A body seen through one tag has two planar solutions; the tracker takes the one that keeps
+//! the bodies' recent relative pose when the other body is solved (it follows the head and the
+//! phone), else the one nearer the body's own recent pose (both no older than
+//! [`TrackerConfig::prior_max_age_s`]), and otherwise flags the body `ambiguous` rather than
+//! guess silently; the pose, fit and covariance reported are those of the solution taken. A
+//! tag that appears beside tags already tracked and fits the pose far worse than they do is
+//! dropped for that frame (a one-frame flicker, e.g. a misread glare patch). Quality flags say
+//! what went wrong in a frame; a frame without tags is a result with flags, not an error, and
+//! a pose that is not finite is never returned. New settings ([`Tracker::set_config`]) keep
+//! the motion tracked so far.
 
 pub mod registration;
 pub mod roi;
@@ -66,7 +69,8 @@ pub struct TrackerConfig {
     /// A tag new to a tracked body is dropped when its RMS error (px) exceeds both this and
     /// three times that of the body's other tags.
     pub flicker_px: f64,
-    /// A body's earlier pose settles a single tag's ambiguity only if seen within this (s).
+    /// A body's earlier pose, or the bodies' earlier relative pose, settles a single tag's
+    /// ambiguity (and places the expected region) only if seen within this (s).
     pub prior_max_age_s: f64,
     /// Smooth `maxilla_from_mandible` (off by default: raw poses are the measurement).
     pub smoother: Option<SmootherConfig>,
@@ -245,24 +249,7 @@ fn slot(kind: BodyKind) -> usize {
 impl Tracker {
     /// A tracker for `marker` (nominal or calibrated).
     pub fn new(marker: Marker, config: TrackerConfig) -> Result<Self, TrackError> {
-        let c = &config;
-        let positive =
-            [("max_rms_px", c.max_rms_px), ("flicker_px", c.flicker_px), ("prior_max_age_s", c.prior_max_age_s)];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(TrackError::BadConfig(format!("{name} must be a positive number, got {v}")));
-            }
-        }
-        let s = &c.search;
-        if !(s.margin.is_finite() && s.margin >= 0.0 && s.min_margin_px.is_finite() && s.min_margin_px >= 0.0) {
-            return Err(TrackError::BadConfig(format!(
-                "search margin must be non-negative (margin {}, min_margin_px {})",
-                s.margin, s.min_margin_px
-            )));
-        }
-        if s.full_frame_every == 0 {
-            return Err(TrackError::BadConfig("full_frame_every must be at least 1".into()));
-        }
+        validate(&config)?;
         let corners = BodyKind::ALL.map(|kind| {
             marker
                 .body(kind)
@@ -291,6 +278,22 @@ impl Tracker {
     /// The settings.
     pub fn config(&self) -> &TrackerConfig {
         &self.config
+    }
+
+    /// Changes the settings and keeps the bodies' motion: their recent poses (the expected
+    /// region, the starts of their PnP, what settles a lone tag), the last relative pose and
+    /// the tag statistics. The smoother restarts only when its settings change, since its state
+    /// was built under the old ones. Settings refused leave the tracker as it was.
+    pub fn set_config(&mut self, config: TrackerConfig) -> Result<(), TrackError> {
+        validate(&config)?;
+        if config.detector != self.config.detector {
+            self.detector = Detector::new(config.detector)?;
+        }
+        if config.smoother != self.config.smoother {
+            self.smoother = config.smoother.map(Smoother::new);
+        }
+        self.config = config;
+        Ok(())
     }
 
     /// Sets (or clears) the registration to the tooth scans.
@@ -386,13 +389,19 @@ impl Tracker {
         self.marker.find_tag(id).map(|(k, _)| k)
     }
 
+    /// Whether a pose seen at `seen` (s) is recent enough to go by at `t`: the one age limit
+    /// for a body's own poses and for the bodies' relative pose.
+    fn recent(&self, seen: f64, t: f64) -> bool {
+        t - seen <= self.config.prior_max_age_s
+    }
+
     /// Where both markers are expected, when both are tracked and a full search is not due.
     fn expected_region(&self, frame: &ImageView<'_>, camera: &CameraIntrinsics, t: f64) -> Option<Roi> {
         let s = &self.config.search;
         if !s.roi || self.since_full + 1 >= s.full_frame_every {
             return None;
         }
-        let recent = |b: &BodyState| b.last().is_some_and(|l| t - l.0 <= self.config.prior_max_age_s);
+        let recent = |b: &BodyState| b.last().is_some_and(|l| self.recent(l.0, t));
         if !self.bodies.iter().all(|b| recent(b) && !b.tags.is_empty()) {
             return None;
         }
@@ -417,21 +426,24 @@ impl Tracker {
             solved[slot(kind)] = Some(self.drop_flicker(kind, pose, observations, camera, prior.as_ref()));
         }
         let mut bodies: [Option<BodyResult>; 2] = [None, None];
-        // Settle each lone tag by its own recent pose first, then by the other body.
+        // Settle each lone tag by the other body first: its pose this frame carries any motion
+        // of the head or the phone since the bodies were last seen together, which the lone
+        // body's own extrapolated pose does not; both are no older than `prior_max_age_s`.
         for kind in BodyKind::ALL {
             let Some((pose, rejected)) = solved[slot(kind)].clone() else { continue };
             let own = self.bodies[slot(kind)]
                 .last()
-                .filter(|l| t - l.0 <= self.config.prior_max_age_s)
+                .filter(|l| self.recent(l.0, t))
                 .and_then(|_| self.bodies[slot(kind)].predict(t));
-            let other = match (kind, &solved[1 - slot(kind)], self.last_relative) {
+            let relative = self.last_relative.filter(|r| self.recent(r.0, t));
+            let other = match (kind, &solved[1 - slot(kind)], relative) {
                 (_, Some((o, _)), Some((_, rel))) if o.alternative.is_none() => Some(match kind {
                     BodyKind::Maxilla => o.camera_from_body * rel.inverse(),
                     BodyKind::Mandible => o.camera_from_body * rel,
                 }),
                 _ => None,
             };
-            bodies[slot(kind)] = self.accept(kind, pose, rejected, own.or(other).as_ref(), &mut flags);
+            bodies[slot(kind)] = self.accept(kind, pose, rejected, other.or(own).as_ref(), &mut flags);
         }
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
@@ -551,18 +563,18 @@ impl Tracker {
         expected: Option<&Pose>,
         flags: &mut Vec<Flag>,
     ) -> Option<BodyResult> {
-        let mut chosen = pose.camera_from_body;
-        let mut rms = pose.rms_px;
+        let (mut chosen, mut rms, mut covariance) = (pose.camera_from_body, pose.rms_px, pose.covariance);
         if pose.tags.len() == 1 {
             flags.push(Flag::SingleTag(kind));
         }
-        if let Some((alternative, alt_rms)) = pose.alternative {
+        if let Some(alternative) = pose.alternative {
             match expected {
                 Some(p) => {
                     let angle = |q: &Pose| q.rotation().angle_to(&p.rotation());
-                    if angle(&alternative) < angle(&chosen) {
-                        chosen = alternative;
-                        rms = alt_rms;
+                    if angle(&alternative.camera_from_body) < angle(&chosen) {
+                        chosen = alternative.camera_from_body;
+                        rms = alternative.rms_px;
+                        covariance = alternative.covariance;
                     }
                 }
                 None => flags.push(Flag::Ambiguous(kind)),
@@ -574,15 +586,36 @@ impl Tracker {
         if rms > self.config.max_rms_px {
             flags.push(Flag::HighReprojectionError(kind));
         }
-        let finite = chosen.is_finite() && rms.is_finite() && pose.covariance.iter().all(|v| !v.is_nan());
+        let finite = chosen.is_finite() && rms.is_finite() && covariance.iter().all(|v| !v.is_nan());
         finite.then_some(BodyResult {
             camera_from_body: chosen,
             tags: pose.tags,
             rejected_tags,
             rms_px: rms,
-            covariance: pose.covariance,
+            covariance,
         })
     }
+}
+
+/// Refuses settings out of range.
+fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
+    let positive = [("max_rms_px", c.max_rms_px), ("flicker_px", c.flicker_px), ("prior_max_age_s", c.prior_max_age_s)];
+    for (name, v) in positive {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(TrackError::BadConfig(format!("{name} must be a positive number, got {v}")));
+        }
+    }
+    let s = &c.search;
+    if !(s.margin.is_finite() && s.margin >= 0.0 && s.min_margin_px.is_finite() && s.min_margin_px >= 0.0) {
+        return Err(TrackError::BadConfig(format!(
+            "search margin must be non-negative (margin {}, min_margin_px {})",
+            s.margin, s.min_margin_px
+        )));
+    }
+    if s.full_frame_every == 0 {
+        return Err(TrackError::BadConfig("full_frame_every must be at least 1".into()));
+    }
+    Ok(())
 }
 
 /// Whether a corner lies within `distance` (px) of an edge of `roi` that is not the frame's.

@@ -1,13 +1,15 @@
 //! The tracker through time: searching where the markers are expected on a rendered hinge
-//! sequence, dropping a tag that flickers in, settling a lone tag's mirror ambiguity, and the
+//! sequence, dropping a tag that flickers in, settling a lone tag's mirror ambiguity (and
+//! reporting the covariance of the solution taken), new settings that keep the motion, and the
 //! registration to the tooth scans.
 
 use jawtrack_apriltag::{Detection, ImageView};
 use jawtrack_marker::{BodyKind, Marker};
-use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_pose::pnp::{pose_jacobian, projection_jacobian};
+use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
 use jawtrack_synth::{Realism, SceneKind, SceneOptions, SynthConfig, Synthesizer};
-use jawtrack_tracker::{Flag, Registration, SearchConfig, Tracker, TrackerConfig};
-use nalgebra::{Point3, UnitQuaternion, Vector3};
+use jawtrack_tracker::{Flag, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector2, Vector3};
 
 #[test]
 fn steady_tracking_searches_only_the_expected_region() {
@@ -131,14 +133,15 @@ fn a_lone_tag_is_settled_by_history_or_the_other_body_and_flagged_otherwise() {
     let lone = (12..24).find(|&id| probe(id)).expect("some single tag is ambiguous");
     let close = |p: &Pose, q: &Pose| p.distance_to(q).0.to_degrees() < 0.01;
 
-    // Settled by the other body: both were seen together once, long ago.
+    // Settled beside the other body: both were seen together once, within the age limit (a
+    // stale relative pose settles nothing: `a_stale_relative_pose_does_not_settle_a_lone_tag`).
     let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
     let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
     d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
     tracker.solve(d, &camera, 0.0);
     let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
     d.extend(detections(&marker, &[lone], &mandible, &camera));
-    let r = tracker.solve(d, &camera, 10.0);
+    let r = tracker.solve(d, &camera, 0.4);
     assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
     assert!(r.flags.contains(&Flag::SingleTag(BodyKind::Mandible)));
     assert!(close(&r.mandible.expect("mandible").camera_from_body, &mandible));
@@ -200,4 +203,158 @@ fn a_tag_that_never_fits_the_marker_file_is_reported() {
     }
     assert_eq!(tracker.mismatched_tags(5), vec![(3, 8, 8)]);
     assert!(tracker.mismatched_tags(9).is_empty(), "too few frames to say");
+}
+
+/// A mandible tag whose pose alone has a mirror solution, and that mirror.
+fn lone_tag_with_mirror(marker: &Marker, mandible: &Pose, camera: &CameraIntrinsics) -> (u32, Pose) {
+    let tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    (12..24)
+        .find_map(|id| {
+            let d = detections(marker, &[id], mandible, camera);
+            let obs = tracker.observations(BodyKind::Mandible, &d);
+            let pose = solve_pnp(&obs, camera, None, &PnpOptions::default()).ok()?;
+            pose.alternative.map(|a| (id, a.camera_from_body))
+        })
+        .expect("some single tag has a mirror solution")
+}
+
+/// The covariance the solver gives a single tag's corners at `pose`: the inverse Gauss–Newton
+/// normal matrix times the assumed corner variance (four points are too few to estimate it).
+fn covariance_at(observations: &[Observation], camera: &CameraIntrinsics, pose: &Pose) -> Matrix6<f64> {
+    let focal = Vector2::new(camera.fx, camera.fy);
+    let mut h = Matrix6::zeros();
+    for o in observations {
+        let c = pose.transform_point(&o.body);
+        let j = pose_jacobian(&c, &projection_jacobian(&c, &focal).expect("in front"));
+        h += j.transpose() * j;
+    }
+    h.try_inverse().expect("invertible") * PnpOptions::default().corner_sigma_px.powi(2)
+}
+
+#[test]
+fn a_lone_tag_on_its_mirror_solution_reports_that_solutions_covariance() {
+    let marker = Marker::default();
+    let (camera, _, mandible) = scene();
+    let (lone, mirror) = lone_tag_with_mirror(&marker, &mandible, &camera);
+    // The body was last seen (through three tags) at the mirror pose, so the lone tag's frame
+    // takes the mirror over the better-fitting true pose.
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    tracker.solve(detections(&marker, &[12, 13, 14], &mirror, &camera), &camera, 0.0);
+    let d = detections(&marker, &[lone], &mandible, &camera);
+    let observations = tracker.observations(BodyKind::Mandible, &d);
+    let r = tracker.solve(d, &camera, 1.0 / 30.0);
+    assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
+    let body = r.mandible.expect("mandible");
+    assert!(body.camera_from_body.distance_to(&mirror).0 < 1e-6, "the mirror is taken");
+    let chosen = covariance_at(&observations, &camera, &body.camera_from_body);
+    let rejected = covariance_at(&observations, &camera, &mandible);
+    let gap = |a: &Matrix6<f64>, b: &Matrix6<f64>| (a - b).norm() / b.norm();
+    assert!(gap(&rejected, &chosen) > 0.01, "the two solutions' covariances differ");
+    assert!(
+        gap(&body.covariance, &chosen) < 1e-6,
+        "reported covariance is not the chosen pose's ({:.2e} off; {:.2e} off the rejected one's)",
+        gap(&body.covariance, &chosen),
+        gap(&body.covariance, &rejected)
+    );
+}
+
+#[test]
+fn a_lone_tag_follows_the_other_body_when_the_head_moves() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    let (lone, mirror) = lone_tag_with_mirror(&marker, &mandible, &camera);
+    // Both bodies are seen with the mandible at the lone tag's mirror pose; then the head turns
+    // so that the mandible sits at the true pose, and only the lone tag of it is seen. Its own
+    // last pose points to the mirror; the maxilla, seen this frame, points to the truth.
+    let head = mandible * mirror.inverse();
+    let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+    let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+    d.extend(detections(&marker, &[12, 13, 14], &mirror, &camera));
+    tracker.solve(d, &camera, 0.0);
+    let mut d = detections(&marker, &[0, 1, 2], &(head * maxilla), &camera);
+    d.extend(detections(&marker, &[lone], &mandible, &camera));
+    let r = tracker.solve(d, &camera, 0.1);
+    assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
+    let taken = r.mandible.expect("mandible").camera_from_body;
+    assert!(taken.distance_to(&mandible).0.to_degrees() < 0.01, "the head's motion is followed, not the old pose");
+}
+
+#[test]
+fn a_stale_relative_pose_does_not_settle_a_lone_tag() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    let (lone, _) = lone_tag_with_mirror(&marker, &mandible, &camera);
+    let limit = TrackerConfig::default().prior_max_age_s;
+    let lone_frame_after = |age: f64| {
+        let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
+        let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+        d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
+        tracker.solve(d, &camera, 0.0);
+        let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+        d.extend(detections(&marker, &[lone], &mandible, &camera));
+        tracker.solve(d, &camera, age)
+    };
+    // Long after both bodies were last seen together the relative pose no longer chooses.
+    let r = lone_frame_after(20.0 * limit);
+    assert!(r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "a stale pose chose: {:?}", r.flags);
+    // Within the limit it still does, and picks the true pose.
+    let r = lone_frame_after(0.8 * limit);
+    assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
+    assert!(r.mandible.expect("mandible").camera_from_body.distance_to(&mandible).0 < 1e-6);
+}
+
+#[test]
+fn new_settings_keep_the_motion() {
+    let marker = Marker::default();
+    let (camera, maxilla, mandible) = scene();
+    let (lone, _) = lone_tag_with_mirror(&marker, &mandible, &camera);
+    // The jaw opening a little each frame, so that the smoother lags behind it.
+    let opened =
+        |i: u32| mandible * Pose::from_axis_angle(Vector3::new(0.02 * f64::from(i), 0.0, 0.0), Vector3::zeros());
+    let frame = |i: u32, mandible_ids: &[u32]| {
+        let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
+        d.extend(detections(&marker, mandible_ids, &opened(i), &camera));
+        d
+    };
+    let smoothing = TrackerConfig { smoother: Some(SmootherConfig::default()), ..TrackerConfig::default() };
+    // Three frames with three tags per body, the settings changed (or not: `None`), then a
+    // frame with a lone mandible tag.
+    let lone_frame = |new: Option<TrackerConfig>| {
+        let mut tracker = Tracker::new(marker.clone(), smoothing).expect("tracker");
+        for i in 0..3 {
+            tracker.solve(frame(i, &[12, 13, 14]), &camera, f64::from(i) / 30.0);
+        }
+        if let Some(config) = new {
+            let bad = TrackerConfig { flicker_px: -1.0, ..config };
+            assert!(tracker.set_config(bad).is_err(), "a refused setting");
+            assert_eq!(tracker.config(), &smoothing, "a refused setting changes nothing");
+            tracker.set_config(config).expect("valid settings");
+            assert_eq!(tracker.config(), &config);
+        }
+        tracker.solve(frame(3, &[lone]), &camera, 3.0 / 30.0)
+    };
+    let raw = maxilla.inverse() * opened(3);
+    let unchanged = lone_frame(None);
+    assert!(!unchanged.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", unchanged.flags);
+    let smoothed = unchanged.maxilla_from_mandible.expect("both bodies");
+    assert!(smoothed.distance_to(&raw).0 > 1e-3, "the smoother lags");
+
+    // Other settings, the same smoother: the motion and the smoother's state are kept.
+    let mut other = smoothing;
+    other.detector.nthreads = 2;
+    other.pnp.max_iterations = 60;
+    other.search.roi = false;
+    other.max_rms_px = 3.0;
+    let r = lone_frame(Some(other));
+    assert_eq!(r.flags, unchanged.flags);
+    assert_eq!(r.mandible, unchanged.mandible);
+    assert_eq!(r.maxilla_from_mandible, Some(smoothed));
+
+    // A new smoother setting restarts the smoother (its first sample is passed through); the
+    // bodies' motion is still kept.
+    let retuned = TrackerConfig { smoother: Some(SmootherConfig { beta: 1.0, ..SmootherConfig::default() }), ..other };
+    let r = lone_frame(Some(retuned));
+    assert_eq!(r.flags, unchanged.flags);
+    let (angle, dist) = r.maxilla_from_mandible.expect("both bodies").distance_to(&raw);
+    assert!(angle < 1e-6 && dist < 1e-6, "{angle} rad {dist} mm");
 }
