@@ -18,8 +18,14 @@
 //! 3. A tag seen in fewer than `min_views` views is kept where the model (or the assembly
 //!    check) puts it and named, never invented.
 //!
+//! 4. The cameras' focal length is judged against the calibrated marker ([`check_focal`]): a
+//!    wrong one leaves every view fitting badly in the same way, which no tag placement fixes.
+//!
 //! The calibrated marker has the nominal file's schema; the tracker loads it as it is.
 
+mod focal;
+
+pub use focal::{FocalCheck, check_focal};
 use jawtrack_marker::{BodyKind, Marker, MarkerError, PrintError, Tag};
 use jawtrack_pose::lm::{self, Damping, damped};
 use jawtrack_pose::pnp::{perturb, pose_jacobian, projection_jacobian};
@@ -186,6 +192,9 @@ pub struct Calibration {
     pub marker: Marker,
     /// Bodies seen, in the marker's order.
     pub bodies: Vec<BodyCalibration>,
+    /// What the views say about the cameras' focal length ([`check_focal`]), when some view
+    /// shows three tags of a body.
+    pub focal: Option<FocalCheck>,
 }
 
 /// Why no calibration came out.
@@ -283,7 +292,9 @@ pub fn calibrate(
         return Err(CalibrationError::NoViews);
     }
     out.validate()?;
-    Ok(Calibration { marker: out, bodies })
+    // Judged with the calibrated marker: the nominal one's print errors blur the optimum.
+    let focal = check_focal(&out, frames);
+    Ok(Calibration { marker: out, bodies, focal })
 }
 
 /// A body's views: frames showing two of its tags or more, with poses from the model.

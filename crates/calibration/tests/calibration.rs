@@ -2,7 +2,7 @@
 //! must match the printed one (up to the turn of the whole body that views cannot tell), gross
 //! assembly errors must be found and named, and unseen tags kept nominal.
 
-use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
+use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate, check_focal};
 use jawtrack_marker::{BodyKind, Marker, PrintError};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -208,4 +208,37 @@ fn a_tag_seen_badly_in_a_few_views_does_not_pull_the_others() {
         assert!(a < 0.02, "{kind}: {a:.4} mm");
         assert!(a < b, "{kind}: dropping bad sightings helps ({a:.4} vs {b:.4} mm)");
     }
+}
+
+#[test]
+fn a_wrong_focal_length_is_found_and_the_right_one_passes() {
+    let mut rng = Lcg(5);
+    let truth = printed(&mut rng);
+    let (frames, _) = views(&truth, 40, 0.2, &mut rng);
+    let with = |f: f64| -> Vec<CalibrationFrame> {
+        frames
+            .iter()
+            .map(|x| CalibrationFrame { camera: CameraIntrinsics { fx: f, fy: f, ..x.camera }, ..x.clone() })
+            .collect()
+    };
+    let options = CalibrationOptions::default();
+    let right = calibrate(&Marker::default(), &frames, &options).expect("calibrates").focal.expect("judged");
+    eprintln!("right focal length, calibrated marker: {right}");
+    assert!(!right.looks_wrong(), "{right}");
+    assert!((right.best_scale - 1.0).abs() < 0.02, "{right}");
+    // Print errors of 0.2 mm move the nominal marker's optimum, but do not make it look wrong.
+    let nominal = check_focal(&Marker::default(), &frames).expect("views with three tags");
+    eprintln!("right focal length, nominal marker: {nominal}");
+    assert!(!nominal.looks_wrong(), "{nominal}");
+    // Intrinsics of twice the focal length (another resolution's, say), as in the issue, and
+    // of 20 % more: the views point back to the true one.
+    for (f, scale) in [(3000.0, 0.5), (1800.0, 1500.0 / 1800.0)] {
+        let wrong = calibrate(&Marker::default(), &with(f), &options).expect("calibrates").focal.expect("judged");
+        eprintln!("focal length {f}, calibrated marker: {wrong}");
+        assert!(wrong.looks_wrong(), "{wrong}");
+        assert!((wrong.best_scale - scale).abs() < 0.03, "{wrong}");
+    }
+    let wrong = check_focal(&Marker::default(), &with(3000.0)).expect("judged");
+    eprintln!("focal length 3000, nominal marker: {wrong}");
+    assert!(wrong.looks_wrong(), "{wrong}");
 }

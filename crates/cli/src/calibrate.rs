@@ -7,7 +7,9 @@ use crate::frames::{FrameSource, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig};
-use jawtrack_calibration::{Calibration, CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate};
+use jawtrack_calibration::{
+    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, SeenTag, calibrate,
+};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use std::path::PathBuf;
@@ -126,4 +128,18 @@ pub(crate) fn print_report(cal: &Calibration) {
             eprintln!("warning: {f} (turn the marker to show that face from a few angles)");
         }
     }
+    if let Some(focal) = cal.focal.filter(FocalCheck::looks_wrong) {
+        eprintln!("warning: {}", intrinsics_warning(&focal, cal.bodies.iter().map(|b| b.rms_after_px)));
+    }
+}
+
+/// What to say when the views point to another focal length than the one given: shared by
+/// `calibrate-marker` and `track`.
+pub(crate) fn intrinsics_warning(focal: &FocalCheck, residuals_px: impl IntoIterator<Item = f64>) -> String {
+    let worst = residuals_px.into_iter().fold(0.0, f64::max);
+    format!(
+        "check --intrinsics: {focal}{}. Intrinsics for another resolution or another lens make every \
+         distance wrong by about that factor; a calibrated marker's residual is normally 0.1-0.5 px",
+        if worst > 0.0 { format!(", and the marker fits with {worst:.2} px") } else { String::new() }
+    )
 }

@@ -7,6 +7,7 @@ use crate::frames::open_frames;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::DetectorConfig;
+use jawtrack_calibration::{CalibrationFrame, FocalCheck, SeenTag, check_focal};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
@@ -116,6 +117,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let mut out = RecordingWriter::new(out, header, &a.out.display().to_string())?;
     let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
     let mut summary = Summary::default();
+    let mut views = FocalViews::default();
     let mut index = 0;
     while let Some(frame) = source.next_frame()? {
         // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
@@ -126,6 +128,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         let record = match tracked {
             Ok(r) => {
                 summary.add(&r);
+                views.add(&r, &a.intrinsics);
                 r.to_record(index, Some(&frame.name))
             }
             Err(why) => {
@@ -146,7 +149,17 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         );
     }
     eprintln!("tracked {index} frames: {}; poses in {}", summary.describe(), a.out.display());
+    let focal = check_focal(tracker.marker(), &views.frames).filter(FocalCheck::looks_wrong);
+    if let Some(focal) = &focal {
+        eprintln!("warning: {}", crate::calibrate::intrinsics_warning(focal, []));
+    }
     for (id, seen, dropped) in tracker.mismatched_tags(5) {
+        if focal.is_some() {
+            eprintln!(
+                "warning: tag {id} disagreed with the marker file in {dropped} of {seen} frames (first check the intrinsics)"
+            );
+            continue;
+        }
         eprintln!(
             "warning: tag {id} disagreed with the marker file in {dropped} of the {seen} frames it was seen in and was \
              left out: is it glued turned or on another face, or is the marker file another print's? \
@@ -154,6 +167,32 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The marker's tags seen in frames spread over the run, for judging the focal length
+/// ([`check_focal`]) at its end.
+#[derive(Default)]
+struct FocalViews {
+    frames: Vec<CalibrationFrame>,
+    offered: usize,
+}
+
+impl FocalViews {
+    /// Views kept at most; every `STRIDE`-th frame with three tags of a body is offered.
+    const MAX: usize = 200;
+    const STRIDE: usize = 5;
+
+    fn add(&mut self, r: &FrameResult, camera: &CameraIntrinsics) {
+        let three = [&r.maxilla, &r.mandible].iter().any(|b| b.as_ref().is_some_and(|b| b.tags.len() >= 3));
+        if !three || self.frames.len() >= Self::MAX {
+            return;
+        }
+        self.offered += 1;
+        if (self.offered - 1).is_multiple_of(Self::STRIDE) {
+            let tags = r.detections.iter().map(|d| SeenTag { id: d.id, corners: d.corners }).collect();
+            self.frames.push(CalibrationFrame { camera: *camera, tags });
+        }
+    }
 }
 
 /// Counts over a run, for the closing line.

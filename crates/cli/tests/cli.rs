@@ -415,11 +415,17 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     assert!(report.contains("maxilla: 17 views") && report.contains("px calibrated"), "{report}");
     // Faces turned toward the patient are never seen: named, kept nominal.
     assert!(stderr(&o).contains("warning: tag 9 was seen in 0 usable view(s)"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("check --intrinsics"), "the right intrinsics pass: {}", stderr(&o));
     let o = jawtrack(&["check-marker", calibrated]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // Twice the focal length: the calibration says so, and names the factor that fits.
+    let doubled = "3000,3000,959.5,539.5";
+    let wrong = dir.path().join("wrong.json");
+    let o = jawtrack(&["calibrate-marker", "--intrinsics", doubled, "--out", wrong.to_str().expect("utf-8"), frames]);
+    assert!(stderr(&o).contains("check --intrinsics") && stderr(&o).contains("0.5"), "{}", stderr(&o));
 
     let set = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/static-1080p"));
-    let track = |marker: Option<&str>, out: &Path| {
+    let track = |marker: Option<&str>, out: &Path, intrinsics: &str| {
         let mut args = vec!["track", "--intrinsics", intrinsics, "--out", out.to_str().expect("utf-8")];
         if let Some(m) = marker {
             args.extend(["--marker", m]);
@@ -427,13 +433,17 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
         args.push(set.to_str().expect("utf-8"));
         let o = jawtrack(&args);
         assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
     };
     let (nominal, with_cal) = (dir.path().join("nominal.jsonl"), dir.path().join("calibrated.jsonl"));
-    track(None, &nominal);
-    track(Some(calibrated), &with_cal);
+    assert!(!track(None, &nominal, intrinsics).contains("check --intrinsics"));
+    assert!(!track(Some(calibrated), &with_cal, intrinsics).contains("check --intrinsics"));
+    // Tracking with the wrong focal length is warned of before any tag is blamed.
+    let said = track(Some(calibrated), &dir.path().join("wrong.jsonl"), doubled);
+    assert!(said.contains("warning: check --intrinsics"), "{said}");
     let (before, after) = (jaw_error(&nominal, set), jaw_error(&with_cal, set));
     eprintln!("static fixture, mandible in maxilla: nominal {before:.3?}, calibrated {after:.3?} (mm, °)");
-    // Measured: 0.29 mm / 0.82° nominal, 0.048 mm / 0.086° calibrated.
+    // Measured: 0.29 mm / 0.82° nominal, 0.040 mm / 0.032° calibrated.
     assert!(after.0 < before.0 / 4.0 && after.1 < before.1 / 4.0, "{before:?} → {after:?}");
     assert!(after.0 < 0.07 && after.1 < 0.15, "{after:?}");
 }
