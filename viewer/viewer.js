@@ -599,6 +599,12 @@ function setupLive() {
 // ---------------------------------------------------------------- replay mode
 let replay = null;
 
+// Frame `i` of `n` numbered as the CLI and the recording number frames, from 0: by its own
+// `frame` when the server sends it (a received recording need not start at 0), else by place.
+function frameLabel(f, i, n) {
+  return `frame ${isFiniteNumber(f.frame) ? f.frame : i} (${i + 1} of ${n})`;
+}
+
 class Replay {
   constructor(frames) {
     this.frames = frames;
@@ -664,7 +670,7 @@ class Replay {
     $('scrub').value = String(i);
     const seq = isFiniteNumber(f.seq) ? ` · seq ${f.seq}` : '';
     $('time').textContent =
-      `${this.times[i].toFixed(3)} s / ${this.duration.toFixed(3)} s · frame ${i + 1}/${this.n}${seq}`;
+      `${this.times[i].toFixed(3)} s / ${this.duration.toFixed(3)} s · ${frameLabel(f, i, this.n)}${seq}`;
     dirty = true;
   }
 

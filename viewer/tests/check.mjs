@@ -224,6 +224,18 @@ try {
       );
       const diff = Math.max(...diffs);
       if (!(diff > 1e-6)) fail(`seeking to frames ${targets.join(', ')} never moves the mandible from frame 0 (max diff ${diff})`);
+      // The timeline numbers frames as the recording and the CLI do, from 0.
+      const labels = await page.evaluate(async (targets) => {
+        const frames = (await (await fetch('/api/recording')).json()).frames;
+        return [0, ...targets].map((k) => {
+          window.jawtrack.seek(k);
+          const want = Number.isFinite(frames[k].frame) ? frames[k].frame : k;
+          return { want, shown: document.getElementById('time').textContent };
+        });
+      }, targets);
+      for (const { want, shown } of labels) {
+        if (!shown.includes(`frame ${want} `)) fail(`the timeline should name frame ${want}: it shows "${shown}"`);
+      }
     }
     posesApplied = await page.evaluate(() => window.jawtrack.posesApplied);
 

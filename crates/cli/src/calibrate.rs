@@ -21,7 +21,7 @@ pub(crate) struct CalibrateArgs {
     #[arg(long)]
     marker: Option<PathBuf>,
     /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     intrinsics: CameraIntrinsics,
     /// Where to write the calibrated marker file.
     #[arg(long)]
@@ -46,7 +46,7 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
         bail!("--min-views must be at least 1");
     }
     let marker = match &a.marker {
-        Some(p) => Marker::load(p).with_context(|| format!("marker file {}", p.display()))?,
+        Some(p) => Marker::load(p)?,
         None => Marker::default(),
     };
     let source = open_frames(a.video.as_deref(), &a.frames, None)?;

@@ -16,6 +16,7 @@
 //! views coloured by frequency, and `summary.json`.
 
 use crate::export::{SessionArg, load};
+use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::Mesh;
@@ -338,7 +339,7 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     }
 
     let s = session.summary();
-    let summary = json!({
+    let mut summary = json!({
         "frames": {
             "read": rec.frames.len(),
             "checked": s.frames,
@@ -361,6 +362,7 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
             "total_s": total_s,
         },
     });
+    clean_json(&mut summary);
     let p = a.out.join("summary.json");
     let text = serde_json::to_string_pretty(&summary).context("summary")?;
     std::fs::write(&p, text + "\n").with_context(|| format!("writing {}", p.display()))?;
@@ -373,9 +375,16 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     say!("{checked} frames checked of {read}{skipped}; {near} within {t} mm, {deep} penetrating");
     match s.deepest {
         Some(d) if d.depth_mm > 0.0 => {
-            say!("deepest penetration {:.3} mm at frame {} (t {:.3} s)", d.depth_mm, d.frame, d.t)
+            say!("deepest penetration {} mm at frame {} (t {} s)", fixed(d.depth_mm, 3), d.frame, fixed(d.t, 3))
         }
-        Some(d) => say!("no penetration; smallest gap {:.3} mm at frame {} (t {:.3} s)", -d.depth_mm, d.frame, d.t),
+        Some(d) => {
+            say!(
+                "no penetration; smallest gap {} mm at frame {} (t {} s)",
+                fixed(-d.depth_mm, 3),
+                d.frame,
+                fixed(d.t, 3)
+            )
+        }
         None => {
             say!("no contact within {t} mm");
             eprintln!(

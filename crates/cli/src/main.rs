@@ -33,6 +33,7 @@ mod frames;
 mod link;
 mod marker;
 mod metrics;
+mod numbers;
 mod output;
 mod progress;
 mod register;

@@ -85,7 +85,7 @@ fn parse_init(s: &str) -> Result<Pose, String> {
 }
 
 pub(crate) fn run(a: &RegisterArgs) -> Result<()> {
-    let marker = Marker::load(&a.marker).with_context(|| format!("marker file {}", a.marker.display()))?;
+    let marker = Marker::load(&a.marker)?;
     let samples = marker_surface_samples(&marker, a.body, a.spacing).context("--marker/--body/--spacing")?;
     // Read the registration first: a file we cannot update is refused before any work.
     let mut registration = if a.out.exists() {

@@ -3,16 +3,18 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use clap::builder::{PossibleValue, TypedValueParser};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_synth::{Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `jawtrack synth`.
 #[derive(Args)]
 pub(crate) struct SynthArgs {
-    /// Which scene: static, hinge, excursion or chew.
-    #[arg(long)]
+    /// Which scene.
+    #[arg(long, value_parser = SceneParser)]
     scene: Option<SceneKind>,
     /// Output folder.
     #[arg(long)]
@@ -24,7 +26,7 @@ pub(crate) struct SynthArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Camera intrinsics fx,fy,cx,cy[,k1,k2] (px); default: an iPhone wide camera.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     intrinsics: Option<CameraIntrinsics>,
     /// Marker file (default: the nominal 12.7 mm pair).
     #[arg(long)]
@@ -53,6 +55,23 @@ pub(crate) struct SynthArgs {
     /// Instead of a scene, render a large tag and measure where its edges land (px).
     #[arg(long, conflicts_with_all = ["scene", "out"])]
     self_check: bool,
+}
+
+/// `--scene`: parsed by the synth crate, its values listed in the help from the crate's own
+/// list, so neither can leave a scene out.
+#[derive(Clone)]
+struct SceneParser;
+
+impl TypedValueParser for SceneParser {
+    type Value = SceneKind;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<SceneKind, clap::Error> {
+        (|s: &str| s.parse::<SceneKind>()).parse_ref(cmd, arg, value)
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(SceneKind::ALL.into_iter().map(|k| PossibleValue::new(k.name()))))
+    }
 }
 
 pub(crate) fn load_realism(a: &SynthArgs) -> Result<Realism> {
@@ -101,7 +120,9 @@ pub(crate) fn run(a: &SynthArgs) -> Result<()> {
         say!("ok: every edge within {worst:.4} px of its projection");
         return Ok(());
     }
-    let Some(scene) = a.scene else { bail!("--scene is required (static, hinge, excursion or chew)") };
+    let Some(scene) = a.scene else {
+        bail!("--scene is required ({})", SceneKind::ALL.map(SceneKind::name).join(", "))
+    };
     let Some(out) = &a.out else { bail!("--out DIR is required") };
     let config = synth_config(a, scene)?;
     let summary = render_with_progress(config, out)?;

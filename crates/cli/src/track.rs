@@ -23,7 +23,7 @@ pub(crate) struct TrackArgs {
     #[arg(long)]
     marker: Option<PathBuf>,
     /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2] (pixel centres at integer coordinates).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     intrinsics: CameraIntrinsics,
     /// Registration of the markers to the tooth scans (JSON); adds
     /// `maxilla_scan_from_mandible_scan` to every line.
@@ -72,7 +72,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     a.intrinsics.validate().context("--intrinsics")?;
     let marker = match &a.marker {
         Some(p) => {
-            let m = Marker::load(p).with_context(|| format!("marker file {}", p.display()))?;
+            let m = Marker::load(p)?;
             crate::marker::require_both_bodies(&m, p)?;
             m
         }

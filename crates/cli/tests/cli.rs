@@ -493,3 +493,51 @@ fn a_marker_file_with_one_body_is_refused_before_tracking() {
     assert!(!out.exists(), "refused before writing anything");
     assert!(jawtrack(&["check-marker", full]).status.success(), "the complete file still passes");
 }
+
+#[test]
+fn a_bad_marker_field_is_said_once_naming_the_file() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("cm.json");
+    let p = s(&path);
+    ok(&jawtrack(&["marker", "--out", p]));
+    let text = std::fs::read_to_string(&path).expect("written").replacen("\"units\": \"mm\"", "\"units\": \"cm\"", 1);
+    std::fs::write(&path, text).expect("rewritten");
+    let out = dir.path().join("poses.jsonl");
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/static-1080p");
+    let intrinsics = ["--intrinsics", "1500,1500,959.5,539.5"];
+    for o in [
+        jawtrack(&["check-marker", p]),
+        jawtrack(&[&["track"], &intrinsics[..], &["--marker", p, "--out", s(&out), set]].concat()),
+        jawtrack(&[&["calibrate-marker"], &intrinsics[..], &["--marker", p, "--out", s(&out), set]].concat()),
+    ] {
+        refused(&o, "`units` must be \"mm\", got \"cm\"");
+        let e = stderr(&o);
+        assert_eq!(e.matches("must be \"mm\"").count(), 1, "said once: {e}");
+        assert_eq!(e.matches("cm.json").count(), 1, "the file named once: {e}");
+    }
+}
+
+#[test]
+fn negative_intrinsics_reach_their_check_without_an_equals_sign() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("out");
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/static-1080p");
+    let bad = "-1500,1500,959.5,539.5";
+    for o in [
+        jawtrack(&["track", "--intrinsics", bad, "--out", s(&out), set]),
+        jawtrack(&["calibrate-marker", "--intrinsics", bad, "--out", s(&out), set]),
+        jawtrack(&["synth", "--scene", "static", "--intrinsics", bad, "--out", s(&out)]),
+    ] {
+        refused(&o, "focal lengths must be positive (fx=-1500");
+    }
+    assert!(!out.exists(), "refused before writing anything");
+}
+
+#[test]
+fn synth_help_lists_every_scene() {
+    let help = ok(&jawtrack(&["synth", "--help"]));
+    for scene in jawtrack_synth::SceneKind::ALL {
+        assert!(help.contains(scene.name()), "{} missing from:\n{help}", scene.name());
+    }
+    refused(&jawtrack(&["synth", "--out", "x"]), "calibration");
+}

@@ -9,6 +9,8 @@ use std::io::{BufRead, BufReader};
 use std::net::{TcpListener, UdpSocket};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
+mod common;
+use common::{jawtrack, refused, s};
 
 const KEY: &str = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff";
 
@@ -128,4 +130,67 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
     viewer.wait().ok();
     assert!(replay.status.success(), "replay check failed:\n{}", String::from_utf8_lossy(&replay.stderr));
     eprintln!("replay: {}", String::from_utf8_lossy(&replay.stdout).trim());
+}
+
+/// A short recording of a still jaw, enough for `view` to serve.
+fn still_recording(dir: &Path) -> PathBuf {
+    let path = dir.join("still.jsonl");
+    let identity = "[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]";
+    let lines: Vec<String> = (0..3)
+        .map(|k| {
+            format!(r#"{{"frame":{k},"t":{k},"maxilla":null,"mandible":null,"maxilla_from_mandible":{identity}}}"#)
+        })
+        .collect();
+    std::fs::write(&path, lines.join("\n") + "\n").expect("write");
+    path
+}
+
+#[test]
+fn view_refuses_a_mesh_it_cannot_show_before_serving() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = still_recording(dir.path());
+    let good = concat!(env!("CARGO_MANIFEST_DIR"), "/../../harness-cad/dodecahedron-with-post.stl");
+    let photo = dir.path().join("photo.stl");
+    let frame = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/hinge-1080p/frame_0000.png");
+    std::fs::copy(frame, &photo).expect("a photo renamed .stl");
+    let empty = dir.path().join("empty.ply");
+    std::fs::write(&empty, "").expect("write");
+    // One triangle 20 units across: a tooth scan exported in metres would be 20 km.
+    let metres = dir.path().join("metres.stl");
+    std::fs::write(
+        &metres,
+        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 20000 0 0\nvertex 0 20000 0\nendloop\nendfacet\nendsolid t\n",
+    )
+    .expect("write");
+    for (option, bad, why) in [
+        ("--maxilla", &photo, "not a readable STL mesh"),
+        ("--mandible", &empty, "empty.ply"),
+        ("--mandible", &metres, "convert the file to mm"),
+    ] {
+        let other = if option == "--maxilla" { "--mandible" } else { "--maxilla" };
+        let serve = format!("127.0.0.1:{}", free_port());
+        let o = jawtrack(&["view", s(&recording), "--serve", &serve, "--duration", "1", option, s(bad), other, good]);
+        refused(&o, why);
+        let e = common::stderr(&o);
+        assert!(e.contains(option) && e.contains(s(bad)) && !e.contains("replaying"), "{e}");
+        let o = jawtrack(&[
+            "receive",
+            "--listen",
+            "127.0.0.1:0",
+            "--key",
+            KEY,
+            "--out",
+            s(&dir.path().join("r.jsonl")),
+            "--serve",
+            &serve,
+            "--duration",
+            "1",
+            option,
+            s(bad),
+            other,
+            good,
+        ]);
+        refused(&o, why);
+        assert!(common::stderr(&o).contains(option), "{}", common::stderr(&o));
+    }
 }

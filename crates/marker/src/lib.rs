@@ -46,18 +46,19 @@ pub enum MarkerError {
         /// The system's reason.
         reason: String,
     },
-    /// An error inside a named file.
-    #[error("{path}: {source}")]
+    /// An error inside a named file. Shown whole here and not chained as a source, or reports
+    /// that print the chain would say it twice.
+    #[error("{path}: {error}")]
     InFile {
         /// The file.
         path: String,
         /// The error.
-        source: Box<MarkerError>,
+        error: Box<MarkerError>,
     },
 }
 
 impl MarkerError {
     fn in_file(self, path: &std::path::Path) -> Self {
-        MarkerError::InFile { path: path.display().to_string(), source: Box::new(self) }
+        MarkerError::InFile { path: path.display().to_string(), error: Box::new(self) }
     }
 }

@@ -37,15 +37,27 @@ const RIGHT: f64 = 20.0;
 const TOP: f64 = 40.0;
 const BOTTOM: f64 = 50.0;
 
-/// Ticks at 1, 2 or 5 × 10ⁿ covering [lo, hi].
-fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+/// The tick step, 1, 2 or 5 × 10ⁿ, for [lo, hi].
+fn tick_step(lo: f64, hi: f64) -> f64 {
     let span = (hi - lo).max(1e-9);
     let raw = span / 6.0;
     let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| span / s <= 8.0).unwrap_or(10.0 * mag);
+    [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| span / s <= 8.0).unwrap_or(10.0 * mag)
+}
+
+/// Ticks at 1, 2 or 5 × 10ⁿ covering [lo, hi].
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let step = tick_step(lo, hi);
     let first = (lo / step).ceil() as i64;
     let last = (hi / step).floor() as i64;
     (first..=last).map(|i| i as f64 * step).collect()
+}
+
+/// The ticks of [lo, hi] with their labels, written with the step's decimals: a multiple of
+/// the step is not exact in binary (3 × 0.2 is 0.6000000000000001).
+fn labelled_ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+    let decimals = (-tick_step(lo, hi).log10().floor()).max(0.0) as usize;
+    ticks(lo, hi).into_iter().map(|t| (t, format!("{t:.decimals$}"))).collect()
 }
 
 fn label(s: &str, x: f64, y: f64, anchor: &str) -> Text {
@@ -95,12 +107,12 @@ pub fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], e
             label(y_label, 16.0, TOP + ph / 2.0, "middle")
                 .set("transform", format!("rotate(-90 16 {})", TOP + ph / 2.0)),
         );
-    for t in ticks(x0, x1) {
+    for (t, text) in labelled_ticks(x0, x1) {
         doc = doc
             .add(Line::new().set("x1", sx(t)).set("x2", sx(t)).set("y1", TOP).set("y2", TOP + ph).set("stroke", "#ddd"))
-            .add(label(&format!("{t}"), sx(t), TOP + ph + 16.0, "middle"));
+            .add(label(&text, sx(t), TOP + ph + 16.0, "middle"));
     }
-    for t in ticks(y0, y1) {
+    for (t, text) in labelled_ticks(y0, y1) {
         doc = doc
             .add(
                 Line::new()
@@ -110,7 +122,7 @@ pub fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], e
                     .set("y2", sy(t))
                     .set("stroke", "#ddd"),
             )
-            .add(label(&format!("{t}"), LEFT - 6.0, sy(t) + 4.0, "end"));
+            .add(label(&text, LEFT - 6.0, sy(t) + 4.0, "end"));
     }
     doc = doc.add(
         Rectangle::new()
@@ -196,6 +208,16 @@ mod tests {
         let t = ticks(-0.37, 0.81);
         assert_eq!(t.first().copied(), Some(-0.2));
         assert!(t.iter().all(|v| (-0.37..=0.81).contains(v)));
+    }
+
+    #[test]
+    fn tick_labels_show_the_step_s_decimals_only() {
+        let s = [Series { name: "line", color: "#c00", style: Style::Line, points: vec![(0.0, 0.0), (1.0, 1.0)] }];
+        let text = chart("t", "x", "y", &s, false).to_string();
+        assert!(!text.contains("0.6000000000000001"), "{text}");
+        for tick in ["0.0", "0.2", "0.4", "0.6", "0.8", "1.0"] {
+            assert!(text.contains(&format!(">\n{tick}\n</text>")), "tick {tick} missing: {text}");
+        }
     }
 
     #[test]

@@ -1,0 +1,46 @@
+//! Numbers as the CLI shows them. A value that reads as zero never carries a minus sign
+//! ("-0.00 mm", "-0" in a CSV, -0.0 in JSON): users read the sign as a direction.
+
+use serde_json::Value;
+
+/// `v` with `decimals` decimals; a value that rounds to zero prints without a minus sign.
+pub(crate) fn fixed(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    match s.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
+        _ => s,
+    }
+}
+
+/// `v` in full (the shortest text that reads back the same), -0 as 0.
+pub(crate) fn full(v: f64) -> String {
+    // Adding +0.0 turns -0.0 into 0.0 and leaves every other value as it is.
+    (v + 0.0).to_string()
+}
+
+/// `v` with every -0.0 in it made 0.0.
+pub(crate) fn clean_json(v: &mut Value) {
+    match v {
+        Value::Number(n) if n.as_f64().is_some_and(|x| x == 0.0 && x.is_sign_negative()) => *v = Value::from(0.0),
+        Value::Array(a) => a.iter_mut().for_each(clean_json),
+        Value::Object(o) => o.values_mut().for_each(clean_json),
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_has_no_sign_and_everything_else_keeps_its_own() {
+        assert_eq!(
+            [fixed(-0.0, 2), fixed(-0.004, 2), fixed(-0.005, 3), fixed(1.5, 1)],
+            ["0.00", "0.00", "-0.005", "1.5"]
+        );
+        assert_eq!([full(-0.0), full(-0.001), full(2.5)], ["0", "-0.001", "2.5"]);
+        let mut v = serde_json::json!({"a": -0.0, "b": [-0.0, -1.0, 3], "c": "-0.0"});
+        clean_json(&mut v);
+        assert_eq!(v.to_string(), r#"{"a":0.0,"b":[0.0,-1.0,3],"c":"-0.0"}"#);
+    }
+}
