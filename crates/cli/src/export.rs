@@ -3,15 +3,17 @@
 //! incisor's path in the sagittal, frontal and transverse planes.
 //!
 //! Frames received over the link are written in arrival order; both commands put them back in
-//! sequence order. Displacements are measured from the rest position: the first frame with a
-//! jaw pose, or `--rest-frame`.
+//! sequence order. Displacements are measured from the rest position: `--rest-frame`'s jaw
+//! pose, else the bite the intercuspation step accepted while recording, else the first frame
+//! with a jaw pose.
 
+use crate::numbers::{fixed, full};
 use anyhow::{Context, Result, bail};
 use clap::{ArgGroup, Args};
 use jawtrack_kinematics::{Displacement, Incisor};
 use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_pose::Pose;
-use jawtrack_recording::{FrameRecord, Recording, RecordingHeader, SessionId};
+use jawtrack_recording::{BiteRecord, FrameRecord, Recording, RecordingHeader, SessionId};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -33,8 +35,8 @@ pub(crate) struct ExportArgs {
     out: PathBuf,
     #[command(flatten)]
     session: SessionArg,
-    /// The frame (its `frame` number) whose jaw pose is the rest position; default: the first
-    /// frame with one.
+    /// The frame (its `frame` number) whose jaw pose is the rest position; default: the bite
+    /// accepted while recording (a `bite` line), else the first frame with a jaw pose.
     #[arg(long)]
     rest_frame: Option<u64>,
 }
@@ -47,7 +49,8 @@ pub(crate) struct PlotArgs {
     /// Output folder for the SVG and PNG plots.
     #[arg(long, default_value = "plots")]
     out: PathBuf,
-    /// The frame whose jaw pose is the rest position; default: the first frame with one.
+    /// The frame whose jaw pose is the rest position; default: the bite accepted while
+    /// recording, else the first frame with a jaw pose.
     #[arg(long)]
     rest_frame: Option<u64>,
     #[command(flatten)]
@@ -78,6 +81,7 @@ pub(crate) fn load(path: &Path, only: SessionArg) -> Result<Recording> {
                 bail!("{}: no frame of session {wanted}; its sessions: {}", path.display(), ids.join(", "));
             }
             rec.frames.retain(|f| f.session == Some(wanted));
+            rec.bites.retain(|b| b.session == Some(wanted));
         }
         None if sessions.len() > 1 => {
             let counts: Vec<String> = sessions
@@ -111,13 +115,59 @@ pub(crate) fn load(path: &Path, only: SessionArg) -> Result<Recording> {
     Ok(rec)
 }
 
-/// The rest position's jaw pose: frame `rest_frame`'s (an error if it has none), or the first
-/// frame's that has one; `None` when no frame has a jaw pose.
-pub(crate) fn rest_pose(frames: &[FrameRecord], rest_frame: Option<u64>) -> Result<Option<Pose>> {
+/// Where displacements are measured from.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Rest {
+    /// A frame's jaw pose (`--rest-frame`, or the first frame with one).
+    Frame(u64, Pose),
+    /// The bite the intercuspation step accepted while recording.
+    Bite(BiteRecord),
+}
+
+impl Rest {
+    pub(crate) fn pose(&self) -> Pose {
+        match self {
+            Rest::Frame(_, p) => *p,
+            Rest::Bite(b) => b.maxilla_from_mandible,
+        }
+    }
+
+    /// In words, for a summary.
+    pub(crate) fn describe(&self) -> String {
+        match self {
+            Rest::Frame(n, _) => format!("frame {n}"),
+            Rest::Bite(b) => format!(
+                "the bite accepted at t = {} s ({} frames held within {} mm)",
+                fixed(b.t, 2),
+                b.frames,
+                fixed(b.spread_mm, 2)
+            ),
+        }
+    }
+
+    /// As JSON, for `metrics --json`.
+    pub(crate) fn to_json(&self) -> serde_json::Value {
+        match self {
+            Rest::Frame(n, _) => serde_json::json!({"source": "frame", "frame": n}),
+            Rest::Bite(b) => serde_json::json!({"source": "bite", "t": b.t, "frames": b.frames,
+                "span_s": b.span_s, "spread_mm": b.spread_mm, "spread_deg": b.spread_deg}),
+        }
+    }
+}
+
+/// The rest position: frame `rest_frame`'s jaw pose (an error if it has none); else the last
+/// bite the intercuspation step accepted in the recording; else the first frame's jaw pose.
+/// `None` when there is none of these.
+pub(crate) fn rest_of(rec: &Recording, rest_frame: Option<u64>) -> Result<Option<Rest>> {
     match rest_frame {
-        None => Ok(frames.iter().find_map(|f| f.maxilla_from_mandible)),
-        Some(n) => match frames.iter().find(|f| f.frame == n) {
-            Some(f) => f.maxilla_from_mandible.map(Some).with_context(|| format!("frame {n} has no jaw pose")),
+        None => Ok(rec.rest(None).map(|b| Rest::Bite(*b)).or_else(|| {
+            rec.frames.iter().find_map(|f| f.maxilla_from_mandible.map(|m| Rest::Frame(f.frame, m)))
+        })),
+        Some(n) => match rec.frames.iter().find(|f| f.frame == n) {
+            Some(f) => f
+                .maxilla_from_mandible
+                .map(|m| Some(Rest::Frame(n, m)))
+                .with_context(|| format!("frame {n} has no jaw pose")),
             None => bail!("--rest-frame {n}: no such frame in the recording"),
         },
     }
@@ -134,7 +184,7 @@ fn displacements(frames: &[FrameRecord], rest: &Pose) -> Vec<Timed> {
 
 pub(crate) fn export(a: &ExportArgs) -> Result<()> {
     let rec = load(&a.recording, a.session)?;
-    let rest = rest_pose(&rec.frames, a.rest_frame)?;
+    let rest = rest_of(&rec, a.rest_frame)?.map(|r| r.pose());
     let mut out: Box<dyn Write> = if a.out.as_os_str() == "-" {
         Box::new(std::io::stdout().lock())
     } else {
@@ -177,12 +227,12 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
             "lateral_mm",
             "protrusive_mm",
         ])?;
-        let opt = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
+        let opt = |v: Option<f64>| v.map(full).unwrap_or_default();
         for f in &rec.frames {
             let mut row = vec![
                 f.frame.to_string(),
                 f.seq.map(|s| s.to_string()).unwrap_or_default(),
-                f.t.to_string(),
+                full(f.t),
                 opt(f.received_unix_s),
                 f.maxilla.as_ref().map(|b| b.tags.len().to_string()).unwrap_or_default(),
                 f.mandible.as_ref().map(|b| b.tags.len().to_string()).unwrap_or_default(),
@@ -194,7 +244,7 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
                 Some(m) => {
                     let (t, q) = (m.translation(), m.rotation());
                     let p = incisor.in_head(m);
-                    row.extend([t.x, t.y, t.z, q.w, q.i, q.j, q.k, p.x, p.y, p.z].map(|v| v.to_string()));
+                    row.extend([t.x, t.y, t.z, q.w, q.i, q.j, q.k, p.x, p.y, p.z].map(full));
                     let d = rest.map(|r| incisor.displacement(m, &r));
                     row.extend([d.map(|d| d.opening), d.map(|d| d.lateral), d.map(|d| d.protrusive)].map(opt));
                 }
@@ -214,7 +264,7 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
 
 pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
     let rec = load(&a.recording, a.session)?;
-    let Some(rest) = rest_pose(&rec.frames, a.rest_frame)? else {
+    let Some(rest) = rest_of(&rec, a.rest_frame)?.map(|r| r.pose()) else {
         bail!("{}: no frame has a jaw pose (both markers tracked), nothing to plot", a.recording.display());
     };
     let path = displacements(&rec.frames, &rest);
@@ -275,13 +325,13 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
     }
     let peak = |f: &dyn Fn(&Displacement) -> f64| path.iter().map(|(_, d)| f(d)).fold(f64::NEG_INFINITY, f64::max);
     eprintln!(
-        "{} frames with a jaw pose of {}; widest opening {:.1} mm, left {:.1} mm, right {:.1} mm, protrusion {:.1} mm",
+        "{} frames with a jaw pose of {}; widest opening {} mm, left {} mm, right {} mm, protrusion {} mm",
         path.len(),
         rec.frames.len(),
-        peak(&|d| d.opening),
-        peak(&|d| d.lateral),
-        peak(&|d| -d.lateral),
-        peak(&|d| d.protrusive)
+        fixed(peak(&|d| d.opening), 1),
+        fixed(peak(&|d| d.lateral), 1),
+        fixed(peak(&|d| -d.lateral), 1),
+        fixed(peak(&|d| d.protrusive), 1)
     );
     Ok(())
 }

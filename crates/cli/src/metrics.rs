@@ -6,7 +6,8 @@
 //! The recording is read as `export` and `plot` read it (sequence order, displacements from the
 //! rest position); frames without a jaw pose are skipped and counted.
 
-use crate::export::{SessionArg, load, rest_pose};
+use crate::export::{Rest, SessionArg, load, rest_of};
+use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::metrics::{frontal, sagittal};
@@ -27,8 +28,8 @@ pub(crate) struct MetricsArgs {
     /// harness mounting's.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
     incisor: Option<Point3<f64>>,
-    /// The frame (its `frame` number) whose jaw pose is the rest position; default: the first
-    /// frame with one.
+    /// The frame (its `frame` number) whose jaw pose is the rest position; default: the bite
+    /// accepted while recording (a `bite` line), else the first frame with a jaw pose.
     #[arg(long)]
     rest_frame: Option<u64>,
     /// Output folder for the envelope plots (SVG and PNG) and metrics.json.
@@ -54,11 +55,10 @@ fn parse_point(s: &str) -> Result<Point3<f64>, String> {
 pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     let name = a.recording.display();
     let rec = load(&a.recording, a.session)?;
-    let Some(rest) = rest_pose(&rec.frames, a.rest_frame)? else {
+    let Some(rest_at) = rest_of(&rec, a.rest_frame)? else {
         bail!("{name}: no frame has a jaw pose (both markers tracked), nothing to measure");
     };
-    let rest_frame =
-        a.rest_frame.or_else(|| rec.frames.iter().find(|f| f.maxilla_from_mandible.is_some()).map(|f| f.frame));
+    let rest = rest_at.pose();
     let incisor = a.incisor.map_or_else(Incisor::standard, Incisor::at);
     let path: Vec<Sample> = rec
         .frames
@@ -73,10 +73,12 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
         o.insert("recording".into(), json!(a.recording.to_string_lossy()));
         o.insert("frames_total".into(), json!(rec.frames.len()));
         o.insert("frames_skipped_no_pose".into(), json!(skipped));
-        o.insert("rest_frame".into(), json!(rest_frame));
+        o.insert("rest_frame".into(), json!(if let Rest::Frame(n, _) = rest_at { Some(n) } else { None }));
+        o.insert("rest".into(), rest_at.to_json());
         o.insert("incisor_in_mandible_marker_mm".into(), json!([p.x, p.y, p.z]));
         o.insert("incisor_standard".into(), json!(a.incisor.is_none()));
     }
+    clean_json(&mut report);
     if skipped > 0 {
         eprintln!("{name}: {skipped} of {} frames have no jaw pose, skipped", rec.frames.len());
     }
@@ -86,20 +88,15 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     if a.json {
         say!("{report}");
     } else {
-        print_summary(&metrics, skipped, rest_frame, &incisor, a.incisor.is_none());
+        print_summary(&metrics, skipped, &rest_at, &incisor, a.incisor.is_none());
     }
     Ok(())
 }
 
-fn print_summary(m: &Metrics, skipped: usize, rest_frame: Option<u64>, incisor: &Incisor, standard: bool) {
+fn print_summary(m: &Metrics, skipped: usize, rest: &Rest, incisor: &Incisor, standard: bool) {
     let p = incisor.point_in_mandible_marker();
-    let rest = rest_frame.map_or_else(|| "?".to_owned(), |n| n.to_string());
-    say!("frames              {} with a jaw pose, {skipped} skipped (no jaw pose); rest: frame {rest}", m.frames);
-    // Rounding noise of the standard point's zero would print as "-0.00".
-    let mm = |v: f64| match format!("{v:.2}") {
-        s if s == "-0.00" => "0.00".to_owned(),
-        s => s,
-    };
+    say!("frames              {} with a jaw pose, {skipped} skipped (no jaw pose); rest: {}", m.frames, rest.describe());
+    let mm = |v: f64| fixed(v, 2);
     say!(
         "incisal point       ({}, {}, {}) mm in the mandible marker's frame{}",
         mm(p.x),
@@ -114,10 +111,10 @@ fn print_summary(m: &Metrics, skipped: usize, rest_frame: Option<u64>, incisor: 
         ("max protrusion", m.max_protrusion),
         ("max retrusion", m.max_retrusion),
     ] {
-        say!("{label:<19} {:7.2} mm   (frame {}, t {:.3} s)", e.mm, e.frame, e.t);
+        say!("{label:<19} {:>7} mm   (frame {}, t {} s)", mm(e.mm), e.frame, fixed(e.t, 3));
     }
     for (label, e) in [("sagittal envelope", &m.sagittal), ("frontal envelope", &m.frontal)] {
-        say!("{label:<19} {:7.2} mm²  ({} hull vertices)", e.area_mm2, e.hull.len());
+        say!("{label:<19} {:>7} mm²  ({} hull vertices)", mm(e.area_mm2), e.hull.len());
     }
 }
 

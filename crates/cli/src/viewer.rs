@@ -1,8 +1,9 @@
 //! `jawtrack view` and the viewer flags `receive --serve` shares: a recording replayed in the
 //! web viewer (`jawtrack_viewer`), served until Ctrl-C or `--duration`.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
+use jawtrack_occlusion::Mesh;
 use jawtrack_viewer::{LiveServer, LiveState, ViewerOptions};
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -25,12 +26,19 @@ pub(crate) struct ViewerArgs {
 }
 
 impl ViewerArgs {
-    pub(crate) fn options(&self) -> ViewerOptions {
-        ViewerOptions {
+    /// The viewer's options, once each mesh has been read as `contacts` reads it: a file the
+    /// page could not draw is refused here, naming it, before anything is served.
+    pub(crate) fn options(&self) -> Result<ViewerOptions> {
+        for (option, path) in [("--maxilla", &self.maxilla), ("--mandible", &self.mandible)] {
+            if let Some(p) = path {
+                Mesh::load(p).with_context(|| option)?;
+            }
+        }
+        Ok(ViewerOptions {
             maxilla: self.maxilla.clone(),
             mandible: self.mandible.clone(),
             page_dir: self.viewer_dir.clone(),
-        }
+        })
     }
 }
 
@@ -64,9 +72,11 @@ pub(crate) fn warn_if_exposed(addr: SocketAddr) {
 
 pub(crate) fn view(a: &ViewArgs) -> Result<()> {
     warn_if_exposed(a.serve);
+    let options = a.viewer.options()?;
     let rec = crate::export::load(&a.recording, a.session)?;
     let header = rec.header.as_ref().and_then(|h| serde_json::to_value(h).ok());
-    let state = Arc::new(LiveState::replay(&a.viewer.options(), header, &rec.frames)?);
+    let rest = rec.rest(None).map(|b| b.maxilla_from_mandible);
+    let state = Arc::new(LiveState::replay(&options, header, &rec.frames, rest)?);
     LiveServer::start(a.serve, state)?;
     eprintln!("replaying {} frames at http://{}/ (Ctrl-C to stop)", rec.frames.len(), a.serve);
     let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));

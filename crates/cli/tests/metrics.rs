@@ -236,3 +236,86 @@ fn bad_input_is_refused_with_a_message_naming_the_problem() {
     refused(&jawtrack(&["metrics", file, "--incisor", "1,2"]), "three numbers");
     refused(&jawtrack(&["metrics", file, "--out", &path("a-file", "")]), "a-file");
 }
+
+/// The numbers in `v` that are zero with a minus sign.
+fn negative_zeros(v: &Value) -> usize {
+    match v {
+        Value::Number(n) => usize::from(n.as_f64().is_some_and(|x| x == 0.0 && x.is_sign_negative())),
+        Value::Array(a) => a.iter().map(negative_zeros).sum(),
+        Value::Object(o) => o.values().map(negative_zeros).sum(),
+        _ => 0,
+    }
+}
+
+#[test]
+fn a_jaw_that_never_moves_measures_zero_without_a_minus_sign() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("still.jsonl");
+    let identity = json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+    let lines: Vec<String> = (0..4u32)
+        .map(|k| {
+            json!({"frame": k, "t": f64::from(k) / 20.0, "maxilla": null, "mandible": null, "maxilla_from_mandible": identity})
+                .to_string()
+        })
+        .collect();
+    std::fs::write(&file, lines.join("\n") + "\n").expect("write");
+    let file = file.to_str().expect("utf-8");
+    let text = ok(&jawtrack(&["metrics", file]));
+    assert!(!text.contains("-0.00") && text.contains("max right lateral      0.00 mm"), "{text}");
+    let report: Value = serde_json::from_str(&ok(&jawtrack(&["metrics", file, "--json"]))).expect("JSON");
+    assert_eq!(negative_zeros(&report), 0, "{report}");
+    let out = dir.path().join("m");
+    ok(&jawtrack(&["metrics", file, "--out", out.to_str().expect("utf-8")]));
+    let written: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).expect("written")).expect("JSON");
+    assert_eq!(negative_zeros(&written), 0, "{written}");
+    let plot = jawtrack(&["plot", file, "--out", out.to_str().expect("utf-8")]);
+    ok(&plot);
+    let said = String::from_utf8_lossy(&plot.stderr);
+    assert!(said.contains("right 0.0 mm") && !said.contains("-0.0"), "{said}");
+    let csv = ok(&jawtrack(&["export", file, "--csv", "--out", "-"]));
+    assert!(csv.lines().skip(1).all(|l| l.split(',').all(|c| c != "-0")), "{csv}");
+}
+
+#[test]
+fn the_bite_accepted_while_recording_is_the_rest_every_reader_measures_from() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rig = Rig::default();
+    let s = session(dir.path(), rig.mounting.lower_incisal_point);
+    let hinge = JawMotion::Hinge { opening_mm: HINGE_MM, start_s: 0.0, period_s: 2.0 };
+    let pose_at = |t: f64| {
+        let (maxilla, mandible) = rig.markers(&hinge, t);
+        serde_json::to_value(maxilla.inverse() * mandible).expect("a pose serialises")
+    };
+    // The recording starts with the jaw half open (frame 0), then the held bite is accepted.
+    let text = std::fs::read_to_string(&s.file).expect("session");
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    lines[1] = json!({"frame": 0, "t": -0.05, "maxilla": null, "mandible": null, "maxilla_from_mandible": pose_at(0.5)})
+        .to_string();
+    let bite = json!({"bite": {"t": -0.05, "maxilla_from_mandible": pose_at(0.0), "frames": 15, "span_s": 0.47,
+        "spread_mm": 0.02, "spread_deg": 0.03}});
+    let without = dir.path().join("without.jsonl");
+    std::fs::write(&without, lines.join("\n") + "\n").expect("write");
+    lines.push(bite.to_string());
+    let with = dir.path().join("with.jsonl");
+    std::fs::write(&with, lines.join("\n") + "\n").expect("write");
+
+    let report = |file: &Path| -> Value {
+        serde_json::from_str(&ok(&jawtrack(&["metrics", file.to_str().expect("utf-8"), "--json"]))).expect("JSON")
+    };
+    let opening = peak(&s.truth, |d| d[0]);
+    let measured = report(&with);
+    assert_eq!(measured["rest"]["source"], "bite", "{}", measured["rest"]);
+    assert_eq!(measured["rest_frame"], Value::Null);
+    check_extreme(&measured, "max_opening", opening);
+    // Without it, the half-open first frame is the rest: every number is off.
+    let naive = report(&without);
+    assert_eq!(naive["rest"], json!({"source": "frame", "frame": 0}));
+    assert!((num(&naive["max_opening"]["mm"]) - opening.0).abs() > 5.0, "{}", naive["max_opening"]);
+    let text = ok(&jawtrack(&["metrics", with.to_str().expect("utf-8")]));
+    assert!(text.contains("rest: the bite accepted at t = -0.05 s (15 frames held within 0.02 mm)"), "{text}");
+    // --rest-frame still overrides it.
+    let o = ok(&jawtrack(&["metrics", with.to_str().expect("utf-8"), "--json", "--rest-frame", "0"]));
+    let chosen: Value = serde_json::from_str(&o).expect("JSON");
+    assert_eq!(chosen["rest"]["source"], "frame");
+}

@@ -1,20 +1,18 @@
 //! One tracker behind both doors: runs a frame, turns the tracker's result into the records
-//! the app reads (with the overlay already in the preview's coordinates), remembers the
-//! recent jaw poses for the intercuspation step, and converts results back into the recording
-//! schema for the recorder and the link.
+//! the app reads (with the overlay already in the preview's coordinates), offers the tracker's
+//! intercuspation step, and converts results back into the recording schema for the recorder
+//! and the link.
 
 use crate::error::invalid;
 use crate::{Intrinsics, JawTrackError, Settings};
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
-use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
+use jawtrack_recording::{BiteRecord, BodyRecord, FrameRecord, TimingsRecord};
 use jawtrack_tracker::{BodyResult, Flag, Tracker};
 use nalgebra::{Point3, Vector3};
 use std::collections::VecDeque;
 
-/// Frames the intercuspation step averages (half a second at 30 frames/s).
-const INTERCUSPATION_FRAMES: usize = 15;
 /// Length of the axes drawn on each body (mm).
 const AXIS_MM: f64 = 10.0;
 
@@ -96,17 +94,46 @@ pub struct FrameResult {
     pub fps: f64,
 }
 
-/// The intercuspation step's outcome.
+/// The intercuspation step's outcome: the bite accepted (by the tracker's one rule,
+/// `jawtrack_tracker::bite`) and the registration correction it made.
 #[derive(Debug, Clone, PartialEq, uniffi::Record)]
 pub struct IntercuspationResult {
+    /// The time of the last frame of the held bite (s, the frames' clock).
+    pub t: f64,
+    /// The rest position: the mean mandible marker in the maxilla marker's frame, 4×4
+    /// row-major, mm. [`crate::Recorder::append_bite`] writes it into the recording.
+    pub maxilla_from_mandible: Vec<f64>,
     /// Frames averaged.
     pub frames: u32,
+    /// Time they spanned (s).
+    pub span_s: f64,
     /// How far the correction moved the lower scan's origin (mm).
     pub translation_mm: f64,
     /// How far it turned the lower scan (°).
     pub rotation_deg: f64,
     /// How far the frames spread about their mean (mm): how still the patient held the bite.
     pub spread_mm: f64,
+    /// How far they turned about their mean (°).
+    pub spread_deg: f64,
+}
+
+impl IntercuspationResult {
+    /// The bite as a recording line.
+    pub(crate) fn record(&self) -> Result<BiteRecord, JawTrackError> {
+        if !(self.t.is_finite() && self.span_s.is_finite() && self.spread_mm.is_finite() && self.spread_deg.is_finite())
+        {
+            return Err(invalid("bite: its time and spreads must be numbers"));
+        }
+        Ok(BiteRecord {
+            session: None,
+            t: self.t,
+            maxilla_from_mandible: pose_of(&self.maxilla_from_mandible, "bite maxilla_from_mandible")?,
+            frames: u64::from(self.frames),
+            span_s: self.span_s,
+            spread_mm: self.spread_mm,
+            spread_deg: self.spread_deg,
+        })
+    }
 }
 
 /// A tracker with what the app needs around it.
@@ -115,7 +142,6 @@ pub(crate) struct Engine {
     pub(crate) settings: Settings,
     frame: u64,
     pub(crate) last: Option<FrameResult>,
-    recent: VecDeque<Pose>,
     times: VecDeque<f64>,
     /// Luma of BGRA frames, reused between frames.
     pub(crate) luma: Vec<u8>,
@@ -133,7 +159,6 @@ impl Engine {
             settings,
             frame: 0,
             last: None,
-            recent: VecDeque::new(),
             times: VecDeque::new(),
             luma: Vec::new(),
         })
@@ -152,7 +177,6 @@ impl Engine {
         self.tracker.set_registration(None);
         self.frame = 0;
         self.last = None;
-        self.recent.clear();
         self.times.clear();
     }
 
@@ -171,12 +195,6 @@ impl Engine {
         }
         let camera = intrinsics.camera()?;
         let r = self.tracker.track(view, &camera, t)?;
-        if let Some(m) = r.maxilla_from_mandible {
-            self.recent.push_back(m);
-            if self.recent.len() > INTERCUSPATION_FRAMES {
-                self.recent.pop_front();
-            }
-        }
         self.times.push_back(t);
         while self.times.len() > 2 && self.times.front().is_some_and(|&first| t - first > 1.0) {
             self.times.pop_front();
@@ -239,16 +257,16 @@ impl Engine {
     }
 
     pub(crate) fn calibrate_intercuspation(&mut self) -> Result<IntercuspationResult, JawTrackError> {
-        let recent: Vec<Pose> = self.recent.iter().copied().collect();
-        if recent.len() < 3 {
-            return Err(JawTrackError::not_enough_frames(3, recent.len()));
-        }
-        let cal = self.tracker.calibrate_intercuspation(&recent)?;
+        let (bite, cal) = self.tracker.calibrate_intercuspation()?;
         Ok(IntercuspationResult {
-            frames: cal.samples as u32,
+            t: bite.t,
+            maxilla_from_mandible: bite.maxilla_from_mandible.to_row_major().to_vec(),
+            frames: bite.frames as u32,
+            span_s: bite.span_s,
             translation_mm: cal.translation_mm,
             rotation_deg: cal.rotation_deg,
-            spread_mm: cal.spread_mm,
+            spread_mm: bite.spread_mm,
+            spread_deg: bite.spread_deg,
         })
     }
 }

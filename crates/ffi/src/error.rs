@@ -7,7 +7,7 @@ use jawtrack_apriltag::DetectError;
 use jawtrack_marker::MarkerError;
 use jawtrack_pose::GeometryError;
 use jawtrack_recording::RecordingError;
-use jawtrack_tracker::{RegistrationError, TrackError};
+use jawtrack_tracker::{BiteRefusal, RegistrationError, TrackError};
 use jawtrack_wire::{KeyError, WireError};
 
 /// What went wrong, as the app sees it. Every variant's `message` is written for people.
@@ -47,14 +47,24 @@ pub enum JawTrackError {
         /// What is wrong with it.
         message: String,
     },
-    /// The intercuspation step has too few recent frames with both jaws tracked: bite, hold
-    /// still, and try again.
+    /// The intercuspation step has too few recent frames with both jaws tracked, or they span
+    /// too short a time: bite, hold still, and try again.
     #[error("{message}")]
     NotEnoughFrames {
         /// Frames the step needs.
         needed: u32,
         /// Frames it has.
         got: u32,
+        /// The same, in words.
+        message: String,
+    },
+    /// The jaw moved during the intercuspation step: bite firmly, hold still, and try again.
+    #[error("{message}")]
+    JawMoving {
+        /// How far the frames spread about their mean (mm).
+        spread_mm: f64,
+        /// How far they turned about their mean (°).
+        spread_deg: f64,
         /// The same, in words.
         message: String,
     },
@@ -144,6 +154,26 @@ impl From<TrackError> for JawTrackError {
     }
 }
 
+impl From<BiteRefusal> for JawTrackError {
+    fn from(e: BiteRefusal) -> Self {
+        let message = e.to_string();
+        match e {
+            BiteRefusal::TooFewFrames { needed, got, .. } => {
+                JawTrackError::NotEnoughFrames { needed: needed as u32, got: got as u32, message }
+            }
+            // Frames enough but too brief: the frames the needed span holds at their rate.
+            BiteRefusal::TooShort { needed_s, span_s, frames } => {
+                let rate = if span_s > 0.0 { (frames - 1) as f64 / span_s } else { 0.0 };
+                let needed = ((needed_s * rate).ceil() as usize + 1).max(frames + 1);
+                JawTrackError::NotEnoughFrames { needed: needed as u32, got: frames as u32, message }
+            }
+            BiteRefusal::Moving { spread_mm, spread_deg, .. } => {
+                JawTrackError::JawMoving { spread_mm, spread_deg, message }
+            }
+        }
+    }
+}
+
 impl From<RegistrationError> for JawTrackError {
     fn from(e: RegistrationError) -> Self {
         match e {
@@ -192,5 +222,11 @@ mod tests {
         assert!(matches!(e, JawTrackError::InvalidKey { .. }), "{e:?}");
         let e: JawTrackError = RecordingError::Exists { path: "/tmp/s.jsonl".into() }.into();
         assert!(matches!(&e, JawTrackError::Io { path, .. } if path == "/tmp/s.jsonl"), "{e:?}");
+        let e: JawTrackError = BiteRefusal::TooShort { needed_s: 0.3, span_s: 0.1, frames: 7 }.into();
+        // 7 frames over 0.1 s: 0.3 s holds 19 at that rate.
+        assert!(matches!(e, JawTrackError::NotEnoughFrames { needed: 19, got: 7, .. }), "{e:?}");
+        let moving = BiteRefusal::Moving { spread_mm: 15.4, spread_deg: 9.0, limit_mm: 0.3, limit_deg: 1.0 };
+        let e: JawTrackError = moving.into();
+        assert!(matches!(e, JawTrackError::JawMoving { spread_mm: 15.4, .. }) && e.to_string().contains("15.40 mm"));
     }
 }

@@ -179,7 +179,8 @@ pub struct Recorder {
 
 #[uniffi::export]
 impl Recorder {
-    /// Creates (or truncates) `path` and writes the header, which starts a new session.
+    /// Creates `path` and writes the header, which starts a new session. An existing file is
+    /// refused, never replaced: the app picks a free name.
     #[uniffi::constructor]
     pub fn open(path: String, info: RecordingInfo) -> Result<Arc<Self>, JawTrackError> {
         let mut header = RecordingHeader::new("JawTrack iOS");
@@ -194,7 +195,7 @@ impl Recorder {
             None => serde_json::Value::Null,
         };
         header.key_id = info.key_id;
-        let writer = RecordingWriter::create(std::path::Path::new(&path), header, Overwrite::Replace)?;
+        let writer = RecordingWriter::create(std::path::Path::new(&path), header, Overwrite::Refuse)?;
         Ok(Arc::new(Recorder { writer: Mutex::new(Some(writer)), frames: Mutex::new(0), path }))
     }
 
@@ -205,6 +206,16 @@ impl Recorder {
         let w = writer.as_mut().ok_or_else(|| invalid(format!("{}: the recording is closed", self.path)))?;
         w.append(&record)?;
         *lock(&self.frames) = w.frames_written();
+        Ok(())
+    }
+
+    /// Appends the rest position the intercuspation step accepted
+    /// ([`Tracker::calibrate_intercuspation`]'s result), so that readers measure from it.
+    pub fn append_bite(&self, bite: IntercuspationResult) -> Result<(), JawTrackError> {
+        let record = bite.record()?;
+        let mut writer = lock(&self.writer);
+        let w = writer.as_mut().ok_or_else(|| invalid(format!("{}: the recording is closed", self.path)))?;
+        w.append_bite(&record)?;
         Ok(())
     }
 

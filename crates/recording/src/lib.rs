@@ -23,6 +23,10 @@
 //! Frames received over the link carry `"seq"` and `"received_unix_s"` and no `cov` or
 //! `timings_s`. Files written before session ids have none on their frames.
 //!
+//! When the maximal-intercuspation step accepts a bite, a line
+//! `{"bite": {"session", "t", "maxilla_from_mandible": M, "frames", "span_s", "spread_mm",
+//! "spread_deg"}}` ([`BiteRecord`]) records the rest position it chose.
+//!
 //! Every `M` is a 4×4 row-major matrix in mm; `cov` is the 6×6 covariance of (rotation vector
 //! [rad], translation [mm]), row-major. No value is ever NaN: the tracker never returns a pose
 //! that is not finite, and JSON cannot carry one.
@@ -35,7 +39,7 @@ mod write;
 pub use flag::Flag;
 pub use read::{MAX_TRANSLATION_MM, Recording, open, read_recording};
 pub use schema::{
-    BodyRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader, SessionId, TimingsRecord,
+    BiteRecord, BodyRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader, SessionId, TimingsRecord,
 };
 pub use write::{Overwrite, RecordingWriter, create_file};
 

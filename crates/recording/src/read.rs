@@ -1,7 +1,7 @@
 //! The one reader of recordings: every line that is a frame, and for every other line where
 //! and why it was skipped.
 
-use crate::{FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingError, RecordingHeader, SessionId};
+use crate::{BiteRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingError, RecordingHeader, SessionId};
 use serde_json::Value;
 use std::io::BufRead;
 use std::path::Path;
@@ -13,6 +13,8 @@ pub struct Recording {
     pub header: Option<RecordingHeader>,
     /// The frames, in file order.
     pub frames: Vec<FrameRecord>,
+    /// The rest positions the intercuspation step accepted, in file order (the last is in force).
+    pub bites: Vec<BiteRecord>,
     /// Lines that were not frames: (1-based line number, why). A last line cut short by a
     /// killed writer shows up here.
     pub skipped: Vec<(usize, String)>,
@@ -29,6 +31,11 @@ impl Recording {
             }
         }
         seen
+    }
+
+    /// The rest position in force: the last bite accepted in `session` (any session when `None`).
+    pub fn rest(&self, session: Option<SessionId>) -> Option<&BiteRecord> {
+        self.bites.iter().rev().find(|b| session.is_none() || b.session == session)
     }
 
     /// Puts the frames in capture order: by sequence number where the link gave one (datagrams
@@ -76,6 +83,16 @@ fn read_named(reader: impl BufRead, name: &str) -> Result<Recording, RecordingEr
                 )));
             }
             rec.header = Some(h);
+            continue;
+        }
+        if let Some(b) = value.get("bite") {
+            match serde_path_to_error::deserialize::<_, BiteRecord>(b.clone()) {
+                Ok(b) if b.maxilla_from_mandible.translation().norm() <= MAX_TRANSLATION_MM && b.t.is_finite() => {
+                    rec.bites.push(b)
+                }
+                Ok(_) => rec.skipped.push((i + 1, "implausible bite: its rest position or time is absurd".into())),
+                Err(e) => rec.skipped.push((i + 1, format!("not a bite: field `{}`: {}", e.path(), e.inner()))),
+            }
             continue;
         }
         match serde_path_to_error::deserialize::<_, FrameRecord>(value) {

@@ -175,6 +175,34 @@ pub struct FrameRecord {
     pub received_unix_s: Option<f64>,
 }
 
+/// The rest position the maximal-intercuspation step accepted, `{"bite": {…}}`: every clinical
+/// number after it is measured from it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BiteRecord {
+    /// The session it belongs to (stamped by the writer like a frame's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub session: Option<SessionId>,
+    /// The time of the last frame of the held bite (s, the frames' clock).
+    pub t: f64,
+    /// The rest position: the mean mandible marker in the maxilla marker's frame.
+    pub maxilla_from_mandible: Pose,
+    /// Frames averaged.
+    pub frames: u64,
+    /// Time they spanned (s).
+    pub span_s: f64,
+    /// How far the frames spread about their mean (mm) …
+    pub spread_mm: f64,
+    /// … and turned (°).
+    pub spread_deg: f64,
+}
+
+impl BiteRecord {
+    /// The record as its JSON line (without the newline).
+    pub fn to_line(&self) -> String {
+        serde_json::json!({ "bite": self }).to_string()
+    }
+}
+
 impl FrameRecord {
     /// The line of a frame that could not be decoded or tracked: it keeps the frame's place,
     /// name and time, holds no pose, and is flagged [`Flag::Unreadable`](crate::Flag::Unreadable).

@@ -2,7 +2,7 @@
 //! and flushed, so a killed process leaves every frame written before the kill and at most the
 //! last line cut short (which the reader reports and skips).
 
-use crate::{FrameRecord, RecordingError, RecordingHeader};
+use crate::{BiteRecord, FrameRecord, RecordingError, RecordingHeader};
 use std::io::Write;
 use std::path::Path;
 
@@ -73,6 +73,13 @@ impl<W: Write> RecordingWriter<W> {
         Ok(())
     }
 
+    /// Appends the rest position the intercuspation step accepted, stamped with the header's
+    /// session when it carries none.
+    pub fn append_bite(&mut self, bite: &BiteRecord) -> Result<(), RecordingError> {
+        let line = BiteRecord { session: bite.session.or(self.header.session), ..*bite }.to_line();
+        self.write_line(&line)
+    }
+
     /// The header written.
     pub fn header(&self) -> &RecordingHeader {
         &self.header
@@ -134,6 +141,36 @@ mod tests {
         assert_eq!(rec.frames[0].session, Some(session), "stamped with the header's");
         assert_eq!(rec.frames[1].session, Some(other), "a frame's own session is kept");
         assert_eq!(rec.sessions(), vec![session, other]);
+    }
+
+    #[test]
+    fn a_bite_is_written_stamped_and_read_back_as_the_rest_in_force() {
+        use jawtrack_pose::Pose;
+        use nalgebra::Vector3;
+        let header = RecordingHeader::new("test");
+        let session = header.session;
+        let mut w = RecordingWriter::new(Vec::new(), header, "memory").expect("header");
+        let rest = |y: f64| BiteRecord {
+            session: None,
+            t: y / 10.0,
+            maxilla_from_mandible: Pose::from_axis_angle(Vector3::zeros(), Vector3::new(0.0, y, 0.0)),
+            frames: 15,
+            span_s: 0.47,
+            spread_mm: 0.02,
+            spread_deg: 0.05,
+        };
+        w.append(&frame(0)).expect("frame");
+        w.append_bite(&rest(40.0)).expect("bite");
+        w.append(&frame(1)).expect("frame");
+        w.append_bite(&rest(41.0)).expect("bite");
+        let rec = read_recording(w.into_inner().as_slice()).expect("readable");
+        assert_eq!(rec.frames.len(), 2, "bites are not frames");
+        assert!(rec.skipped.is_empty(), "{:?}", rec.skipped);
+        assert_eq!(rec.bites.len(), 2);
+        assert!(rec.bites.iter().all(|b| b.session == session), "stamped with the header's session");
+        let in_force = rec.rest(session).expect("a rest");
+        assert_eq!(in_force.maxilla_from_mandible.translation().y, 41.0, "the last one");
+        assert!(rec.rest(Some(SessionId(3))).is_none());
     }
 
     #[test]

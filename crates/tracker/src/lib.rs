@@ -20,10 +20,12 @@
 //! a pose that is not finite is never returned. New settings ([`Tracker::set_config`]) keep
 //! the motion tracked so far.
 
+pub mod bite;
 pub mod registration;
 pub mod roi;
 pub mod smoothing;
 
+pub use bite::{Bite, BiteRefusal, BiteRule, BiteWindow};
 pub use jawtrack_recording::Flag;
 pub use registration::{IntercuspationCalibration, Registration, RegistrationError, calibrate_intercuspation};
 pub use smoothing::{Smoother, SmootherConfig};
@@ -74,6 +76,8 @@ pub struct TrackerConfig {
     pub prior_max_age_s: f64,
     /// Smooth `maxilla_from_mandible` (off by default: raw poses are the measurement).
     pub smoother: Option<SmootherConfig>,
+    /// When the maximal-intercuspation step accepts a bite.
+    pub bite: BiteRule,
 }
 
 impl Default for TrackerConfig {
@@ -86,6 +90,7 @@ impl Default for TrackerConfig {
             flicker_px: 2.0,
             prior_max_age_s: 0.5,
             smoother: None,
+            bite: BiteRule::default(),
         }
     }
 }
@@ -237,6 +242,8 @@ pub struct Tracker {
     corners: [Vec<Point3<f64>>; 2],
     /// Per tag id: frames it was detected in with its body solved, and frames it was dropped.
     tag_counts: std::collections::BTreeMap<u32, (usize, usize)>,
+    /// The recent raw jaw poses, for the intercuspation step.
+    bite: BiteWindow,
 }
 
 fn slot(kind: BodyKind) -> usize {
@@ -267,6 +274,7 @@ impl Tracker {
             since_full: 0,
             corners,
             tag_counts: Default::default(),
+            bite: BiteWindow::new(config.bite),
         })
     }
 
@@ -292,6 +300,9 @@ impl Tracker {
         if config.smoother != self.config.smoother {
             self.smoother = config.smoother.map(Smoother::new);
         }
+        if config.bite != self.config.bite {
+            self.bite = BiteWindow::new(config.bite);
+        }
         self.config = config;
         Ok(())
     }
@@ -306,17 +317,21 @@ impl Tracker {
         self.registration.as_ref()
     }
 
-    /// The maximal-intercuspation calibration step: from `maxilla_from_mandible` measured
-    /// while the patient bites, corrects the mandible's registration (starting from identity
-    /// when none is set) and keeps the corrected one.
-    pub fn calibrate_intercuspation(
-        &mut self,
-        maxilla_from_mandible: &[Pose],
-    ) -> Result<IntercuspationCalibration, RegistrationError> {
+    /// The maximal-intercuspation calibration step over the frames tracked last: if
+    /// [`TrackerConfig::bite`] accepts them as a held bite, their mean jaw pose becomes the
+    /// rest, and the mandible's registration (identity when none is set) is corrected so that
+    /// the rest maps the lower scan onto its scanned intercuspal pose.
+    pub fn calibrate_intercuspation(&mut self) -> Result<(Bite, IntercuspationCalibration), BiteRefusal> {
+        let bite = self.bite.judge()?;
         let current = self.registration.unwrap_or_else(Registration::identity);
-        let cal = calibrate_intercuspation(&current, maxilla_from_mandible)?;
+        let samples = self.bite.poses();
+        let cal = calibrate_intercuspation(&current, &samples).map_err(|_| BiteRefusal::TooFewFrames {
+            needed: self.config.bite.min_frames,
+            got: samples.len(),
+            window_s: self.config.bite.window_s,
+        })?;
         self.registration = Some(cal.registration);
-        Ok(cal)
+        Ok((bite, cal))
     }
 
     /// Where `kind` is expected at `t` (s), extrapolated from the frames before: the pose its
@@ -341,6 +356,7 @@ impl Tracker {
         self.bodies = Default::default();
         self.last_relative = None;
         self.since_full = 0;
+        self.bite.clear();
         if let Some(s) = &mut self.smoother {
             s.reset();
         }
@@ -472,6 +488,7 @@ impl Tracker {
         if let Some(r) = raw {
             self.last_relative = Some((t, r));
         }
+        self.bite.push(t, raw);
         let maxilla_from_mandible = match (raw, &mut self.smoother) {
             (Some(r), Some(s)) => Some(s.filter(t, &r)).filter(Pose::is_finite),
             (None, Some(s)) => {
@@ -599,6 +616,7 @@ impl Tracker {
 
 /// Refuses settings out of range.
 fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
+    c.bite.validate().map_err(TrackError::BadConfig)?;
     let positive = [("max_rms_px", c.max_rms_px), ("flicker_px", c.flicker_px), ("prior_max_age_s", c.prior_max_age_s)];
     for (name, v) in positive {
         if !(v.is_finite() && v > 0.0) {

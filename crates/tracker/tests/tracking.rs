@@ -8,7 +8,7 @@ use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::pnp::{pose_jacobian, projection_jacobian};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
 use jawtrack_synth::{Realism, SceneKind, SceneOptions, SynthConfig, Synthesizer};
-use jawtrack_tracker::{Flag, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use jawtrack_tracker::{BiteRefusal, Flag, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector2, Vector3};
 
 #[test]
@@ -178,11 +178,18 @@ fn registration_maps_the_jaw_into_the_scans() {
     let got = r.maxilla_scan_from_mandible_scan.expect("registered");
     let (angle, dist) = got.distance_to(&want);
     assert!(angle < 1e-9 && dist < 1e-9);
-    // The intercuspation step makes this bite the scanned intercuspal pose (identity here).
-    let bite = r.maxilla_from_mandible.expect("both");
-    let cal = tracker.calibrate_intercuspation(&[bite]).expect("calibrates");
+    // One frame is not a held bite.
+    assert!(matches!(tracker.calibrate_intercuspation(), Err(BiteRefusal::TooFewFrames { got: 1, .. })));
+    // Held for 0.4 s, the intercuspation step makes this bite the scanned intercuspal pose
+    // (identity here).
+    for i in 1..=12 {
+        tracker.solve(d.clone(), &camera, f64::from(i) / 30.0);
+    }
+    let (bite, cal) = tracker.calibrate_intercuspation().expect("calibrates");
+    assert_eq!(bite.frames, 13);
+    assert!(bite.maxilla_from_mandible.distance_to(&(maxilla.inverse() * mandible)).1 < 1e-9, "{bite:?}");
     assert!(cal.translation_mm > 1.0, "the registration above is not the bite: {cal:?}");
-    let r = tracker.solve(d, &camera, 1.0 / 30.0);
+    let r = tracker.solve(d, &camera, 13.0 / 30.0);
     let (angle, dist) = r.maxilla_scan_from_mandible_scan.expect("registered").distance_to(&Pose::identity());
     assert!(angle < 1e-9 && dist < 1e-9, "{angle} rad {dist} mm");
 }

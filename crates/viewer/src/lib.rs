@@ -6,7 +6,10 @@
 //! The readouts (opening, lateral and protrusive displacement of the lower incisor) are
 //! computed here, not in the browser (`jawtrack_kinematics`), from the rest position, which
 //! the "Calibrate" button sets to the mean of the last frames while the patient bites in
-//! maximal intercuspation (the first frame until then).
+//! maximal intercuspation, if the tracker's one rule accepts them as a held bite
+//! (`jawtrack_tracker::bite`); the first frame until then. Replayed, the recording's own rest
+//! (its last bite line) is used when it has one. Bites accepted live are handed to the
+//! receiver ([`LiveState::take_bites`]) to be written into the recording.
 
 use axum::Router;
 use axum::extract::ws::{Message as WsMessage, WebSocket, WebSocketUpgrade};
@@ -17,11 +20,10 @@ use axum::routing::get;
 use jawtrack_kinematics::Incisor;
 use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
 use jawtrack_pose::Pose;
-use jawtrack_recording::FrameRecord;
-use jawtrack_tracker::registration::mean_pose;
+use jawtrack_recording::{BiteRecord, FrameRecord, SessionId};
+use jawtrack_tracker::{BiteRule, BiteWindow};
 use jawtrack_wire::link::Counters;
 use serde_json::{Value, json};
-use std::collections::VecDeque;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -82,9 +84,6 @@ pub struct ViewerOptions {
     pub page_dir: Option<PathBuf>,
 }
 
-/// Frames averaged by the intercuspation step (half a second at 30 frames/s).
-const CALIBRATION_FRAMES: usize = 15;
-
 /// What the viewer shows, and the poses it moves by.
 pub struct LiveState {
     mode: &'static str,
@@ -96,9 +95,12 @@ pub struct LiveState {
     incisor: Incisor,
 }
 
-#[derive(Default)]
 struct Inner {
-    recent: VecDeque<Pose>,
+    bite: BiteWindow,
+    /// The session of the last frame, for the bites accepted.
+    session: Option<SessionId>,
+    /// Bites accepted and not yet taken by the receiver.
+    accepted: Vec<BiteRecord>,
     rest: Option<Pose>,
     /// The last status's time and accepted count, for the rate.
     last_status: Option<(Instant, u64)>,
@@ -138,16 +140,28 @@ impl LiveState {
             page_dir: options.page_dir.clone(),
             meshes,
             tx: tokio::sync::broadcast::channel(256).0,
-            inner: Mutex::new(Inner::default()),
+            inner: Mutex::new(Inner {
+                bite: BiteWindow::new(BiteRule::default()),
+                session: None,
+                accepted: Vec::new(),
+                rest: None,
+                last_status: None,
+            }),
             recording: None,
             incisor: Incisor::standard(),
         })
     }
 
-    /// A state for replaying `frames` (`jawtrack view`).
-    pub fn replay(options: &ViewerOptions, header: Option<Value>, frames: &[FrameRecord]) -> Result<Self, ViewerError> {
+    /// A state for replaying `frames` (`jawtrack view`), measured from `rest` (the recording's
+    /// accepted bite) or else from the first frame with a jaw pose.
+    pub fn replay(
+        options: &ViewerOptions,
+        header: Option<Value>,
+        frames: &[FrameRecord],
+        rest: Option<Pose>,
+    ) -> Result<Self, ViewerError> {
         let mut state = LiveState::new(options, "replay")?;
-        let rest = frames.iter().find_map(|f| f.maxilla_from_mandible);
+        let rest = rest.or_else(|| frames.iter().find_map(|f| f.maxilla_from_mandible));
         state.inner.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner).rest = rest;
         let list: Vec<Value> = frames.iter().map(|f| state.frame_message(f, f.seq, rest.as_ref())).collect();
         state.recording = Some(json!({ "header": header, "frames": list }));
@@ -175,6 +189,7 @@ impl LiveState {
         };
         json!({
             "type": "pose",
+            "frame": f.frame,
             "seq": seq,
             "t": f.t,
             "maxilla_from_mandible": f.maxilla_from_mandible,
@@ -192,11 +207,9 @@ impl LiveState {
             let mut inner = self.lock();
             if let Some(m) = f.maxilla_from_mandible {
                 inner.rest.get_or_insert(m);
-                inner.recent.push_back(m);
-                if inner.recent.len() > CALIBRATION_FRAMES {
-                    inner.recent.pop_front();
-                }
             }
+            inner.bite.push(f.t, f.maxilla_from_mandible);
+            inner.session = f.session;
             inner.rest
         };
         if self.tx.receiver_count() > 0 {
@@ -227,21 +240,37 @@ impl LiveState {
         }
     }
 
-    /// The maximal-intercuspation step: the mean of the last frames becomes the rest position.
+    /// The maximal-intercuspation step: if the last frames are a held bite, their mean becomes
+    /// the rest position, and the bite is queued for the recording.
     fn calibrate(&self) -> Value {
         let mut inner = self.lock();
-        let recent: Vec<Pose> = inner.recent.iter().copied().collect();
-        match mean_pose(&recent) {
-            Some(mean) if recent.len() >= 3 => {
+        match inner.bite.judge() {
+            Ok(bite) => {
+                let mean = bite.maxilla_from_mandible;
                 let moved = inner.rest.map(|r| (self.incisor.in_head(&mean) - self.incisor.in_head(&r)).norm());
                 inner.rest = Some(mean);
+                let session = inner.session;
+                inner.accepted.push(BiteRecord {
+                    session,
+                    t: bite.t,
+                    maxilla_from_mandible: mean,
+                    frames: bite.frames as u64,
+                    span_s: bite.span_s,
+                    spread_mm: bite.spread_mm,
+                    spread_deg: bite.spread_deg,
+                });
                 json!({"type": "calibrated", "ok": true, "message": format!(
-                    "rest position set from the last {} frames{}", recent.len(),
+                    "rest position set from {} frames over {:.2} s, held within {:.2} mm{}",
+                    bite.frames, bite.span_s, bite.spread_mm,
                     moved.map(|d| format!(" (the incisor's rest moved {d:.2} mm)")).unwrap_or_default())})
             }
-            _ => json!({"type": "calibrated", "ok": false, "message": format!(
-                "need at least 3 recent frames with both jaws tracked, have {}", recent.len())}),
+            Err(refusal) => json!({"type": "calibrated", "ok": false, "message": refusal.to_string()}),
         }
+    }
+
+    /// The bites accepted since the last call, for the receiver to write into the recording.
+    pub fn take_bites(&self) -> Vec<BiteRecord> {
+        std::mem::take(&mut self.lock().accepted)
     }
 
     fn scene(&self) -> Value {
@@ -397,12 +426,17 @@ mod tests {
     }
 
     fn frame(opening_rad: f64) -> FrameRecord {
+        timed(opening_rad, 0.0)
+    }
+
+    /// A frame at `t` (s) with the jaw opened by `opening_rad`.
+    fn timed(opening_rad: f64, t: f64) -> FrameRecord {
         let m = Pose::from_axis_angle(Vector3::new(opening_rad, 0.0, 0.0), Vector3::new(0.0, 44.0, 0.0));
         FrameRecord {
             frame: 0,
             session: None,
             path: None,
-            t: 0.0,
+            t,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: Some(m),
@@ -416,17 +450,30 @@ mod tests {
     }
 
     #[test]
-    fn the_calibration_step_sets_the_rest_from_recent_frames_only_when_there_are_enough() {
+    fn the_calibration_step_sets_the_rest_only_from_a_held_bite_and_queues_it_for_the_recording() {
         let state = LiveState::new(&options(), "live").expect("state");
-        state.pose(&frame(0.2), Some(0));
-        state.pose(&frame(0.0), Some(1));
+        state.pose(&timed(0.2, 0.0), Some(0));
+        state.pose(&timed(0.0, 1.0 / 30.0), Some(1));
         let refused = state.calibrate();
         assert_eq!(refused["ok"], false, "{refused}");
-        for i in 2..40 {
-            state.pose(&frame(0.0), Some(i));
+        assert!(refused["message"].as_str().is_some_and(|m| m.contains("needs 8 frames")), "{refused}");
+        // Pressed while the jaw closes: refused, and the rest stays where it was.
+        for i in 2u32..20 {
+            state.pose(&timed(0.3 - 0.015 * f64::from(i), f64::from(i) / 30.0), Some(u64::from(i)));
+        }
+        let moving = state.calibrate();
+        assert_eq!(moving["ok"], false, "{moving}");
+        assert!(moving["message"].as_str().is_some_and(|m| m.contains("jaw moved")), "{moving}");
+        assert!(state.take_bites().is_empty());
+        for i in 20u32..40 {
+            state.pose(&timed(0.0, f64::from(i) / 30.0), Some(u64::from(i)));
         }
         let done = state.calibrate();
         assert_eq!(done["ok"], true, "{done}");
+        let bites = state.take_bites();
+        assert_eq!(bites.len(), 1, "queued for the recording once");
+        assert!(bites[0].frames >= 8 && bites[0].spread_mm < 1e-9, "{:?}", bites[0]);
+        assert!(state.take_bites().is_empty());
         // The first frame was open: the rest moved to the closed position.
         let rest = state.lock().rest.expect("rest");
         let (angle, _) = rest.distance_to(&frame(0.0).maxilla_from_mandible.expect("pose"));

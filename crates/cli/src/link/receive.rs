@@ -127,6 +127,7 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             bail!("{name} must be a positive number of seconds, got {v}");
         }
     }
+    let viewer = a.viewer.options()?;
     if let Some(addr) = a.serve {
         crate::viewer::warn_if_exposed(addr);
     }
@@ -144,7 +145,7 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     header.key_id = key_id(&security);
     header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
     // The viewer's port before the file: a run that cannot start leaves no empty recording.
-    let live = Arc::new(LiveState::new(&a.viewer.options(), "live")?);
+    let live = Arc::new(LiveState::new(&viewer, "live")?);
     let _server = match a.serve {
         Some(addr) => Some(LiveServer::start(addr, live.clone())?),
         None => None,
@@ -183,6 +184,15 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             || a.idle_exit.zip(last_arrival).is_some_and(|(idle, t)| t.elapsed().as_secs_f64() >= idle)
         {
             break;
+        }
+        // The viewer's Calibrate accepted a held bite: its rest goes into the recording (checked
+        // every pass: the socket's read timeout keeps passes short when no datagram comes).
+        for bite in live.take_bites() {
+            out.append_bite(&bite)?;
+            eprintln!(
+                "bite accepted at t = {:.3} s ({} frames, held within {:.2} mm)",
+                bite.t, bite.frames, bite.spread_mm
+            );
         }
         if last_live.elapsed() >= Duration::from_millis(500) {
             last_live = Instant::now();

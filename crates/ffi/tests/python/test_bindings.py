@@ -57,23 +57,54 @@ class Bindings(unittest.TestCase):
         self.assertAlmostEqual(results[-1].fps, 30.0, places=6)
         self.assertGreater(tracker.frame_handle(), 0)
 
-    def test_the_intercuspation_step_needs_frames_then_corrects(self):
+    def test_the_intercuspation_step_needs_a_held_bite_then_corrects_and_is_recorded(self):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
         with self.assertRaises(jawtrack.JawTrackError.NotEnoughFrames) as e:
             tracker.calibrate_intercuspation()
-        self.assertEqual((e.exception.needed, e.exception.got), (3, 0))
-        self.assertIn("at least 3", e.exception.message)
+        self.assertEqual((e.exception.needed, e.exception.got), (8, 0))
+        self.assertIn("needs 8 frames", e.exception.message)
         w, h, pixels = frames()[0]
-        for i in range(5):
+        # A tenth of a second is not a held bite.
+        for i in range(8):
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 60.0)
+        with self.assertRaises(jawtrack.JawTrackError.NotEnoughFrames) as e:
+            tracker.calibrate_intercuspation()
+        self.assertIn("hold the bite a moment longer", e.exception.message)
+        tracker.reset()
+        # A jaw opening (the hinge frames one after another) is refused, naming the spread.
+        for i, (w, h, px) in enumerate(frames()[:4] * 3):
+            tracker.track_luma(px, w, h, w, INTRINSICS, i / 30.0)
+        with self.assertRaises(jawtrack.JawTrackError.JawMoving) as e:
+            tracker.calibrate_intercuspation()
+        self.assertGreater(e.exception.spread_mm, 0.3)
+        self.assertIn("hold still", e.exception.message)
+        tracker.reset()
+        # Held still for 0.4 s.
+        for i in range(13):
             tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0)
         cal = tracker.calibrate_intercuspation()
-        self.assertEqual(cal.frames, 5)
-        self.assertLess(cal.spread_mm, 0.05, "the same frame five times")
-        after = tracker.track_luma(pixels, w, h, w, INTRINSICS, 5 / 30.0)
+        self.assertEqual(cal.frames, 13)
+        self.assertAlmostEqual(cal.span_s, 0.4, places=9)
+        self.assertLess(cal.spread_mm, 0.05, "the same frame thirteen times")
+        after = tracker.track_luma(pixels, w, h, w, INTRINSICS, 13 / 30.0)
         scan = after.maxilla_scan_from_mandible_scan
         self.assertIsNotNone(scan, "the step sets the registration")
         # The bite just calibrated reads as the scanned intercuspal position (identity).
         self.assertLess(max(abs(scan[3]), abs(scan[7]), abs(scan[11])), 0.05)
+        # The rest goes into the recording.
+        path = OUT / "bite.jsonl"
+        info = jawtrack.RecordingInfo(device="test", intrinsics=INTRINSICS, marker_json=None, settings_json=None,
+                                      key_id=None)
+        rec = jawtrack.Recorder.open(str(path), info)
+        rec.append(after)
+        rec.append_bite(cal)
+        rec.close()
+        lines = [json.loads(l) for l in path.read_text().splitlines()]
+        bite = lines[2]["bite"]
+        self.assertEqual(bite["frames"], 13)
+        self.assertEqual(bite["session"], lines[1]["session"])
+        self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in zip(bite["maxilla_from_mandible"],
+                                                                             cal.maxilla_from_mandible)))
 
     def test_misuse_raises_errors_naming_the_problem(self):
         bad = jawtrack.default_settings()
@@ -142,6 +173,12 @@ class Bindings(unittest.TestCase):
         with self.assertRaises(jawtrack.JawTrackError.Io) as e:
             jawtrack.Recorder.open(str(OUT / "no-such-folder" / "x.jsonl"), info)
         self.assertTrue(e.exception.path.endswith("x.jsonl"), e.exception.path)
+        # A recording is never replaced.
+        before = path.read_text()
+        with self.assertRaises(jawtrack.JawTrackError.Io) as e:
+            jawtrack.Recorder.open(str(path), info)
+        self.assertIn("already exists", e.exception.message)
+        self.assertEqual(path.read_text(), before)
 
     def test_the_link_encoder_seals_datagrams_libsodium_can_open(self):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)

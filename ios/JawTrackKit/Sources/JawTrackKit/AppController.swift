@@ -409,8 +409,8 @@ public final class AppController {
     /// What the bite calibration tells the clinician.
     public static func biteText(_ bite: IntercuspationResult) -> String {
         String(
-            format: "%u frames averaged; spread %.2f mm. The lower scan moved %.2f mm and turned %.2f°.",
-            bite.frames, bite.spreadMm, bite.translationMm, bite.rotationDeg
+            format: "%u frames averaged over %.2f s; held within %.2f mm and %.2f°. The lower scan moved %.2f mm and turned %.2f°.",
+            bite.frames, bite.spanS, bite.spreadMm, bite.spreadDeg, bite.translationMm, bite.rotationDeg
         )
     }
 

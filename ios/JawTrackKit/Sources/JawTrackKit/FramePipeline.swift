@@ -41,6 +41,8 @@ public final class FramePipeline {
     private var makeVideo: VideoSinkFactory?
     private var link: LinkSession?
     private var recording = Recording.idle
+    /// Why the recording ended outside a frame's turn, for the next frame's report.
+    private var lateRecordingProblem: String?
     private var lastTime: Double?
     private var dropped: UInt64 = 0
 
@@ -93,14 +95,27 @@ public final class FramePipeline {
         }
     }
 
-    /// The maximal-intercuspation step over the frames tracked so far.
+    /// The maximal-intercuspation step over the frames tracked last (the library judges whether
+    /// they are a held bite). An accepted bite's rest position goes into the running recording,
+    /// so that its readers measure from it; if it cannot be written, the recording ends and
+    /// the next frame's report says why.
     public func calibrate(completion: @escaping (Result<IntercuspationResult, Error>) -> Void) {
         queue.async {
             guard let tracker = self.tracker else {
                 completion(.failure(AppError(message: "The tracker is not running.")))
                 return
             }
-            completion(Result { try tracker.calibrateIntercuspation() })
+            let result = Result { try tracker.calibrateIntercuspation() }
+            if case .success(let bite) = result, case .active(let session) = self.recording {
+                do {
+                    try session.appendBite(bite)
+                } catch {
+                    self.recording = .idle
+                    session.finish { _ in }
+                    self.lateRecordingProblem = "\(userText(error)) What was recorded is in Files."
+                }
+            }
+            completion(result)
         }
     }
 
@@ -174,6 +189,10 @@ public final class FramePipeline {
         camera: CaptureConfiguration,
         report: inout FrameReport
     ) {
+        if let problem = lateRecordingProblem {
+            report.recordingProblem = problem
+            lateRecordingProblem = nil
+        }
         if case .pending(let request) = recording {
             guard let intrinsics else {
                 return

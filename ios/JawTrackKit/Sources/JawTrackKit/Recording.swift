@@ -146,6 +146,11 @@ public final class RecordingSession {
         try recorder.append(result: result)
     }
 
+    /// Writes the rest position the bite step accepted into the poses file.
+    public func appendBite(_ bite: IntercuspationResult) throws {
+        try recorder.appendBite(bite: bite)
+    }
+
     /// Appends the camera frame to the video, if one is recorded.
     public func appendVideo(_ frame: CameraFrame) {
         guard let video else {

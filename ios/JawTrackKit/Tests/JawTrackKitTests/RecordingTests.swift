@@ -90,6 +90,34 @@ final class RecordingTests: XCTestCase {
         try FileManager.default.copyItem(at: files.poses, to: shared)
     }
 
+    func testAnAcceptedBiteGoesIntoTheRecording() throws {
+        let folder = try Fixtures.scratch("bite")
+        pipeline.startRecording(request(folder, video: false))
+        // Held still for 0.4 s: the library accepts it as a bite.
+        for i in 0..<13 {
+            source.play(set.frames[0], time: Double(i) / 30, cameraMatrix: set.cameraMatrix)
+        }
+        var outcome: Result<IntercuspationResult, Error>?
+        let done = expectation(description: "calibrated")
+        pipeline.calibrate { result in
+            outcome = result
+            done.fulfill()
+        }
+        wait(for: [done], timeout: 5)
+        let bite = try XCTUnwrap(outcome).get()
+        XCTAssertEqual(bite.frames, 13)
+        let files = try XCTUnwrap(try stop())
+        let lines = try jsonLines(files.poses)
+        XCTAssertEqual(lines.count, 1 + 13 + 1, "the header, the frames, then the bite")
+        let recorded = try XCTUnwrap(lines.last?["bite"] as? [String: Any])
+        XCTAssertEqual(recorded["frames"] as? Int, 13)
+        XCTAssertEqual(recorded["session"] as? String, lines[1]["session"] as? String)
+        let rest = try XCTUnwrap(recorded["maxilla_from_mandible"] as? [Double])
+        for (a, b) in zip(rest, bite.maxillaFromMandible) {
+            XCTAssertEqual(a, b, accuracy: 1e-9)
+        }
+    }
+
     func testARecordingNeverOverwritesAndRenamesBothFiles() throws {
         let folder = try Fixtures.scratch("naming")
         for _ in 0..<2 {

@@ -201,14 +201,17 @@ final class ScreenTests: XCTestCase {
         controller.pipeline.queue.sync {}
         XCTAssertFalse(controller.state.isCalibrating)
         XCTAssertEqual(controller.state.message?.title, "Calibration failed")
-        for i in 0..<4 {
+        for i in 0..<13 {
             camera.play(set.frames[0], time: Double(i) / 30, cameraMatrix: set.cameraMatrix)
         }
         controller.calibrateBite()
         XCTAssertTrue(controller.state.isCalibrating)
         controller.pipeline.queue.sync {}
         XCTAssertEqual(controller.state.message?.title, "Bite calibrated")
-        XCTAssertTrue(controller.state.message?.text.hasPrefix("4 frames averaged") ?? false, controller.state.message?.text ?? "")
+        XCTAssertTrue(
+            controller.state.message?.text.hasPrefix("13 frames averaged over 0.40 s") ?? false,
+            controller.state.message?.text ?? ""
+        )
     }
 
     func testBadSettingsAreRefusedWithTheLibrarysMessage() {
