@@ -26,6 +26,8 @@ pub(crate) struct CalibrateArgs {
     /// Where to write the calibrated marker file.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
     /// Views a tag needs to be calibrated (with another tag of its body in each).
     #[arg(long, default_value_t = 3)]
     min_views: usize,
@@ -42,6 +44,7 @@ pub(crate) struct CalibrateArgs {
 
 pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
     a.intrinsics.validate().context("--intrinsics")?;
+    a.force.check_file(&a.out)?;
     if a.min_views == 0 {
         bail!("--min-views must be at least 1");
     }

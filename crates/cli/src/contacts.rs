@@ -87,6 +87,8 @@ pub(crate) struct ContactsArgs {
     /// Output folder (created).
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
     /// Check every n-th frame with a pose.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     every: u64,
@@ -198,6 +200,7 @@ fn check_options(a: &ContactsArgs) -> Result<()> {
     if a.out.exists() && !a.out.is_dir() {
         bail!("--out {}: exists and is not a folder (contacts writes a folder of results)", a.out.display());
     }
+    a.force.check_folder(&a.out, &["contacts.jsonl", "summary.json"])?;
     if a.mode == Mode::Dynamic {
         let options = dynamics_options(a);
         if let Err(e) = options.validate() {

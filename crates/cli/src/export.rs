@@ -34,6 +34,8 @@ pub(crate) struct ExportArgs {
     #[arg(long, default_value = "-")]
     out: PathBuf,
     #[command(flatten)]
+    force: crate::output::ForceArgs,
+    #[command(flatten)]
     session: SessionArg,
     /// The frame (its `frame` number) whose jaw pose is the rest position; default: the bite
     /// accepted while recording (a `bite` line), else the first frame with a jaw pose.
@@ -49,6 +51,8 @@ pub(crate) struct PlotArgs {
     /// Output folder for the SVG and PNG plots.
     #[arg(long, default_value = "plots")]
     out: PathBuf,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
     /// The frame whose jaw pose is the rest position; default: the bite accepted while
     /// recording, else the first frame with a jaw pose.
     #[arg(long)]
@@ -125,15 +129,15 @@ pub(crate) enum Rest {
 }
 
 impl Rest {
-    pub(crate) fn pose(&self) -> Pose {
+    pub(crate) fn pose(self) -> Pose {
         match self {
-            Rest::Frame(_, p) => *p,
+            Rest::Frame(_, p) => p,
             Rest::Bite(b) => b.maxilla_from_mandible,
         }
     }
 
     /// In words, for a summary.
-    pub(crate) fn describe(&self) -> String {
+    pub(crate) fn describe(self) -> String {
         match self {
             Rest::Frame(n, _) => format!("frame {n}"),
             Rest::Bite(b) => format!(
@@ -146,7 +150,7 @@ impl Rest {
     }
 
     /// As JSON, for `metrics --json`.
-    pub(crate) fn to_json(&self) -> serde_json::Value {
+    pub(crate) fn to_json(self) -> serde_json::Value {
         match self {
             Rest::Frame(n, _) => serde_json::json!({"source": "frame", "frame": n}),
             Rest::Bite(b) => serde_json::json!({"source": "bite", "t": b.t, "frames": b.frames,
@@ -160,9 +164,10 @@ impl Rest {
 /// `None` when there is none of these.
 pub(crate) fn rest_of(rec: &Recording, rest_frame: Option<u64>) -> Result<Option<Rest>> {
     match rest_frame {
-        None => Ok(rec.rest(None).map(|b| Rest::Bite(*b)).or_else(|| {
-            rec.frames.iter().find_map(|f| f.maxilla_from_mandible.map(|m| Rest::Frame(f.frame, m)))
-        })),
+        None => Ok(rec
+            .rest(None)
+            .map(|b| Rest::Bite(*b))
+            .or_else(|| rec.frames.iter().find_map(|f| f.maxilla_from_mandible.map(|m| Rest::Frame(f.frame, m))))),
         Some(n) => match rec.frames.iter().find(|f| f.frame == n) {
             Some(f) => f
                 .maxilla_from_mandible
@@ -183,6 +188,7 @@ fn displacements(frames: &[FrameRecord], rest: &Pose) -> Vec<Timed> {
 }
 
 pub(crate) fn export(a: &ExportArgs) -> Result<()> {
+    a.force.check_file(&a.out)?;
     let rec = load(&a.recording, a.session)?;
     let rest = rest_of(&rec, a.rest_frame)?.map(|r| r.pose());
     let mut out: Box<dyn Write> = if a.out.as_os_str() == "-" {
@@ -262,7 +268,12 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
+/// The plots `plot` writes, each as SVG and PNG.
+const PLOTS: [&str; 4] = ["incisor_sagittal", "incisor_frontal", "incisor_transverse", "incisor_opening"];
+
 pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
+    let files: Vec<String> = PLOTS.iter().flat_map(|p| [format!("{p}.svg"), format!("{p}.png")]).collect();
+    a.force.check_folder(&a.out, &files.iter().map(String::as_str).collect::<Vec<_>>())?;
     let rec = load(&a.recording, a.session)?;
     let Some(rest) = rest_of(&rec, a.rest_frame)?.map(|r| r.pose()) else {
         bail!("{}: no frame has a jaw pose (both markers tracked), nothing to plot", a.recording.display());
@@ -277,9 +288,10 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
             points: path.iter().map(f).collect(),
         }]
     };
+    let [sagittal, frontal, transverse, opening] = PLOTS;
     let charts = [
         (
-            "incisor_sagittal",
+            sagittal,
             plot::chart(
                 "Lower incisor, sagittal plane (patient facing right)",
                 "protrusive (mm)",
@@ -289,7 +301,7 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
             ),
         ),
         (
-            "incisor_frontal",
+            frontal,
             plot::chart(
                 "Lower incisor, frontal plane (seen from the front)",
                 "patient's left (mm)",
@@ -299,7 +311,7 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
             ),
         ),
         (
-            "incisor_transverse",
+            transverse,
             plot::chart(
                 "Lower incisor, transverse plane (seen from above)",
                 "patient's left (mm)",
@@ -309,7 +321,7 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
             ),
         ),
         (
-            "incisor_opening",
+            opening,
             plot::chart(
                 "Lower incisor opening over time",
                 "time (s)",

@@ -47,10 +47,13 @@ pub(crate) struct MarkerArgs {
     #[arg(long)]
     out: PathBuf,
     #[command(flatten)]
+    force: crate::output::ForceArgs,
+    #[command(flatten)]
     geometry: GeometryArgs,
 }
 
 pub(crate) fn marker(a: &MarkerArgs) -> Result<()> {
+    a.force.check_file(&a.out)?;
     let m = a.geometry.marker()?;
     m.save(&a.out)?;
     let size = m.bodies[0].tags[0].size;

@@ -35,6 +35,8 @@ pub(crate) struct MetricsArgs {
     /// Output folder for the envelope plots (SVG and PNG) and metrics.json.
     #[arg(long)]
     out: Option<PathBuf>,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
     /// Print one JSON object (the content of metrics.json) instead of the summary.
     #[arg(long)]
     json: bool,
@@ -54,6 +56,9 @@ fn parse_point(s: &str) -> Result<Point3<f64>, String> {
 /// Runs `jawtrack metrics`.
 pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     let name = a.recording.display();
+    if let Some(out) = &a.out {
+        a.force.check_folder(out, &["metrics.json"])?;
+    }
     let rec = load(&a.recording, a.session)?;
     let Some(rest_at) = rest_of(&rec, a.rest_frame)? else {
         bail!("{name}: no frame has a jaw pose (both markers tracked), nothing to measure");
@@ -88,14 +93,18 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     if a.json {
         say!("{report}");
     } else {
-        print_summary(&metrics, skipped, &rest_at, &incisor, a.incisor.is_none());
+        print_summary(&metrics, skipped, rest_at, &incisor, a.incisor.is_none());
     }
     Ok(())
 }
 
-fn print_summary(m: &Metrics, skipped: usize, rest: &Rest, incisor: &Incisor, standard: bool) {
+fn print_summary(m: &Metrics, skipped: usize, rest: Rest, incisor: &Incisor, standard: bool) {
     let p = incisor.point_in_mandible_marker();
-    say!("frames              {} with a jaw pose, {skipped} skipped (no jaw pose); rest: {}", m.frames, rest.describe());
+    say!(
+        "frames              {} with a jaw pose, {skipped} skipped (no jaw pose); rest: {}",
+        m.frames,
+        rest.describe()
+    );
     let mm = |v: f64| fixed(v, 2);
     say!(
         "incisal point       ({}, {}, {}) mm in the mandible marker's frame{}",

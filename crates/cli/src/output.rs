@@ -1,12 +1,14 @@
-//! Where a command writes a recording: never over an existing file unless the user gave
-//! `--force`, and the refusal says so.
+//! Where a command writes a recording or a result: never over an existing file unless the
+//! user gave `--force`, and the refusal says so, before any work is done.
 
+use anyhow::bail;
 use jawtrack_recording::{Overwrite, RecordingError};
+use std::path::Path;
 
-/// The `--force` flag of commands that write a recording.
+/// The `--force` flag of commands that write a recording or a result.
 #[derive(clap::Args, Clone, Copy, Debug)]
 pub(crate) struct ForceArgs {
-    /// Replace --out if it exists (by default an existing file is never overwritten).
+    /// Replace what --out already holds (by default an existing output is never overwritten).
     #[arg(long)]
     pub(crate) force: bool,
 }
@@ -14,6 +16,26 @@ pub(crate) struct ForceArgs {
 impl ForceArgs {
     pub(crate) fn overwrite(self) -> Overwrite {
         if self.force { Overwrite::Replace } else { Overwrite::Refuse }
+    }
+
+    /// Refuses an existing output file, unless --force; `-` (standard output) is never refused.
+    pub(crate) fn check_file(self, path: &Path) -> anyhow::Result<()> {
+        if !self.force && path.as_os_str() != "-" && path.exists() {
+            bail!("{} already exists: give another name, or add --force to replace it", path.display());
+        }
+        Ok(())
+    }
+
+    /// Refuses to write into the folder `dir` when it already holds one of the outputs
+    /// `names`, unless --force.
+    pub(crate) fn check_folder(self, dir: &Path, names: &[&str]) -> anyhow::Result<()> {
+        if let Some(name) = names.iter().find(|n| dir.join(n).exists()).filter(|_| !self.force) {
+            bail!(
+                "{} already holds {name} from an earlier run: give another folder, or add --force to replace its results",
+                dir.display()
+            );
+        }
+        Ok(())
     }
 
     /// `e`, with the way out when it is a refusal to overwrite.

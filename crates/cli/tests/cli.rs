@@ -541,3 +541,38 @@ fn synth_help_lists_every_scene() {
     }
     refused(&jawtrack(&["synth", "--out", "x"]), "calibration");
 }
+
+#[test]
+fn results_are_never_overwritten_unless_forced() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (marker, recording) = (dir.path().join("m.json"), dir.path().join("r.jsonl"));
+    let set = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p");
+    ok(&jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", s(&recording), set]));
+    let (csv, plots, metrics) = (dir.path().join("r.csv"), dir.path().join("plots"), dir.path().join("metrics"));
+    let runs: Vec<Vec<&str>> = vec![
+        vec!["marker", "--out", s(&marker)],
+        vec!["export", s(&recording), "--csv", "--out", s(&csv)],
+        vec!["plot", s(&recording), "--out", s(&plots)],
+        vec!["metrics", s(&recording), "--out", s(&metrics)],
+    ];
+    for args in &runs {
+        ok(&jawtrack(args));
+    }
+    let written = || {
+        [&marker, &csv, &plots.join("incisor_opening.svg"), &metrics.join("metrics.json")]
+            .map(|p| std::fs::read(p).expect("written"))
+    };
+    let before = written();
+    // calibrate-marker refuses before reading any frame.
+    let calibrate =
+        vec!["calibrate-marker", "--intrinsics", "1500,1500,959.5,539.5", "--out", s(&marker), "/nonexistent"];
+    for args in runs.iter().chain([&calibrate]) {
+        let o = jawtrack(args);
+        refused(&o, "add --force");
+        assert!(!stderr(&o).contains("/nonexistent"), "refused before reading anything: {}", stderr(&o));
+        assert!(written() == before, "{args:?} changed nothing");
+    }
+    for args in &runs {
+        ok(&jawtrack(&[&args[..], &["--force"]].concat()));
+    }
+}

@@ -403,6 +403,15 @@ fn a_registration_maps_marker_poses_to_scan_poses() {
     let l = lines(&out.join("contacts.jsonl"));
     assert!((f(&l[1]["max_depth_mm"]) - 0.2).abs() < 1e-3, "{}", l[1]);
     assert_eq!(l[0]["contacts"]["registration"].as_str(), Some(s(&reg_path)));
+    // A second run into the same folder keeps the first's results unless told otherwise.
+    let again = |extra: &[&str]| {
+        let mut args = vec!["contacts", "--maxilla", s(&upper), "--mandible", s(&lower), "--poses", s(&poses)];
+        args.extend(["--registration", s(&reg_path), "--out", s(&out)]);
+        args.extend_from_slice(extra);
+        jawtrack(&args)
+    };
+    refused(&again(&[]), "already holds contacts.jsonl");
+    ok(&again(&["--force"]));
 }
 
 #[test]

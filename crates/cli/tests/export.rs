@@ -111,7 +111,11 @@ fn export_and_plot_refuse_what_they_cannot_use() {
         let e = String::from_utf8_lossy(&o.stderr).into_owned();
         assert!(!o.status.success() && e.contains(needle) && !e.contains("panicked"), "wanted '{needle}': {e}");
     };
-    check(jawtrack(&["plot", empty.to_str().expect("utf-8"), "--out", "/tmp/x"]), "no frame has a jaw pose");
+    let plots = dir.path().join("plots");
+    check(
+        jawtrack(&["plot", empty.to_str().expect("utf-8"), "--out", plots.to_str().expect("utf-8")]),
+        "no frame has a jaw pose",
+    );
     check(jawtrack(&["export", "/nonexistent.jsonl", "--csv"]), "/nonexistent.jsonl");
     check(jawtrack(&["export", empty.to_str().expect("utf-8")]), "--csv");
     check(jawtrack(&["export", empty.to_str().expect("utf-8"), "--csv", "--rest-frame", "4"]), "no such frame");
