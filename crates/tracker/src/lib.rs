@@ -370,6 +370,16 @@ impl Tracker {
         t: f64,
     ) -> Result<FrameResult, TrackError> {
         camera.validate().map_err(|e| TrackError::BadIntrinsics(e.to_string()))?;
+        // Intrinsics of another resolution or of the turned frame put the principal point
+        // off the image; every pose from them would be wrong.
+        let (w, h) = (frame.width() as f64, frame.height() as f64);
+        if !((-0.5..w - 0.5).contains(&camera.cx) && (-0.5..h - 0.5).contains(&camera.cy)) {
+            return Err(TrackError::BadIntrinsics(format!(
+                "the principal point ({}, {}) lies outside the {w}×{h} frame: are the intrinsics for another \
+                 resolution, or for the frame turned upright? Frames are tracked as the camera stores them",
+                camera.cx, camera.cy
+            )));
+        }
         if !t.is_finite() {
             return Err(TrackError::BadConfig(format!("frame time must be finite, got {t}")));
         }

@@ -87,6 +87,10 @@ fn a_frame_without_tags_is_a_result_with_flags_and_bad_intrinsics_an_error() {
     assert!(r.maxilla.is_none() && r.mandible.is_none() && r.maxilla_from_mandible.is_none());
     let names: Vec<String> = r.flags.iter().map(Flag::name).collect();
     assert_eq!(names, vec!["no_tags", "maxilla:lost", "mandible:lost"]);
+    // The intrinsics of a 4K frame on this one.
+    let other = jawtrack_pose::CameraIntrinsics::pinhole(3000.0, 3000.0, 1919.5, 1079.5);
+    let err = tracker.track(&view, &other, 0.0).expect_err("principal point off the frame");
+    assert!(err.to_string().contains("outside the 640×480 frame"), "{err}");
     let bad = jawtrack_pose::CameraIntrinsics { fx: f64::NAN, ..camera };
     let e = tracker.track(&view, &bad, 0.0).expect_err("NaN focal length");
     assert!(e.to_string().contains("fx"), "{e}");
