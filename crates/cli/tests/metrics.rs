@@ -290,8 +290,9 @@ fn the_bite_accepted_while_recording_is_the_rest_every_reader_measures_from() {
     // The recording starts with the jaw half open (frame 0), then the held bite is accepted.
     let text = std::fs::read_to_string(&s.file).expect("session");
     let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
-    lines[1] = json!({"frame": 0, "t": -0.05, "maxilla": null, "mandible": null, "maxilla_from_mandible": pose_at(0.5)})
-        .to_string();
+    lines[1] =
+        json!({"frame": 0, "t": -0.05, "maxilla": null, "mandible": null, "maxilla_from_mandible": pose_at(0.5)})
+            .to_string();
     let bite = json!({"bite": {"t": -0.05, "maxilla_from_mandible": pose_at(0.0), "frames": 15, "span_s": 0.47,
         "spread_mm": 0.02, "spread_deg": 0.03}});
     let without = dir.path().join("without.jsonl");

@@ -154,14 +154,7 @@ fn kind_name(kind: BodyKind) -> String {
 impl Engine {
     pub(crate) fn new(marker: Marker, settings: Settings) -> Result<Self, JawTrackError> {
         let tracker = Tracker::new(marker, settings.tracker_config()?)?;
-        Ok(Engine {
-            tracker,
-            settings,
-            frame: 0,
-            last: None,
-            times: VecDeque::new(),
-            luma: Vec::new(),
-        })
+        Ok(Engine { tracker, settings, frame: 0, last: None, times: VecDeque::new(), luma: Vec::new() })
     }
 
     /// Keeps the bodies' motion, the registration and the recent jaw poses: a settings change

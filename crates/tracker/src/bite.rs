@@ -93,7 +93,9 @@ pub enum BiteRefusal {
         window_s: f64,
     },
     /// The frames span too short a time.
-    #[error("the bite step needs the jaw seen still for {needed_s} s, has {span_s:.2} s: hold the bite a moment longer")]
+    #[error(
+        "the bite step needs the jaw seen still for {needed_s} s, has {span_s:.2} s: hold the bite a moment longer"
+    )]
     TooShort {
         /// Span needed (s).
         needed_s: f64,
@@ -182,8 +184,7 @@ impl BiteWindow {
             return Err(BiteRefusal::TooFewFrames { needed: r.min_frames, got: 0, window_s: r.window_s });
         };
         let spread_mm = poses.iter().map(|p| (p.translation() - mean.translation()).norm()).fold(0.0, f64::max);
-        let spread_deg =
-            poses.iter().map(|p| p.rotation().angle_to(&mean.rotation()).to_degrees()).fold(0.0, f64::max);
+        let spread_deg = poses.iter().map(|p| p.rotation().angle_to(&mean.rotation()).to_degrees()).fold(0.0, f64::max);
         if spread_mm > r.max_spread_mm || spread_deg > r.max_spread_deg {
             return Err(BiteRefusal::Moving {
                 spread_mm,
