@@ -21,12 +21,15 @@
 //! 4. The cameras' focal length is judged against the calibrated marker ([`check_focal`]): a
 //!    wrong one leaves every view fitting badly in the same way, which no tag placement fixes.
 //!
-//! The calibrated marker has the nominal file's schema; the tracker loads it as it is.
+//! The calibrated marker has the nominal file's schema; the tracker loads it as it is. Each
+//! body calibrated records its provenance: views and RMS error before and after, per body and
+//! per tag, each tag `Calibrated` or left `Nominal` (with the views it had); name the
+//! recordings with [`Calibration::name_recordings`]. A body no view showed keeps what it had.
 
 mod focal;
 
 pub use focal::{FocalCheck, check_focal};
-use jawtrack_marker::{BodyKind, Marker, MarkerError, PrintError, Tag};
+use jawtrack_marker::{BodyKind, BodyProvenance, Marker, MarkerError, PrintError, Tag, TagProvenance};
 use jawtrack_pose::lm::{self, Damping, damped};
 use jawtrack_pose::pnp::{perturb, pose_jacobian, projection_jacobian};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};
@@ -197,6 +200,46 @@ pub struct Calibration {
     pub focal: Option<FocalCheck>,
 }
 
+impl Calibration {
+    /// Records the recordings calibrated from (a frames folder, a video path, as the user
+    /// gave them) in the provenance of every body this calibration placed.
+    pub fn name_recordings(&mut self, recordings: &[String]) {
+        for report in &self.bodies {
+            if let Some(p) =
+                self.marker.bodies.iter_mut().find(|b| b.kind == report.body).and_then(|b| b.provenance.as_mut())
+            {
+                p.recordings = recordings.to_vec();
+            }
+        }
+    }
+}
+
+fn count(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
+}
+
+/// The provenance of a body just calibrated and of each of its tags.
+fn record_provenance(body: &mut jawtrack_marker::Body, report: &BodyCalibration) {
+    body.provenance = Some(BodyProvenance {
+        views: count(report.views),
+        rms_before_px: report.rms_before_px,
+        rms_after_px: report.rms_after_px,
+        recordings: Vec::new(),
+    });
+    for tag in &mut body.tags {
+        let calibrated = report.tags.iter().find(|c| c.id == tag.id).map(|c| TagProvenance::Calibrated {
+            views: count(c.views),
+            rms_before_px: c.rms_before_px,
+            rms_after_px: c.rms_after_px,
+        });
+        let views = report.findings.iter().find_map(|f| match *f {
+            Finding::Uncalibrated { id, views } if id == tag.id => Some(views),
+            _ => None,
+        });
+        tag.provenance = Some(calibrated.unwrap_or(TagProvenance::Nominal { views: count(views.unwrap_or(0)) }));
+    }
+}
+
 /// Why no calibration came out.
 #[derive(Debug, thiserror::Error)]
 pub enum CalibrationError {
@@ -285,6 +328,7 @@ pub fn calibrate(
     for b in 0..marker.bodies.len() {
         if let Some((tags, report)) = calibrate_body(&marker.bodies[b].tags, marker.bodies[b].kind, frames, options) {
             out.bodies[b].tags = tags;
+            record_provenance(&mut out.bodies[b], &report);
             bodies.push(report);
         }
     }
@@ -450,9 +494,10 @@ fn calibrate_body(
         }
     }
     // The adjusted placements, written the way the marker model displaces a tag.
-    let displaced = Marker { edge: 0.0, bodies: vec![jawtrack_marker::Body { kind, tags: fixed.clone() }] }
-        .with_print_errors(&placements)
-        .ok()?;
+    let displaced =
+        Marker { edge: 0.0, bodies: vec![jawtrack_marker::Body { kind, tags: fixed.clone(), provenance: None }] }
+            .with_print_errors(&placements)
+            .ok()?;
     fixed = displaced.bodies.into_iter().next()?.tags;
     let report = BodyCalibration {
         body: kind,

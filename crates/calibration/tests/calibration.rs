@@ -3,7 +3,7 @@
 //! assembly errors must be found and named, and unseen tags kept nominal.
 
 use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate, check_focal};
-use jawtrack_marker::{BodyKind, Marker, PrintError};
+use jawtrack_marker::{BodyKind, Marker, PrintError, TagProvenance};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Matrix3, Point3, Vector3};
 
@@ -171,6 +171,43 @@ fn a_tag_never_seen_is_named_and_kept_nominal() {
     let (_, model) = nominal.find_tag(9).expect("tag 9");
     assert_eq!(kept.corners, model.corners, "an unseen tag is never invented");
     assert!(max.tags.iter().all(|t| t.id != 9));
+}
+
+#[test]
+fn the_calibrated_marker_records_its_provenance() {
+    let mut rng = Lcg(3);
+    let truth = printed(&mut rng);
+    let (mut frames, _) = views(&truth, 40, 0.2, &mut rng);
+    // Tag 9 never seen, and the mandible never in view: only the maxilla is calibrated.
+    for f in &mut frames {
+        f.tags.retain(|t| t.id != 9 && t.id < 12);
+    }
+    let mut cal = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates");
+    cal.name_recordings(&["session/calibration".to_string()]);
+    let report = cal.bodies.iter().find(|b| b.body == BodyKind::Maxilla).expect("maxilla");
+    let body = cal.marker.body(BodyKind::Maxilla).expect("maxilla");
+    let p = body.provenance.as_ref().expect("the maxilla records its calibration");
+    assert_eq!(p.views as usize, report.views);
+    assert_eq!((p.rms_before_px, p.rms_after_px), (report.rms_before_px, report.rms_after_px));
+    assert_eq!(p.recordings, ["session/calibration"]);
+    for tag in &body.tags {
+        match tag.provenance.expect("every tag of a calibrated body says how it was placed") {
+            TagProvenance::Calibrated { views, rms_before_px, rms_after_px } => {
+                let c = report.tags.iter().find(|c| c.id == tag.id).expect("a correction");
+                assert_eq!((views as usize, rms_before_px, rms_after_px), (c.views, c.rms_before_px, c.rms_after_px));
+                assert!(views >= 3 && rms_after_px < rms_before_px, "tag {}: {views} views", tag.id);
+            }
+            TagProvenance::Nominal { views } => assert_eq!((tag.id, views), (9, 0), "only tag 9 stays nominal"),
+        }
+    }
+    assert!(cal.marker.is_calibrated());
+    let mandible = cal.marker.body(BodyKind::Mandible).expect("mandible");
+    assert!(mandible.provenance.is_none() && mandible.tags.iter().all(|t| t.provenance.is_none()));
+    // Tag 9 and the whole mandible are what a pose may rest on uncalibrated.
+    let loose: Vec<u32> = cal.marker.uncalibrated_tags().iter().map(|&(_, id)| id).collect();
+    assert_eq!(loose, [9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23]);
+    let back = Marker::from_json(&cal.marker.to_json()).expect("the calibrated marker file reads back");
+    assert_eq!(back, cal.marker);
 }
 
 #[test]

@@ -55,7 +55,13 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
     let source = open_frames(a.video.as_deref(), &a.frames, None)?;
     let frames = detect_views(source, &marker, &a.intrinsics, a.linear_edges)?;
     let options = CalibrationOptions { min_views: a.min_views, ..CalibrationOptions::default() };
-    let cal = calibrate(&marker, &frames, &options)?;
+    let mut cal = calibrate(&marker, &frames, &options)?;
+    // The marker file names what it was calibrated from: the video, or the frames as given.
+    let recordings: Vec<String> = match &a.video {
+        Some(v) => vec![v.display().to_string()],
+        None => a.frames.iter().map(|p| p.display().to_string()).collect(),
+    };
+    cal.name_recordings(&recordings);
     cal.marker.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
     print_report(&cal);
     say!("wrote {}", a.out.display());

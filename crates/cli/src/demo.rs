@@ -72,7 +72,8 @@ fn calibrate_from_recording(a: &DemoArgs) -> Result<Marker> {
     let truth: GroundTruth = serde_json::from_str(&std::fs::read_to_string(dir.join("ground_truth.json"))?)?;
     let source = crate::frames::open_frames(None, std::slice::from_ref(&dir), None)?;
     let views = crate::calibrate::detect_views(source, &Marker::default(), &truth.intrinsics, truth.realism.gamma)?;
-    let cal = calibrate(&Marker::default(), &views, &CalibrationOptions::default())?;
+    let mut cal = calibrate(&Marker::default(), &views, &CalibrationOptions::default())?;
+    cal.name_recordings(&[dir.display().to_string()]);
     let file = a.out.join("calibrated_marker.json");
     cal.marker.save(&file)?;
     for b in &cal.bodies {

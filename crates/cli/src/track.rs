@@ -12,7 +12,7 @@ use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -127,7 +127,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         });
         let record = match tracked {
             Ok(r) => {
-                summary.add(&r);
+                summary.add(&r, tracker.uncalibrated_tags());
                 views.add(&r, &a.intrinsics);
                 r.to_record(index, Some(&frame.name))
             }
@@ -149,6 +149,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         );
     }
     eprintln!("tracked {index} frames: {}; poses in {}", summary.describe(), a.out.display());
+    for line in summary.uncalibrated_lines() {
+        eprintln!("warning: {line}");
+    }
     let focal = check_focal(tracker.marker(), &views.frames).filter(FocalCheck::looks_wrong);
     if let Some(focal) = &focal {
         eprintln!("warning: {}", crate::calibrate::intrinsics_warning(focal, []));
@@ -205,11 +208,28 @@ struct Summary {
     both: usize,
     flags: BTreeMap<String, usize>,
     detection_s: Vec<f64>,
+    /// Per body (maxilla, mandible): frames whose pose used a tag the calibrated marker left
+    /// nominal (flagged `uncalibrated_tag`), and those tags.
+    uncalibrated: [(usize, BTreeSet<u32>); 2],
 }
 
 impl Summary {
-    fn add(&mut self, r: &FrameResult) {
+    /// Counts a tracked frame; `uncalibrated` are the marker's tags left nominal by its
+    /// calibration ([`Tracker::uncalibrated_tags`]).
+    fn add(&mut self, r: &FrameResult, uncalibrated: &[u32]) {
         self.read += 1;
+        for (slot, body) in [&r.maxilla, &r.mandible].into_iter().enumerate() {
+            let used: Vec<u32> = body
+                .iter()
+                .flat_map(|b| &b.tags)
+                .copied()
+                .filter(|id| uncalibrated.binary_search(id).is_ok())
+                .collect();
+            if !used.is_empty() {
+                self.uncalibrated[slot].0 += 1;
+                self.uncalibrated[slot].1.extend(used);
+            }
+        }
         self.both += usize::from(r.maxilla_from_mandible.is_some());
         for f in &r.flags {
             *self.flags.entry(f.name()).or_default() += 1;
@@ -226,6 +246,24 @@ impl Summary {
         } else if self.unreadable == SAID + 1 {
             eprintln!("warning: more frames could not be read; the summary counts them");
         }
+    }
+
+    /// One line per body whose poses rested on nominal tags of a calibrated marker.
+    fn uncalibrated_lines(&self) -> Vec<String> {
+        jawtrack_marker::BodyKind::ALL
+            .iter()
+            .zip(&self.uncalibrated)
+            .filter(|(_, (frames, _))| *frames > 0)
+            .map(|(kind, (frames, ids))| {
+                let ids: Vec<String> = ids.iter().map(u32::to_string).collect();
+                format!(
+                    "{kind}: {frames} frames rest on nominal tag{} {} (flagged {kind}:uncalibrated_tag): calibrate \
+                     with a recording that shows them",
+                    if ids.len() == 1 { "" } else { "s" },
+                    ids.join(", ")
+                )
+            })
+            .collect()
     }
 
     fn describe(&mut self) -> String {

@@ -19,6 +19,85 @@ fn marker_writes_a_valid_file_with_the_computed_tag_size() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("maxilla: 12 tags"));
 }
 
+/// `jawtrack marker`'s nominal file at `path`, rewritten as a calibrated one: every tag
+/// calibrated but those in `nominal`.
+fn calibrated_marker_file(path: &Path, nominal: impl Fn(u64) -> bool) {
+    assert!(jawtrack(&["marker", "--force", "--out", path.to_str().expect("utf-8 path")]).status.success());
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("written")).expect("json");
+    for body in v["bodies"].as_array_mut().expect("bodies") {
+        body["calibration"] = serde_json::json!(
+            {"views": 18, "rms_before_px": 1.5, "rms_after_px": 0.2, "recordings": ["cal/frames"]});
+        for tag in body["tags"].as_array_mut().expect("tags") {
+            tag["calibration"] = if nominal(tag["id"].as_u64().expect("id")) {
+                serde_json::json!({"status": "nominal", "views": 1})
+            } else {
+                serde_json::json!({"status": "calibrated", "views": 9, "rms_before_px": 2.25, "rms_after_px": 0.125})
+            };
+        }
+    }
+    std::fs::write(path, v.to_string()).expect("rewritten");
+}
+
+#[test]
+fn check_marker_prints_the_calibration_provenance() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("m.json");
+    let p = path.to_str().expect("utf-8 path");
+    // A nominal marker: nothing recorded, nothing to flag.
+    assert!(jawtrack(&["marker", "--out", p]).status.success());
+    let out = ok(&jawtrack(&["check-marker", p]));
+    assert!(out.contains("calibration: none recorded") && !out.contains("uncalibrated_tag"), "{out}");
+    // A version 1 file still reads, its provenance unknown.
+    let v1 = std::fs::read_to_string(&path).expect("written").replacen("\"version\": 2", "\"version\": 1", 1);
+    std::fs::write(&path, v1).expect("rewritten");
+    let out = ok(&jawtrack(&["check-marker", p]));
+    assert!(out.contains("calibration: none recorded"), "{out}");
+    // Calibrated but tags 17 and 21.
+    calibrated_marker_file(&path, |id| id == 17 || id == 21);
+    let out = ok(&jawtrack(&["check-marker", p]));
+    assert!(!out.contains("none recorded"), "{out}");
+    assert!(
+        out.contains(
+            "calibrated from 18 views of cal/frames: reprojection error 1.500 px nominal, 0.200 px calibrated"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("     12  calibrated      9      2.250     0.125"), "{out}");
+    assert!(out.contains("     17  nominal         1"), "{out}");
+    assert!(out.contains("nominal tags 17, 21: a pose that uses them is flagged mandible:uncalibrated_tag"), "{out}");
+    assert!(!out.contains("maxilla:uncalibrated_tag"), "every maxilla tag is calibrated: {out}");
+    // A tag's residual that cannot be.
+    let bad =
+        std::fs::read_to_string(&path).expect("written").replacen("\"rms_after_px\":0.125", "\"rms_after_px\":-1", 1);
+    std::fs::write(&path, bad).expect("rewritten");
+    refused(&jawtrack(&["check-marker", p]), "rms_after_px");
+}
+
+#[test]
+fn track_counts_the_frames_resting_on_nominal_tags_of_a_calibrated_marker() {
+    let frame = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/clean-hinge-1080p/frame_0000.png");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let marker = dir.path().join("m.json");
+    // The whole mandible left nominal, the maxilla calibrated.
+    calibrated_marker_file(&marker, |id| id >= 12);
+    let out = dir.path().join("poses.jsonl");
+    let args = ["track", "--intrinsics", "1500,1500,959.5,539.5", "--marker", marker.to_str().expect("utf-8")];
+    let o = jawtrack(&[&args[..], &["--out", out.to_str().expect("utf-8"), frame]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("poses");
+    let line: serde_json::Value = serde_json::from_str(text.lines().nth(1).expect("a frame")).expect("json");
+    let flags: Vec<&str> = line["flags"].as_array().expect("flags").iter().filter_map(|f| f.as_str()).collect();
+    assert!(flags.contains(&"mandible:uncalibrated_tag"), "{flags:?}");
+    assert!(!flags.contains(&"maxilla:uncalibrated_tag"), "{flags:?}");
+    let ids: Vec<String> =
+        line["mandible"]["tags"].as_array().expect("mandible tags").iter().map(|t| t.to_string()).collect();
+    let said = format!("warning: mandible: 1 frames rest on nominal tags {}", ids.join(", "));
+    assert!(stderr(&o).contains(&said), "{said} in {}", stderr(&o));
+    assert!(stderr(&o).contains("mandible:uncalibrated_tag ×1"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("maxilla: 1 frames rest"), "{}", stderr(&o));
+}
+
 #[test]
 fn impossible_marker_parameters_are_refused() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -418,6 +497,10 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     assert!(!stderr(&o).contains("check --intrinsics"), "the right intrinsics pass: {}", stderr(&o));
     let o = jawtrack(&["check-marker", calibrated]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The file says what it was calibrated from, and that tag 9 was left nominal.
+    let listed = String::from_utf8_lossy(&o.stdout);
+    assert!(listed.contains(&format!("views of {frames}:")), "{listed}");
+    assert!(listed.contains("     9  nominal         0"), "{listed}");
     // Twice the focal length: the calibration says so, and names the factor that fits.
     let doubled = "3000,3000,959.5,539.5";
     let wrong = dir.path().join("wrong.json");

@@ -1,10 +1,14 @@
 //! The marker file: versioned JSON describing both bodies' tags in millimetres.
 //!
 //! ```json
-//! {"version": 1, "units": "mm", "edge": 12.7,
+//! {"version": 2, "units": "mm", "edge": 12.7,
 //!  "bodies": [{"name": "maxilla",
+//!              "calibration": {"views": 18, "rms_before_px": 1.9, "rms_after_px": 0.21,
+//!                              "recordings": ["calibration_frames"]},
 //!              "tags": [{"id": 0, "face": 0, "size": 10.6,
-//!                        "corners": [[x,y,z] ×4], "center": [x,y,z], "face_polygon": [[x,y,z] ×5]}, …]},
+//!                        "corners": [[x,y,z] ×4], "center": [x,y,z], "face_polygon": [[x,y,z] ×5],
+//!                        "calibration": {"status": "calibrated", "views": 9,
+//!                                        "rms_before_px": 2.1, "rms_after_px": 0.2}}, …]},
 //!             {"name": "mandible", "tags": […]}]}
 //! ```
 //!
@@ -12,15 +16,26 @@
 //! upright tag); the face polygon starts at the apex and runs counter-clockwise seen from
 //! outside. A calibrated marker uses the same schema; its corners may deviate from the ideal
 //! solid, within the tolerances checked here.
+//!
+//! **Provenance** (version 2): a calibrated body says how it was calibrated (`calibration`:
+//! the views that showed two of its tags, the RMS reprojection error before and after, the
+//! recordings), and each of its tags whether the calibration placed it (`"status":
+//! "calibrated"`, with its views and RMS error before and after) or left it at the nominal place
+//! (`"status": "nominal"`, with the views it had, 0 if never seen). A body has `calibration`
+//! exactly when its tags have. A nominal marker has none; nor does a version 1 file, read with
+//! its provenance unknown.
 
 use crate::MarkerError;
-use crate::model::{Body, BodyKind, Marker, Tag, fitted_normal, newell_normal, plane_deviation};
+use crate::model::{
+    Body, BodyKind, BodyProvenance, Marker, Tag, TagProvenance, fitted_normal, newell_normal, plane_deviation,
+};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// The only marker file version this build reads and writes.
-pub const MARKER_FILE_VERSION: u32 = 1;
+/// The marker file version this build writes; it reads this one and version 1 (which has no
+/// provenance).
+pub const MARKER_FILE_VERSION: u32 = 2;
 
 /// How far (mm) a face's vertices, or a tag's corners, may stray from their common plane.
 /// Printed tags lie flat on a flat face; calibration noise is far below this.
@@ -33,7 +48,7 @@ const OUTSIDE_TOLERANCE_MM: f64 = 0.05;
 const SIDE_TOLERANCE: f64 = 0.1;
 
 #[derive(Serialize, Deserialize)]
-struct FileV1 {
+struct File {
     version: u32,
     units: String,
     edge: f64,
@@ -43,7 +58,24 @@ struct FileV1 {
 #[derive(Serialize, Deserialize)]
 struct FileBody {
     name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    calibration: Option<FileBodyCalibration>,
     tags: Vec<FileTag>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct FileBodyCalibration {
+    views: u32,
+    rms_before_px: f64,
+    rms_after_px: f64,
+    recordings: Vec<String>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+enum FileTagCalibration {
+    Nominal { views: u32 },
+    Calibrated { views: u32, rms_before_px: f64, rms_after_px: f64 },
 }
 
 #[derive(Serialize, Deserialize)]
@@ -54,6 +86,8 @@ struct FileTag {
     corners: [[f64; 3]; 4],
     center: [f64; 3],
     face_polygon: [[f64; 3]; 5],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    calibration: Option<FileTagCalibration>,
 }
 
 fn arr(v: &Vector3<f64>) -> [f64; 3] {
@@ -67,7 +101,7 @@ fn vec3(a: &[f64; 3]) -> Vector3<f64> {
 impl Marker {
     /// The marker file's JSON text (pretty-printed, numbers written to round-trip exactly).
     pub fn to_json(&self) -> String {
-        let file = FileV1 {
+        let file = File {
             version: MARKER_FILE_VERSION,
             units: "mm".into(),
             edge: self.edge,
@@ -76,6 +110,12 @@ impl Marker {
                 .iter()
                 .map(|b| FileBody {
                     name: b.kind.name().into(),
+                    calibration: b.provenance.as_ref().map(|p| FileBodyCalibration {
+                        views: p.views,
+                        rms_before_px: p.rms_before_px,
+                        rms_after_px: p.rms_after_px,
+                        recordings: p.recordings.clone(),
+                    }),
                     tags: b
                         .tags
                         .iter()
@@ -86,6 +126,12 @@ impl Marker {
                             corners: t.corners.map(|c| arr(&c)),
                             center: arr(&t.center),
                             face_polygon: t.face_polygon.map(|c| arr(&c)),
+                            calibration: t.provenance.map(|p| match p {
+                                TagProvenance::Nominal { views } => FileTagCalibration::Nominal { views },
+                                TagProvenance::Calibrated { views, rms_before_px, rms_after_px } => {
+                                    FileTagCalibration::Calibrated { views, rms_before_px, rms_after_px }
+                                }
+                            }),
                         })
                         .collect(),
                 })
@@ -98,12 +144,13 @@ impl Marker {
     pub fn from_json(text: &str) -> Result<Marker, MarkerError> {
         let value: serde_json::Value = serde_json::from_str(text).map_err(|e| MarkerError::Json(e.to_string()))?;
         let version = value.get("version").ok_or_else(|| field("marker file", "version", "is missing"))?;
-        match version.as_u64() {
-            Some(v) if v == u64::from(MARKER_FILE_VERSION) => {}
+        let with_provenance = match version.as_u64() {
+            Some(1) => false,
+            Some(v) if v == u64::from(MARKER_FILE_VERSION) => true,
             Some(v) => return Err(MarkerError::Version { found: v.to_string() }),
             None => return Err(MarkerError::Version { found: version.to_string() }),
-        }
-        let file: FileV1 = serde_path_to_error::deserialize(&value).map_err(|e| {
+        };
+        let mut file: File = serde_path_to_error::deserialize(&value).map_err(|e| {
             let path = e.path().to_string();
             MarkerError::Field {
                 location: describe_path(&value, &path),
@@ -111,6 +158,15 @@ impl Marker {
                 reason: e.into_inner().to_string(),
             }
         })?;
+        if !with_provenance {
+            // Version 1 had no provenance: whatever such keys a writer added mean nothing.
+            for b in &mut file.bodies {
+                b.calibration = None;
+                for t in &mut b.tags {
+                    t.calibration = None;
+                }
+            }
+        }
         let marker = from_file(file)?;
         marker.validate()?;
         Ok(marker)
@@ -131,7 +187,8 @@ impl Marker {
 
     /// Checks everything a marker must satisfy to be tracked: known body names at most once,
     /// unique tag ids and faces, finite numbers, planar faces, tags on and inside their face,
-    /// wound consistently with the outward normal and roughly square.
+    /// wound consistently with the outward normal and roughly square; provenance on a body
+    /// exactly when on its tags, with finite, non-negative residuals.
     pub fn validate(&self) -> Result<(), MarkerError> {
         if !self.edge.is_finite() || self.edge <= 0.0 {
             return Err(field("marker file", "edge", &format!("must be a positive number of mm, got {}", self.edge)));
@@ -147,6 +204,17 @@ impl Marker {
             if body.tags.is_empty() {
                 return Err(field(&format!("body '{}'", body.kind), "tags", "is empty"));
             }
+            if let Some(p) = &body.provenance {
+                for (name, v) in [("rms_before_px", p.rms_before_px), ("rms_after_px", p.rms_after_px)] {
+                    if !(v.is_finite() && v >= 0.0) {
+                        return Err(field(
+                            &format!("body '{}'", body.kind),
+                            "calibration",
+                            &format!("`{name}` must be a non-negative number of px, got {v}"),
+                        ));
+                    }
+                }
+            }
             for (ti, tag) in body.tags.iter().enumerate() {
                 let loc = format!("body '{}', tag id {} (bodies[{bi}].tags[{ti}])", body.kind, tag.id);
                 if let Some(prev) = ids.insert(tag.id, body.kind) {
@@ -156,9 +224,28 @@ impl Marker {
                     return Err(field(&loc, "face", &format!("face {} carries two tags", tag.face)));
                 }
                 validate_tag(tag).map_err(|(f, reason)| field(&loc, f, &reason))?;
+                validate_provenance(tag, body.provenance.is_some())
+                    .map_err(|reason| field(&loc, "calibration", &reason))?;
             }
         }
         Ok(())
+    }
+}
+
+fn validate_provenance(t: &Tag, body_calibrated: bool) -> Result<(), String> {
+    match (t.provenance, body_calibrated) {
+        (None, false) => Ok(()),
+        (None, true) => Err("is missing: the body records a calibration, so each of its tags says its own".into()),
+        (Some(_), false) => Err("is given but the body records no calibration".into()),
+        (Some(TagProvenance::Nominal { .. }), true) => Ok(()),
+        (Some(TagProvenance::Calibrated { rms_before_px, rms_after_px, .. }), true) => {
+            for (name, v) in [("rms_before_px", rms_before_px), ("rms_after_px", rms_after_px)] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(format!("`{name}` must be a non-negative number of px, got {v}"));
+                }
+            }
+            Ok(())
+        }
     }
 }
 
@@ -258,7 +345,7 @@ fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
     Ok(())
 }
 
-fn from_file(file: FileV1) -> Result<Marker, MarkerError> {
+fn from_file(file: File) -> Result<Marker, MarkerError> {
     if file.units != "mm" {
         return Err(field("marker file", "units", &format!("must be \"mm\", got \"{}\"", file.units)));
     }
@@ -284,9 +371,21 @@ fn from_file(file: FileV1) -> Result<Marker, MarkerError> {
                     corners: t.corners.map(|c| vec3(&c)),
                     center: vec3(&t.center),
                     face_polygon: t.face_polygon.map(|c| vec3(&c)),
+                    provenance: t.calibration.map(|c| match c {
+                        FileTagCalibration::Nominal { views } => TagProvenance::Nominal { views },
+                        FileTagCalibration::Calibrated { views, rms_before_px, rms_after_px } => {
+                            TagProvenance::Calibrated { views, rms_before_px, rms_after_px }
+                        }
+                    }),
                 })
                 .collect();
-            Ok(Body { kind, tags })
+            let provenance = b.calibration.map(|c| BodyProvenance {
+                views: c.views,
+                rms_before_px: c.rms_before_px,
+                rms_after_px: c.rms_after_px,
+                recordings: c.recordings,
+            });
+            Ok(Body { kind, tags, provenance })
         })
         .collect::<Result<Vec<_>, MarkerError>>()?;
     Ok(Marker { edge: file.edge, bodies })
@@ -334,8 +433,10 @@ mod tests {
         let back = Marker::from_json(&m.to_json()).expect("own output parses");
         assert_eq!(m, back);
         let v = nominal_json();
-        assert_eq!(v["version"], 1);
+        assert_eq!(v["version"], 2);
         assert_eq!(v["units"], "mm");
+        assert!(v["bodies"][0].get("calibration").is_none(), "a nominal marker records no calibration");
+        assert!(v["bodies"][0]["tags"][0].get("calibration").is_none());
         assert_eq!(v["bodies"][1]["name"], "mandible");
         assert_eq!(v["bodies"][1]["tags"][0]["id"], 12);
     }
@@ -352,10 +453,95 @@ mod tests {
     #[test]
     fn wrong_version_is_named() {
         let mut v = nominal_json();
-        v["version"] = json!(2);
-        assert!(err_of(&v).contains("version 2"), "{}", err_of(&v));
+        v["version"] = json!(3);
+        assert!(err_of(&v).contains("version 3"), "{}", err_of(&v));
         v.as_object_mut().expect("object").remove("version");
         assert!(err_of(&v).contains("version"));
+    }
+
+    /// The default marker with its mandible calibrated: tag 12 placed, tag 13 never seen.
+    fn calibrated_mandible() -> Marker {
+        let mut m = Marker::default();
+        let body = &mut m.bodies[1];
+        body.provenance = Some(BodyProvenance {
+            views: 18,
+            rms_before_px: 1.25,
+            rms_after_px: 0.125,
+            recordings: vec!["calibration/frames".into(), "second.mov".into()],
+        });
+        for t in &mut body.tags {
+            t.provenance = Some(TagProvenance::Calibrated { views: 7, rms_before_px: 2.5, rms_after_px: 0.1 + 0.2 });
+        }
+        body.tags[1].provenance = Some(TagProvenance::Nominal { views: 0 });
+        body.tags[5].provenance = Some(TagProvenance::Nominal { views: 2 });
+        m
+    }
+
+    #[test]
+    fn provenance_round_trips_exactly() {
+        let m = calibrated_mandible();
+        let back = Marker::from_json(&m.to_json()).expect("own output parses");
+        assert_eq!(back, m);
+        let v: Value = serde_json::from_str(&m.to_json()).expect("json");
+        assert_eq!(v["version"], 2);
+        let body = &v["bodies"][1]["calibration"];
+        assert_eq!(body["views"], 18);
+        assert_eq!(body["rms_before_px"], 1.25);
+        assert_eq!(body["rms_after_px"], 0.125);
+        assert_eq!(body["recordings"], json!(["calibration/frames", "second.mov"]));
+        let t12 = &v["bodies"][1]["tags"][0]["calibration"];
+        assert_eq!(t12["status"], "calibrated");
+        assert_eq!(t12["views"], 7);
+        assert_eq!(t12["rms_before_px"], 2.5);
+        assert_eq!(v["bodies"][1]["tags"][1]["calibration"], json!({"status": "nominal", "views": 0}));
+        assert!(v["bodies"][0].get("calibration").is_none(), "the maxilla was not calibrated");
+        assert!(back.is_calibrated());
+        // The maxilla, never calibrated, and the mandible's two tags left nominal.
+        let loose: Vec<u32> = back.uncalibrated_tags().iter().map(|&(_, id)| id).collect();
+        assert_eq!(loose, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 17]);
+        assert!(Marker::default().uncalibrated_tags().is_empty(), "a nominal marker has nothing to flag");
+    }
+
+    #[test]
+    fn version_1_file_reads_with_provenance_unknown() {
+        let mut v = nominal_json();
+        v["version"] = json!(1);
+        let old = Marker::from_json(&v.to_string()).expect("a version 1 file still reads");
+        assert_eq!(old, Marker::default());
+        // Provenance-like keys in a version 1 file mean nothing.
+        let mut v: Value = serde_json::from_str(&calibrated_mandible().to_json()).expect("json");
+        v["version"] = json!(1);
+        let old = Marker::from_json(&v.to_string()).expect("a version 1 file still reads");
+        assert!(old.tags().all(|(_, t)| t.provenance.is_none()));
+        assert!(old.bodies.iter().all(|b| b.provenance.is_none()));
+        assert!(!old.is_calibrated() && old.uncalibrated_tags().is_empty());
+    }
+
+    #[test]
+    fn bad_provenance_is_named() {
+        let good: Value = serde_json::from_str(&calibrated_mandible().to_json()).expect("json");
+        let mut v = good.clone();
+        v["bodies"][1]["tags"][0]["calibration"]["rms_after_px"] = json!(-0.5);
+        let e = err_of(&v);
+        assert!(e.contains("tag id 12") && e.contains("rms_after_px") && e.contains("non-negative"), "{e}");
+        let mut v = good.clone();
+        v["bodies"][1]["calibration"]["rms_before_px"] = json!(-1.0);
+        assert!(err_of(&v).contains("mandible"), "{}", err_of(&v));
+        let mut v = good.clone();
+        v["bodies"][1]["tags"][2]["calibration"]["status"] = json!("guessed");
+        let e = err_of(&v);
+        assert!(e.contains("tag id 14") && e.contains("calibration"), "{e}");
+        let mut v = good.clone();
+        v["bodies"][1]["tags"][3]["calibration"]["views"] = json!(-3);
+        assert!(err_of(&v).contains("tag id 15"), "{}", err_of(&v));
+        let mut v = good.clone();
+        v["bodies"][1]["tags"][4].as_object_mut().expect("object").remove("calibration");
+        let e = err_of(&v);
+        assert!(e.contains("tag id 16") && e.contains("calibration") && e.contains("missing"), "{e}");
+        let mut v = good;
+        v["bodies"][0]["tags"][0]["calibration"] = json!({"status": "nominal", "views": 1});
+        let e = err_of(&v);
+        assert!(e.contains("tag id 0") && e.contains("no calibration"), "{e}");
     }
 
     #[test]

@@ -10,7 +10,8 @@ pub mod model;
 pub use dodecahedron::{Dodecahedron, Face};
 pub use file::MARKER_FILE_VERSION;
 pub use model::{
-    Body, BodyKind, DEFAULT_EDGE_MM, Marker, PrintError, TAG_CORNERS, TAGS_PER_BODY, Tag, default_tag_size,
+    Body, BodyKind, BodyProvenance, DEFAULT_EDGE_MM, Marker, PrintError, TAG_CORNERS, TAGS_PER_BODY, Tag,
+    TagProvenance, default_tag_size,
 };
 
 /// Errors from building, reading or checking a marker.
@@ -20,7 +21,7 @@ pub enum MarkerError {
     #[error("marker file is not valid JSON: {0}")]
     Json(String),
     /// The file's `version` is not one this build reads.
-    #[error("unsupported marker file version {found} (this build reads version 1)")]
+    #[error("unsupported marker file version {found} (this build reads versions 1 and 2)")]
     Version {
         /// The version found.
         found: String,

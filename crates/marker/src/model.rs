@@ -79,6 +79,56 @@ pub struct Tag {
     pub center: Vector3<f64>,
     /// The face's pentagon, apex first, counter-clockwise seen from outside.
     pub face_polygon: [Vector3<f64>; 5],
+    /// How its placement was established; `None` when unknown (a nominal marker, or a file
+    /// from before marker file version 2).
+    pub provenance: Option<TagProvenance>,
+}
+
+/// How a tag's placement was established by a marker calibration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TagProvenance {
+    /// Kept where the model (or the assembly check) puts it: seen in too few views to be
+    /// calibrated.
+    Nominal {
+        /// Views it was seen in beside another tag of its body (0 when never seen).
+        views: u32,
+    },
+    /// Placed by the bundle adjustment.
+    Calibrated {
+        /// Views it was seen in.
+        views: u32,
+        /// Its RMS reprojection error (px) with the nominal placement, each view's pose fitted.
+        rms_before_px: f64,
+        /// … and with the calibrated one.
+        rms_after_px: f64,
+    },
+}
+
+impl TagProvenance {
+    /// Views the tag was seen in during the calibration.
+    pub fn views(&self) -> u32 {
+        match *self {
+            TagProvenance::Nominal { views } | TagProvenance::Calibrated { views, .. } => views,
+        }
+    }
+
+    /// Whether the bundle adjustment placed the tag.
+    pub fn is_calibrated(&self) -> bool {
+        matches!(self, TagProvenance::Calibrated { .. })
+    }
+}
+
+/// How a body's tags were calibrated: the whole body's reprojection error and its sources.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyProvenance {
+    /// Views that showed two of its tags or more.
+    pub views: u32,
+    /// RMS reprojection error (px) over its tags' corners with the nominal marker …
+    pub rms_before_px: f64,
+    /// … and with the calibrated one.
+    pub rms_after_px: f64,
+    /// The recordings calibrated from (a frames folder, a video), as given.
+    pub recordings: Vec<String>,
 }
 
 impl Tag {
@@ -127,6 +177,9 @@ pub struct Body {
     pub kind: BodyKind,
     /// Its tags (at most one per face).
     pub tags: Vec<Tag>,
+    /// Its calibration; `None` when unknown (a nominal marker, an old file, or a body no
+    /// calibration saw). Present exactly when its tags' provenance is.
+    pub provenance: Option<BodyProvenance>,
 }
 
 /// Both bodies of a printed marker pair.
@@ -200,6 +253,7 @@ impl Marker {
             .map(|&kind| Body {
                 kind,
                 tags: solid.faces().iter().map(|f| nominal_tag(f, kind.first_id() + f.index as u32, size)).collect(),
+                provenance: None,
             })
             .collect();
         Ok(Marker { edge, bodies })
@@ -247,6 +301,27 @@ impl Marker {
     pub fn tags(&self) -> impl Iterator<Item = (BodyKind, &Tag)> {
         self.bodies.iter().flat_map(|b| b.tags.iter().map(move |t| (b.kind, t)))
     }
+
+    /// Whether a calibration placed at least one of its tags.
+    pub fn is_calibrated(&self) -> bool {
+        self.tags().any(|(_, t)| t.provenance.is_some_and(|p| p.is_calibrated()))
+    }
+
+    /// The tags of a calibrated marker that no calibration placed (left nominal, or of a body
+    /// the calibration never saw), ascending by id; none for a marker that is not calibrated,
+    /// whose tags are all nominal alike.
+    pub fn uncalibrated_tags(&self) -> Vec<(BodyKind, u32)> {
+        if !self.is_calibrated() {
+            return Vec::new();
+        }
+        let mut ids: Vec<(BodyKind, u32)> = self
+            .tags()
+            .filter(|(_, t)| !t.provenance.is_some_and(|p| p.is_calibrated()))
+            .map(|(k, t)| (k, t.id))
+            .collect();
+        ids.sort_unstable_by_key(|&(_, id)| id);
+        ids
+    }
 }
 
 fn nominal_tag(face: &Face, id: u32, size: f64) -> Tag {
@@ -258,6 +333,7 @@ fn nominal_tag(face: &Face, id: u32, size: f64) -> Tag {
         corners: TAG_CORNERS.map(|(u, v)| face.center + face.x_axis * (u * h) + face.y_axis * (v * h)),
         center: face.center,
         face_polygon: face.vertices,
+        provenance: None,
     }
 }
 

@@ -21,12 +21,15 @@ pub enum Flag {
     /// The frame could not be decoded or tracked (a damaged image file, a frame of another
     /// size): it was skipped, and its line holds no pose.
     Unreadable,
+    /// A body's pose rests on a tag that the marker's calibration left at its nominal place
+    /// (raised only with a calibrated marker: with a nominal one every tag is nominal alike).
+    UncalibratedTag(BodyKind),
 }
 
 impl Flag {
     /// Every flag, in the order of their datagram bits (`docs/wire.md`): a flag added later
     /// goes at the end.
-    pub const ALL: [Flag; 12] = [
+    pub const ALL: [Flag; 14] = [
         Flag::NoTags,
         Flag::Lost(BodyKind::Maxilla),
         Flag::Lost(BodyKind::Mandible),
@@ -39,6 +42,8 @@ impl Flag {
         Flag::RejectedTags(BodyKind::Maxilla),
         Flag::RejectedTags(BodyKind::Mandible),
         Flag::Unreadable,
+        Flag::UncalibratedTag(BodyKind::Maxilla),
+        Flag::UncalibratedTag(BodyKind::Mandible),
     ];
 
     /// A short machine-readable name, e.g. `mandible:lost`.
@@ -51,6 +56,7 @@ impl Flag {
             Flag::HighReprojectionError(b) => format!("{b}:high_reprojection_error"),
             Flag::RejectedTags(b) => format!("{b}:rejected_tags"),
             Flag::Unreadable => "unreadable".into(),
+            Flag::UncalibratedTag(b) => format!("{b}:uncalibrated_tag"),
         }
     }
 
@@ -87,5 +93,9 @@ mod tests {
         assert_eq!(Flag::NoTags.name(), "no_tags");
         assert_eq!(Flag::Lost(BodyKind::Mandible).name(), "mandible:lost");
         assert_eq!(Flag::HighReprojectionError(BodyKind::Maxilla).name(), "maxilla:high_reprojection_error");
+        assert_eq!(Flag::UncalibratedTag(BodyKind::Mandible).name(), "mandible:uncalibrated_tag");
+        // Bits are never renumbered: the newest flags come last.
+        assert_eq!(Flag::ALL[11], Flag::Unreadable);
+        assert_eq!(Flag::ALL[12..], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::UncalibratedTag));
     }
 }

@@ -18,7 +18,9 @@
 //! dropped for that frame (a one-frame flicker, e.g. a misread glare patch). Quality flags say
 //! what went wrong in a frame; a frame without tags is a result with flags, not an error, and
 //! a pose that is not finite is never returned. New settings ([`Tracker::set_config`]) keep
-//! the motion tracked so far.
+//! the motion tracked so far. With a calibrated marker, a body whose pose uses a tag the
+//! calibration left at its nominal place is flagged `uncalibrated_tag`
+//! ([`Tracker::uncalibrated_tags`]); a nominal marker never is.
 
 pub mod bite;
 pub mod registration;
@@ -244,6 +246,8 @@ pub struct Tracker {
     tag_counts: std::collections::BTreeMap<u32, (usize, usize)>,
     /// The recent raw jaw poses, for the intercuspation step.
     bite: BiteWindow,
+    /// Ids of the tags a calibrated marker left nominal, ascending (empty for a nominal marker).
+    uncalibrated: Vec<u32>,
 }
 
 fn slot(kind: BodyKind) -> usize {
@@ -263,6 +267,7 @@ impl Tracker {
                 .map(|b| b.tags.iter().flat_map(|t| t.corners.iter().map(|c| Point3::from(*c))).collect())
                 .unwrap_or_default()
         });
+        let uncalibrated = marker.uncalibrated_tags().into_iter().map(|(_, id)| id).collect();
         Ok(Tracker {
             detector: Detector::new(config.detector)?,
             marker,
@@ -275,12 +280,20 @@ impl Tracker {
             corners,
             tag_counts: Default::default(),
             bite: BiteWindow::new(config.bite),
+            uncalibrated,
         })
     }
 
     /// The marker tracked.
     pub fn marker(&self) -> &Marker {
         &self.marker
+    }
+
+    /// The ids of the tags a calibrated marker left at their nominal place, ascending: a pose
+    /// that uses one is flagged [`Flag::UncalibratedTag`]. Empty for a nominal marker (every
+    /// tag nominal alike) and for one calibrated whole.
+    pub fn uncalibrated_tags(&self) -> &[u32] {
+        &self.uncalibrated
     }
 
     /// The settings.
@@ -612,6 +625,9 @@ impl Tracker {
         }
         if rms > self.config.max_rms_px {
             flags.push(Flag::HighReprojectionError(kind));
+        }
+        if pose.tags.iter().any(|id| self.uncalibrated.binary_search(id).is_ok()) {
+            flags.push(Flag::UncalibratedTag(kind));
         }
         let finite = chosen.is_finite() && rms.is_finite() && covariance.iter().all(|v| !v.is_nan());
         finite.then_some(BodyResult {

@@ -58,7 +58,8 @@ public struct StatusItem: Equatable {
 
 /// The status bar's content, decided here and only laid out by the view: the first line
 /// (jaws, timing, frame rate, link, recording), then at most one line each for the frame's
-/// problem or flags, estimated intrinsics, and the link's problem.
+/// problem or flags (and one per jaw whose pose uses tags the marker's calibration left
+/// nominal), estimated intrinsics, and the link's problem.
 public struct StatusBar: Equatable {
     public let items: [StatusItem]
     /// Whether the link light is shown, and green.
@@ -93,6 +94,7 @@ public struct StatusBar: Equatable {
             notes.append(StatusItem(text: problem, tone: .problem))
         } else if !status.flags.isEmpty {
             notes.append(StatusItem(text: status.flags.joined(separator: ", "), tone: .warning))
+            notes += Self.uncalibratedNotes(status.flags)
         }
         if status.droppedFrames > 0 {
             notes.append(StatusItem(text: "\(status.droppedFrames) frames dropped (tracking slower than the camera)", tone: .warning))
@@ -104,6 +106,18 @@ public struct StatusBar: Equatable {
             notes.append(StatusItem(text: linkProblem, tone: .problem))
         }
         self.notes = notes
+    }
+
+    /// The `BODY:uncalibrated_tag` flags in words: the jaw's pose uses tags that the calibrated
+    /// marker file left at their nominal place.
+    public static func uncalibratedNotes(_ flags: [String]) -> [StatusItem] {
+        var notes: [StatusItem] = []
+        for (body, words) in [("maxilla", "upper"), ("mandible", "lower")] {
+            if flags.contains("\(body):uncalibrated_tag") {
+                notes.append(StatusItem(text: "The \(words) marker rests on tags its calibration left nominal.", tone: .warning))
+            }
+        }
+        return notes
     }
 
     /// An exposure as photographers write it: "1/500 s" (or "12 ms" when long).

@@ -237,4 +237,38 @@ final class ScreenTests: XCTestCase {
         XCTAssertTrue(bar.notes.contains { $0.text.hasPrefix("4 frames dropped") })
         XCTAssertEqual(bar.link.text, "LINK: no ack")
     }
+
+    func testAJawOnTagsTheCalibrationNeverSawIsSaidInWords() {
+        var status = TrackingStatus()
+        status.flags = ["mandible:single_tag", "mandible:uncalibrated_tag"]
+        let bar = StatusBar(
+            status: status, transmitting: false, light: AckLight(), linkProblem: nil, recording: false,
+            recordedFrames: 0, now: 0
+        )
+        XCTAssertEqual(
+            bar.notes,
+            [
+                StatusItem(text: "mandible:single_tag, mandible:uncalibrated_tag", tone: .warning),
+                StatusItem(text: "The lower marker rests on tags its calibration left nominal.", tone: .warning),
+            ]
+        )
+        status.flags = ["maxilla:uncalibrated_tag", "mandible:uncalibrated_tag"]
+        let both = StatusBar(
+            status: status, transmitting: false, light: AckLight(), linkProblem: nil, recording: false,
+            recordedFrames: 0, now: 0
+        )
+        XCTAssertEqual(
+            both.notes.dropFirst().map(\.text),
+            [
+                "The upper marker rests on tags its calibration left nominal.",
+                "The lower marker rests on tags its calibration left nominal.",
+            ]
+        )
+        status.flags = ["maxilla:single_tag"]
+        let plain = StatusBar(
+            status: status, transmitting: false, light: AckLight(), linkProblem: nil, recording: false,
+            recordedFrames: 0, now: 0
+        )
+        XCTAssertFalse(plain.notes.contains { $0.text.contains("calibration left nominal") })
+    }
 }
