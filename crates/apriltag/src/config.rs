@@ -83,8 +83,13 @@ pub struct DetectorConfig {
     /// toward its dark side by a fraction of the blur, in linear light it stays put; (2) with
     /// the gradient's plain mean along the normal rather than the mean weighted by its square,
     /// which pulls toward pixel centres by up to 0.1 px; (3) with the search window re-centred
-    /// on the edge found, so a wide blur (4K) is not cut off on one side. `false` reproduces
-    /// the C library exactly.
+    /// on the edge found, so a wide blur (4K) is not cut off on one side; (4) with only the
+    /// one edge nearest the quad's side, within half a cell of it: on small or steeply tilted
+    /// tags the window otherwise takes in the next edge out (white border to a brighter
+    /// background) and pulls the side outward by 1–2 px; the window is split so only on sides
+    /// whose gradient profile, summed along the side, shows two edges (one sample's profile on
+    /// a dim, blurred grazing tag dips by noise alone). `false` reproduces the C library
+    /// exactly.
     pub linear_edges: bool,
     /// Sharpening of the decoded bit samples: helps small, blurred tags decode.
     pub decode_sharpening: f64,

@@ -13,10 +13,13 @@ use crate::family::Tag36h11;
 use crate::gray::Gray;
 use crate::image::ImageView;
 use crate::preprocess::{blur_or_sharpen, decimate_into};
-use crate::quads::{Quad, fit_quads, intersect_lines};
+use crate::quads::{Quad, fit_quads};
 use crate::threshold::threshold_into;
 use crate::workers::Workers;
+use edges::refine_edges;
 use std::sync::{Arc, Mutex, TryLockError};
+
+mod edges;
 
 /// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
 /// (0, 0); the C library reports 0.5 more).
@@ -258,133 +261,6 @@ static SRGB_TO_LINEAR: std::sync::LazyLock<[f64; 256]> = std::sync::LazyLock::ne
         255.0 * if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
     })
 });
-
-/// C's `refine_edges`: each edge is re-fitted at full resolution to the points of strongest
-/// gradient found along its normal, and the corners re-intersected. `lut` maps pixel values
-/// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges);
-/// `recentre` re-centres the search window on the edge (C does not).
-fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[f64; 256], recentre: bool) {
-    let (w, h) = (im.width() as i64, im.height() as i64);
-    let px = |x: i64, y: i64| lut[usize::from(im.get(x as usize, y as usize).unwrap_or(0))];
-    let mut lines = [[0.0f64; 4]; 4];
-    for (edge, line) in lines.iter_mut().enumerate() {
-        let (a, b) = (edge, (edge + 1) & 3);
-        let (pa, pb) = (quad.p[a].map(f64::from), quad.p[b].map(f64::from));
-        let mut nx = pb[1] - pa[1];
-        let mut ny = -pb[0] + pa[0];
-        let mag = (nx * nx + ny * ny).sqrt();
-        nx /= mag;
-        ny /= mag;
-        let nsamples = 16.max((mag / 8.0) as i64);
-        let (mut mx, mut my, mut mxx, mut mxy, mut myy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        let mut cache: Vec<Option<Option<f64>>> = Vec::new();
-        for s in 0..nsamples {
-            let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
-            let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
-            let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
-            let range = (f64::from(quad_decimate) + 1.0) as i64;
-            // The image along the normal, sampled once per quarter pixel from −(range + reach + 1)
-            // to range + reach + 1 px (windows of ±reach centred within ±range), as each window
-            // needs it (`cache` holds them: None = not yet).
-            // Our windows reach at least 3 px: undecimated 4K frames blur edges wider than C's
-            // ±2 px.
-            let reach = if recentre { range.max(3) } else { range };
-            let lowest = -((range + reach) as f64) - 1.0;
-            cache.clear();
-            cache.resize((4 * (2 * (range + reach) + 2) + 1) as usize, None);
-            let mut sample = |pos: f64| -> Option<f64> {
-                // pos is on the quarter-pixel grid above `lowest`: round to its index.
-                let j = ((pos - lowest) * 4.0 + 0.5) as usize;
-                *cache[j].get_or_insert_with(|| {
-                    let x = x0 + pos * nx - 0.5;
-                    let y = y0 + pos * ny - 0.5;
-                    // modf: integer part toward zero (the casts), fraction with the value's sign.
-                    let (xi, yi) = (x as i64, y as i64);
-                    let (fa, fb) = (x - xi as f64, y - yi as f64);
-                    if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
-                        return None;
-                    }
-                    Some(
-                        (1.0 - fa) * (1.0 - fb) * px(xi, yi)
-                            + fa * (1.0 - fb) * px(xi + 1, yi)
-                            + (1.0 - fa) * fb * px(xi, yi + 1)
-                            + fa * fb * px(xi + 1, yi + 1),
-                    )
-                })
-            };
-            // The gradient-weighted mean offset along the normal over the window [c − reach,
-            // c + reach], from quarter-pixel steps. C's window is at c = 0 and takes every step
-            // in it whole; ours may sit anywhere, and each step counts by how much of its
-            // quarter pixel lies inside, so the mean moves smoothly with `c`.
-            let reach = reach as f64;
-            let mut centroid = |c: f64| -> Option<f64> {
-                let (mut mn, mut mcount) = (0.0, 0.0);
-                let (first, last) = if recentre {
-                    (((c - reach) * 4.0).round() as i64, ((c + reach) * 4.0).round() as i64)
-                } else {
-                    (-4 * range, 4 * range)
-                };
-                for k in first..=last {
-                    let nn = 0.25 * k as f64;
-                    let inside = if recentre && (k == first || k == last) {
-                        let (a, b) = ((nn - 0.125).max(c - reach), (nn + 0.125).min(c + reach));
-                        ((b - a) * 4.0).clamp(0.0, 1.0)
-                    } else {
-                        1.0
-                    };
-                    let Some(g1) = sample(nn + 1.0) else { continue };
-                    let Some(g2) = sample(nn - 1.0) else { continue };
-                    if g1 < g2 {
-                        continue; // the gradient runs backwards here
-                    }
-                    // C squares the gradient, which pulls the mean toward pixel centres by up
-                    // to 0.1 px on edges along the pixel grid; the plain gradient's mean is the
-                    // edge at which the areas balance, exact for a linearly interpolated edge.
-                    let weight = if recentre { inside * (g1 - g2) } else { (g2 - g1) * (g2 - g1) };
-                    mn += weight * nn;
-                    mcount += weight;
-                }
-                (mcount > 0.0).then(|| mn / mcount)
-            };
-            let Some(mut n0) = centroid(0.0) else { continue };
-            if recentre {
-                // A window off-centre on the edge cuts one tail of the gradient and pulls the
-                // mean toward its centre (up to 0.1 px, with the edge's sub-pixel phase):
-                // centre it (within ±range of the quad's edge) on the edge found and measure
-                // again.
-                for _ in 0..3 {
-                    let c = n0.clamp(-(range as f64), range as f64);
-                    let Some(next) = centroid(c) else { break };
-                    let moved = (next - n0).abs();
-                    n0 = next;
-                    if moved < 1e-3 {
-                        break;
-                    }
-                }
-            }
-            let (bx, by) = (x0 + n0 * nx, y0 + n0 * ny);
-            mx += bx;
-            my += by;
-            mxx += bx * bx;
-            mxy += bx * by;
-            myy += by * by;
-            n += 1.0;
-        }
-        let (ex, ey) = (mx / n, my / n);
-        let cxx = mxx / n - ex * ex;
-        let cxy = mxy / n - ex * ey;
-        let cyy = myy / n - ey * ey;
-        let theta = 0.5 * ((-2.0 * cxy) as f32).atan2((cyy - cxx) as f32);
-        *line = [ex, ey, f64::from(theta.cos()), f64::from(theta.sin())];
-    }
-    for i in 0..4 {
-        // C keeps the old corner when the refined edges are near parallel.
-        let (det, corner) = intersect_lines(&lines[i], &lines[(i + 1) & 3]);
-        if det.abs() > 0.001 {
-            quad.p[(i + 1) & 3] = corner;
-        }
-    }
-}
 
 /// C's `homography_compute2`: the homography taking tag coordinates (−1,−1), (1,−1), (1,1),
 /// (−1,1) to the quad's corners, by Gaussian elimination with partial pivoting. `None` when

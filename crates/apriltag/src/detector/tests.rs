@@ -1,5 +1,6 @@
 //! The detector's unit tests on drawn tags: empty and odd frames, the four turns, a mirrored tag, a region of interest.
 
+use super::edges::one_edge;
 use super::*;
 use crate::config::Roi;
 
@@ -136,4 +137,19 @@ fn a_region_of_interest_keeps_full_frame_coordinates() {
         Detector::new(DetectorConfig { quad_sigma: 5.0, ..DetectorConfig::default() }).is_err(),
         "a blur wider than 4 px is refused"
     );
+}
+
+#[test]
+fn the_refit_takes_one_edge_of_two() {
+    // Two edges 12 steps (3 px) apart, the outer one stronger: the one nearest the centre.
+    let bump = |k: f64, at: f64, h: f64| h * (-(k - at) * (k - at) / 8.0).exp();
+    let g: Vec<f64> = (0..33).map(|k| bump(k as f64, 14.0, 1.0) + bump(k as f64, 26.0, 1.2)).collect();
+    let (lo, hi) = one_edge(&g, 16);
+    assert!(lo == 0 && (18..=22).contains(&hi), "{lo}..={hi}");
+    let (lo, hi) = one_edge(&g, 25);
+    assert!((18..=22).contains(&lo) && hi == 32, "{lo}..={hi}");
+    // One edge with small wiggles on its tails: the whole profile.
+    let g: Vec<f64> = (0..33).map(|k| bump(k as f64, 16.0, 1.0) + 0.04 * ((k % 3) as f64)).collect();
+    assert_eq!(one_edge(&g, 16), (0, 32));
+    assert_eq!(one_edge(&[0.0; 5], 2), (0, 4));
 }

@@ -1,0 +1,292 @@
+//! Edge refinement at full resolution: each side of a quad found on the decimated image is
+//! re-fitted to the strongest gradient along its normal, C's way or in linear light with one
+//! edge per window (see [`DetectorConfig::linear_edges`](crate::DetectorConfig::linear_edges)).
+
+use crate::image::ImageView;
+use crate::quads::{Quad, intersect_lines};
+
+/// C's `refine_edges`: each edge is re-fitted at full resolution to the points of strongest
+/// gradient found along its normal, and the corners re-intersected. `lut` maps pixel values
+/// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges);
+/// `recentre` re-centres the search window on the edge (C does not).
+pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[f64; 256], recentre: bool) {
+    let (w, h) = (im.width() as i64, im.height() as i64);
+    let px = |x: i64, y: i64| lut[usize::from(im.get(x as usize, y as usize).unwrap_or(0))];
+    let mut lines = [[0.0f64; 4]; 4];
+    let range = (f64::from(quad_decimate) + 1.0) as i64;
+    let mut points: Vec<(i64, [f64; 2], f64, bool)> = Vec::new();
+    // A side's summed gradient profile over the farthest any window looks, ±(range + reach)
+    // px, per quarter pixel (only every other step is filled).
+    let mut profile = vec![0.0; (8 * (range + range.max(3)) + 1) as usize];
+    for (edge, line) in lines.iter_mut().enumerate() {
+        let (a, b) = (edge, (edge + 1) & 3);
+        let (pa, pb) = (quad.p[a].map(f64::from), quad.p[b].map(f64::from));
+        let mut nx = pb[1] - pa[1];
+        let mut ny = -pb[0] + pa[0];
+        let mag = (nx * nx + ny * ny).sqrt();
+        nx /= mag;
+        ny /= mag;
+        let nsamples = 16.max((mag / 8.0) as i64);
+        let mut cache: Vec<Option<Option<f64>>> = Vec::new();
+        let (mut grads, mut vals): (Vec<f64>, Vec<Option<f64>>) = (Vec::new(), Vec::new());
+        // Sample `s`'s offset of the edge along the normal, and whether it took one edge of
+        // several in its window (only with `split`); with `sum`, adds its gradient profile to it
+        // instead.
+        let mut fit = |s: i64, split: bool, sum: Option<&mut [f64]>| -> Option<(f64, bool)> {
+            let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
+            let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
+            let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
+            // The image along the normal, sampled once per quarter pixel from −(range + reach + 1)
+            // to range + reach + 1 px (windows of ±reach centred within ±range), as each window
+            // needs it (`cache` holds them: None = not yet).
+            // Our windows reach at least 3 px: undecimated 4K frames blur edges wider than C's
+            // ±2 px.
+            let reach = if recentre { range.max(3) } else { range };
+            let lowest = -((range + reach) as f64) - 1.0;
+            cache.clear();
+            cache.resize((4 * (2 * (range + reach) + 2) + 1) as usize, None);
+            let mut sample = |pos: f64| -> Option<f64> {
+                // pos is on the quarter-pixel grid above `lowest`: round to its index.
+                let j = ((pos - lowest) * 4.0 + 0.5) as usize;
+                *cache[j].get_or_insert_with(|| {
+                    let x = x0 + pos * nx - 0.5;
+                    let y = y0 + pos * ny - 0.5;
+                    // modf: integer part toward zero (the casts), fraction with the value's sign.
+                    let (xi, yi) = (x as i64, y as i64);
+                    let (fa, fb) = (x - xi as f64, y - yi as f64);
+                    if xi < 0 || xi + 1 >= w || yi < 0 || yi + 1 >= h {
+                        return None;
+                    }
+                    Some(
+                        (1.0 - fa) * (1.0 - fb) * px(xi, yi)
+                            + fa * (1.0 - fb) * px(xi + 1, yi)
+                            + (1.0 - fa) * fb * px(xi, yi + 1)
+                            + fa * fb * px(xi + 1, yi + 1),
+                    )
+                })
+            };
+            // The gradient-weighted mean offset along the normal over the window [c − reach,
+            // c + reach], from quarter-pixel steps. C's window is at c = 0 and takes every step
+            // in it whole; ours may sit anywhere, and each step counts by how much of its
+            // quarter pixel lies inside, so the mean moves smoothly with `c`.
+            // The window also stays within half a cell of the edge (cells are the black
+            // square's width over 8, here measured to the opposite side): on a small or
+            // steeply tilted tag, a wider one takes in the next edge out.
+            let (qa, qb) = (quad.p[(edge + 2) & 3].map(f64::from), quad.p[(edge + 3) & 3].map(f64::from));
+            let (ux, uy) = (qb[0] - qa[0], qb[1] - qa[1]);
+            let across = ((ux * (y0 - qa[1]) - uy * (x0 - qa[0])) / ux.hypot(uy)).abs();
+            let reach = (reach as f64).min((across / 16.0).max(1.0));
+            // Cells wider than the farthest the window looks (its centre moves up to ±range,
+            // gradients and blur reach ~3 px beyond it, the quad is off by ~1 px): one edge.
+            let lone = across / 8.0 > range as f64 + reach + 4.0;
+            // The gradient profile over 1 px (what `one_edge` splits), to sum along the side.
+            if let Some(profile) = sum {
+                if !lone {
+                    // Over as far as this sample's windows look.
+                    let kmax = (profile.len() / 2) as i64;
+                    // Every half pixel (even steps) is enough to see a dip between edges a cell
+                    // (2 px or more) apart.
+                    let far = ((((range as f64 + reach) * 2.0).ceil() as i64) * 2).min(kmax);
+                    for k in (-far..=far).step_by(2) {
+                        let (a, b) = (sample(0.25 * (k + 2) as f64), sample(0.25 * (k - 2) as f64));
+                        if let (Some(g1), Some(g2)) = (a, b) {
+                            profile[(k + kmax) as usize] += (g1 - g2).max(0.0);
+                        }
+                    }
+                }
+                return None;
+            }
+            let mut centroid = |c: f64, split: bool| -> Option<(f64, bool)> {
+                let (mut mn, mut mcount) = (0.0, 0.0);
+                if !recentre {
+                    for k in -4 * range..=4 * range {
+                        let nn = 0.25 * k as f64;
+                        let Some(g1) = sample(nn + 1.0) else { continue };
+                        let Some(g2) = sample(nn - 1.0) else { continue };
+                        if g1 < g2 {
+                            continue; // the gradient runs backwards here
+                        }
+                        let weight = (g2 - g1) * (g2 - g1);
+                        mn += weight * nn;
+                        mcount += weight;
+                    }
+                    return (mcount > 0.0).then(|| (mn / mcount, false));
+                }
+                let (first, last) = (((c - reach) * 4.0).round() as i64, ((c + reach) * 4.0).round() as i64);
+                // The image at every quarter pixel the window's gradients need, read once.
+                vals.clear();
+                vals.extend((first - 4..=last + 4).map(|k| sample(0.25 * k as f64)));
+                // The gradient at step k over ±d quarter pixels (0 where it runs backwards or
+                // leaves the image).
+                let grad = |k: i64, d: i64| {
+                    let at = |k: i64| vals[(k - first + 4) as usize];
+                    match (at(k + d), at(k - d)) {
+                        (Some(g1), Some(g2)) if g1 >= g2 => g1 - g2,
+                        _ => 0.0,
+                    }
+                };
+                // Only the one edge nearest the window's centre: a small or steeply tilted
+                // tag's cells are a few pixels wide, and the window can reach the next edge
+                // out, from the white border to a brighter background, which in linear light
+                // weighs as much as the black border's own and would pull the line outward.
+                // Edges are told apart on the gradient over 1 px, sharp enough to show the
+                // dip between two edges a cell apart. With `split` false, the whole window (the
+                // side's summed profile decides which is kept, below).
+                let (lo, hi) = if lone || !split {
+                    (0, (last - first) as usize)
+                } else {
+                    grads.clear();
+                    grads.extend((first..=last).map(|k| grad(k, 2)));
+                    one_edge(&grads, ((c * 4.0).round() as i64 - first) as usize)
+                };
+                let cut = lo > 0 || hi < (last - first) as usize;
+                for k in first + lo as i64..=first + hi as i64 {
+                    let nn = 0.25 * k as f64;
+                    // Each step counts by how much of its quarter pixel lies inside.
+                    let inside = if k == first || k == last {
+                        let (a, b) = ((nn - 0.125).max(c - reach), (nn + 0.125).min(c + reach));
+                        ((b - a) * 4.0).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    // Within that edge, weights are the gradient over 2 px, as C's (less noisy).
+                    // C squares the gradient, which pulls the mean toward pixel centres by up
+                    // to 0.1 px on edges along the pixel grid; the plain gradient's mean is the
+                    // edge at which the areas balance, exact for a linearly interpolated edge.
+                    let weight = inside * grad(k, 4);
+                    mn += weight * nn;
+                    mcount += weight;
+                }
+                (mcount > 0.0).then(|| (mn / mcount, cut))
+            };
+            let mut measure = |split: bool| -> Option<(f64, bool)> {
+                let (mut n0, mut cut) = centroid(0.0, split)?;
+                if recentre {
+                    // A window off-centre on the edge cuts one tail of the gradient and pulls the
+                    // mean toward its centre (up to 0.1 px, with the edge's sub-pixel phase):
+                    // centre it (within ±range of the quad's edge) on the edge found and measure
+                    // again.
+                    for _ in 0..3 {
+                        let c = n0.clamp(-(range as f64), range as f64);
+                        let Some((next, next_cut)) = centroid(c, split) else { break };
+                        let moved = (next - n0).abs();
+                        (n0, cut) = (next, next_cut);
+                        if moved < 1e-3 {
+                            break;
+                        }
+                    }
+                }
+                Some((n0, cut))
+            };
+            measure(split)
+        };
+        // Each sample's point (its index, where it looks from, the offset found, and whether
+        // it took one edge of several).
+        points.clear();
+        for s in 0..nsamples {
+            let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
+            let at = [alpha * pa[0] + (1.0 - alpha) * pb[0], alpha * pa[1] + (1.0 - alpha) * pb[1]];
+            if let Some((n0, cut)) = fit(s, true, None) {
+                points.push((s, at, n0, cut));
+            }
+        }
+        // One sample's profile is too noisy to tell a second edge from noise: on a dim, blurred
+        // grazing tag (gradients of a few levels, wiggles of a level or two over a blur several
+        // pixels wide) it dips by a tenth here and there, and taking one of the bumps moved the
+        // side by 1–2 px. So the window stays split only where the side's summed profile shows
+        // two edges (summed over every other sample: half the work, and the noise still falls
+        // by a factor of 3 or so); elsewhere every sample takes its whole window, fitted anew.
+        let cuts = points.iter().filter(|p| p.3).count();
+        if recentre && cuts > 0 {
+            // (Fewer than a quarter of the samples split: noise, without summing.)
+            let two = cuts * 4 >= points.len() && {
+                profile.fill(0.0);
+                for s in (0..nsamples).step_by(2) {
+                    fit(s, false, Some(&mut profile[..]));
+                }
+                let half: Vec<f64> = profile.iter().copied().step_by(2).collect();
+                lobes(&half).len() > 1
+            };
+            if !two {
+                for p in points.iter_mut().filter(|p| p.3) {
+                    if let Some((whole, _)) = fit(p.0, false, None) {
+                        p.2 = whole;
+                    }
+                }
+            }
+        }
+        let (mut mx, mut my, mut mxx, mut mxy, mut myy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for &(_, [x0, y0], n0, _) in &points {
+            let (bx, by) = (x0 + n0 * nx, y0 + n0 * ny);
+            mx += bx;
+            my += by;
+            mxx += bx * bx;
+            mxy += bx * by;
+            myy += by * by;
+            n += 1.0;
+        }
+        let (ex, ey) = (mx / n, my / n);
+        let cxx = mxx / n - ex * ex;
+        let cxy = mxy / n - ex * ey;
+        let cyy = myy / n - ey * ey;
+        let theta = 0.5 * ((-2.0 * cxy) as f32).atan2((cyy - cxx) as f32);
+        *line = [ex, ey, f64::from(theta.cos()), f64::from(theta.sin())];
+    }
+    for i in 0..4 {
+        // C keeps the old corner when the refined edges are near parallel.
+        let (det, corner) = intersect_lines(&lines[i], &lines[(i + 1) & 3]);
+        if det.abs() > 0.001 {
+            quad.p[(i + 1) & 3] = corner;
+        }
+    }
+}
+
+/// The edges in a gradient profile (non-negative, one per quarter pixel), as (first step, last
+/// step, peak's step, peak's value). Edges are told apart by the dip between them: the gradient
+/// falls from a peak and rises again, each by more than a tenth of the profile's largest value
+/// (smaller wiggles split nothing). An all-zero profile is one edge.
+fn lobes(g: &[f64]) -> Vec<(usize, usize, usize, f64)> {
+    let n = g.len();
+    let top = g.iter().copied().fold(0.0, f64::max);
+    if n == 0 || top <= 0.0 {
+        return vec![(0, n.saturating_sub(1), 0, 0.0)];
+    }
+    let delta = 0.1 * top;
+    // Peak and valley detection with hysteresis `delta`: a valley counts once the profile has
+    // fallen by `delta` from the peak before it and risen by `delta` after it.
+    let mut found = Vec::new();
+    let (mut peak, mut peak_at, mut valley, mut valley_at, mut lo) = (g[0], 0, g[0], 0, 0);
+    let mut falling = false;
+    for (i, &v) in g.iter().enumerate() {
+        if falling {
+            if v < valley {
+                (valley, valley_at) = (v, i);
+            } else if v > valley + delta {
+                // A new edge rises: the previous one ends at the valley.
+                found.push((lo, valley_at, peak_at, peak));
+                lo = valley_at;
+                (peak, peak_at, falling) = (v, i, false);
+            }
+        } else if v > peak {
+            (peak, peak_at) = (v, i);
+        } else if v < peak - delta {
+            (valley, valley_at, falling) = (v, i, true);
+        }
+    }
+    found.push((lo, n - 1, peak_at, peak));
+    found
+}
+
+/// The steps `lo..=hi` of a gradient profile that make up the one edge (of `lobes`) whose peak
+/// is nearest step `centre`, the higher of two as near. A lone edge keeps the whole profile.
+pub(super) fn one_edge(g: &[f64], centre: usize) -> (usize, usize) {
+    let edges = lobes(g);
+    let mut chosen = edges[0];
+    for &e in &edges[1..] {
+        let (d, best) = (e.2.abs_diff(centre), chosen.2.abs_diff(centre));
+        if d < best || (d == best && e.3 > chosen.3) {
+            chosen = e;
+        }
+    }
+    (chosen.0, chosen.1)
+}
