@@ -26,14 +26,16 @@
 //! per tag, each tag `Calibrated` or left `Nominal` (with the views it had); name the
 //! recordings with [`Calibration::name_recordings`]. A body no view showed keeps what it had.
 
+mod adjust;
 mod focal;
+mod session;
 
+use adjust::{Adjustment, adjust};
 pub use focal::{FocalCheck, check_focal};
 use jawtrack_marker::{BodyKind, BodyProvenance, Marker, MarkerError, PrintError, Tag, TagProvenance};
-use jawtrack_pose::lm::{self, Damping, damped};
-use jawtrack_pose::pnp::{perturb, pose_jacobian, projection_jacobian};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};
-use nalgebra::{DMatrix, DVector, Isometry3, Matrix2x3, Matrix3, Point2, Point3, Rotation3, Unit, Vector2, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, Rotation3, Unit, Vector2, Vector3};
+pub use session::{BodyRefinement, Kept, Refinement, SessionOptions, refine};
 
 /// A tag seen in a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,6 +95,17 @@ impl Default for CalibrationOptions {
             outlier_px: 0.3,
             gross_min_px: 5.0,
             gross_ratio: 4.0,
+        }
+    }
+}
+
+impl CalibrationOptions {
+    fn adjustment(&self) -> Adjustment {
+        let per_mm = self.corner_sigma_px / self.shift_prior_mm;
+        Adjustment {
+            prior: Vector3::new(per_mm, per_mm, self.corner_sigma_px / self.rotation_prior_deg.to_radians()),
+            huber_px: self.huber_px,
+            max_iterations: self.max_iterations,
         }
     }
 }
@@ -261,14 +274,14 @@ pub enum CalibrationError {
 
 /// A tag's corners seen in one view: their undistorted normalised rays.
 #[derive(Debug, Clone, Copy)]
-struct Seen {
+pub(crate) struct Seen {
     tag: usize,
     rays: [Vector2<f64>; 4],
 }
 
 /// One view of one body.
 #[derive(Debug, Clone)]
-struct View {
+pub(crate) struct View {
     focal: Vector2<f64>,
     seen: Vec<Seen>,
     pose: Isometry3<f64>,
@@ -276,7 +289,7 @@ struct View {
 
 /// A tag's geometry as the adjustment moves it: the base placement and the in-plane change.
 #[derive(Debug, Clone, Copy)]
-struct TagModel {
+pub(crate) struct TagModel {
     center: Vector3<f64>,
     x: Vector3<f64>,
     y: Vector3<f64>,
@@ -326,7 +339,9 @@ pub fn calibrate(
     let mut out = marker.clone();
     let mut bodies = Vec::new();
     for b in 0..marker.bodies.len() {
-        if let Some((tags, report)) = calibrate_body(&marker.bodies[b].tags, marker.bodies[b].kind, frames, options) {
+        if let Some((tags, report, _)) =
+            calibrate_body(&marker.bodies[b].tags, marker.bodies[b].kind, frames, options, &[])
+        {
             out.bodies[b].tags = tags;
             record_provenance(&mut out.bodies[b], &report);
             bodies.push(report);
@@ -397,32 +412,13 @@ fn tag_sse(view: &View, seen: &Seen, model: &TagModel, pose: &Isometry3<f64>, or
         .sum()
 }
 
-/// The Huber loss of one corner, scaled as a square (e² inside `k`, 2k·e − k² beyond), and
-/// its weight in the normal equations.
-fn huber(e2: f64, k: f64) -> (f64, f64) {
-    let e = e2.sqrt();
-    if e <= k { (e2, 1.0) } else { (2.0 * k * e - k * k, k / e) }
-}
-
-/// The Huber cost of one seen tag's corners under `pose`.
-fn tag_cost(view: &View, seen: &Seen, model: &TagModel, pose: &Isometry3<f64>, k: f64) -> f64 {
-    (0..4)
-        .map(|i| {
-            let c = pose * model.corner(i);
-            if c.z <= 1e-9 {
-                return 1e12;
-            }
-            huber(((c.coords.xy() / c.z - seen.rays[i]).component_mul(&view.focal)).norm_squared(), k).0
-        })
-        .sum()
-}
-
 fn calibrate_body(
     tags: &[Tag],
     kind: BodyKind,
     frames: &[CalibrationFrame],
     options: &CalibrationOptions,
-) -> Option<(Vec<Tag>, BodyCalibration)> {
+    held: &[usize],
+) -> Option<(Vec<Tag>, BodyCalibration, Vec<View>)> {
     let mut views = views_of(tags, frames);
     if views.is_empty() {
         return None;
@@ -446,7 +442,7 @@ fn calibrate_body(
     let overall_before = overall_rms(&nominal, &views);
 
     // 1. Assembly check.
-    let (mut fixed, findings_assembly) = assembly_check(tags, &views, options);
+    let (mut fixed, findings_assembly) = assembly_check(tags, &views, options, held);
     let mut models: Vec<TagModel> = fixed.iter().map(TagModel::of).collect();
     for v in &mut views {
         if let Some(p) = fit_pose(v, &models, None) {
@@ -454,23 +450,27 @@ fn calibrate_body(
         }
     }
     // 2. Bundle adjustment of the poses and the well-seen tags.
-    let mut free: Vec<usize> = (0..tags.len()).filter(|&t| counts[t] >= options.min_views).collect();
-    adjust(&mut views, &mut models, &free, options);
+    let placeable = |t: usize, counts: &[usize]| !held.contains(&t) && counts[t] >= options.min_views;
+    let mut free: Vec<usize> = (0..tags.len()).filter(|&t| placeable(t, &counts)).collect();
+    adjust(&mut views, &mut models, &free, &options.adjustment());
     // 3. A tag seen badly in one view (glare, the other marker's edge across it, a grazing
     //    angle) pulls every placement, Huber loss or not: drop such sightings, adjust again.
+    // A tag left in place is reported with the views it was seen in, outliers or not: a
+    // misplaced tag's sightings are outliers because it is misplaced.
+    let seen = counts.clone();
     let mut counts = counts;
     for _ in 0..2 {
         if drop_outlier_sightings(&mut views, &models, options) == 0 {
             break;
         }
         counts = views_per_tag(&views, tags.len());
-        free = (0..tags.len()).filter(|&t| counts[t] >= options.min_views).collect();
+        free = (0..tags.len()).filter(|&t| placeable(t, &counts)).collect();
         for (t, m) in models.iter_mut().enumerate() {
             if !free.contains(&t) {
                 m.e = Vector3::zeros();
             }
         }
-        adjust(&mut views, &mut models, &free, options);
+        adjust(&mut views, &mut models, &free, &options.adjustment());
     }
 
     let mut findings = findings_assembly;
@@ -489,8 +489,8 @@ fn calibrate_body(
                 rms_before_px: rms_before[t],
                 rms_after_px: per_tag_rms(&models, &views, t),
             });
-        } else {
-            findings.push(Finding::Uncalibrated { id: tags[t].id, views: views_seen });
+        } else if !held.contains(&t) {
+            findings.push(Finding::Uncalibrated { id: tags[t].id, views: seen[t] });
         }
     }
     // The adjusted placements, written the way the marker model displaces a tag.
@@ -507,7 +507,7 @@ fn calibrate_body(
         tags: corrections,
         findings,
     };
-    Some((fixed, report))
+    Some((fixed, report, views))
 }
 
 /// Drops the sightings whose RMS error is past `options.outlier_ratio` × the median
@@ -576,11 +576,16 @@ fn overall_rms(models: &[TagModel], views: &[View]) -> f64 {
 
 /// Tries every tag at its four turns on every face of the body, against the poses the other
 /// tags give in views of four tags or more; returns the corrected tags and what was corrected.
-fn assembly_check(tags: &[Tag], views: &[View], options: &CalibrationOptions) -> (Vec<Tag>, Vec<Finding>) {
+fn assembly_check(
+    tags: &[Tag],
+    views: &[View],
+    options: &CalibrationOptions,
+    held: &[usize],
+) -> (Vec<Tag>, Vec<Finding>) {
     let models: Vec<TagModel> = tags.iter().map(TagModel::of).collect();
     let mut fixed = tags.to_vec();
     let mut findings = Vec::new();
-    for t in 0..tags.len() {
+    for t in (0..tags.len()).filter(|t| !held.contains(t)) {
         // Views where the tag and three others are seen: the others fix the pose, and the PnP
         // drops one of them that is itself misplaced.
         let poses: Vec<(&View, &Seen, Isometry3<f64>)> = views
@@ -635,108 +640,4 @@ fn assembly_check(tags: &[Tag], views: &[View], options: &CalibrationOptions) ->
         });
     }
     (fixed, findings)
-}
-
-/// Levenberg–Marquardt over every view's pose and the `free` tags' placements, with a Huber
-/// loss (reweighted each iteration) and a weak prior pulling the placements toward zero (see
-/// the module docs).
-fn adjust(views: &mut [View], models: &mut [TagModel], free: &[usize], options: &CalibrationOptions) {
-    let nv = views.len();
-    let n = 6 * nv + 3 * free.len();
-    let slot = |t: usize| free.iter().position(|&f| f == t);
-    let prior = Vector3::new(
-        options.corner_sigma_px / options.shift_prior_mm,
-        options.corner_sigma_px / options.shift_prior_mm,
-        options.corner_sigma_px / options.rotation_prior_deg.to_radians(),
-    );
-    let cost = |views: &[View], models: &[TagModel]| -> f64 {
-        let data: f64 = views
-            .iter()
-            .map(|v| v.seen.iter().map(|s| tag_cost(v, s, &models[s.tag], &v.pose, options.huber_px)).sum::<f64>())
-            .sum();
-        let reg: f64 = free.iter().map(|&t| models[t].e.component_mul(&prior).norm_squared()).sum();
-        data + reg
-    };
-    let mut state = (views.to_vec(), models.to_vec());
-    let mut current = cost(views, models);
-    let damping = Damping {
-        initial: 1e-4,
-        diagonal_floor: 1e-9,
-        relative_tolerance: 1e-10,
-        max_iterations: options.max_iterations,
-    };
-    let linearise = |state: &(Vec<View>, Vec<TagModel>)| -> Option<(DMatrix<f64>, DVector<f64>)> {
-        let (views, models) = (&state.0, &state.1);
-        let mut h = DMatrix::<f64>::zeros(n, n);
-        let mut g = DVector::<f64>::zeros(n);
-        for (vi, v) in views.iter().enumerate() {
-            let rot = v.pose.rotation.to_rotation_matrix();
-            for s in &v.seen {
-                let model = &models[s.tag];
-                let ts = slot(s.tag);
-                for i in 0..4 {
-                    let c = v.pose * model.corner(i);
-                    let Some(dproj) = projection_jacobian(&c, &v.focal) else { continue };
-                    let r = (c.coords.xy() / c.z - s.rays[i]).component_mul(&v.focal);
-                    let w = huber(r.norm_squared(), options.huber_px).1;
-                    let jp = pose_jacobian(&c, &dproj) * w.sqrt();
-                    let r = r * w.sqrt();
-                    let p0 = 6 * vi;
-                    {
-                        let mut b = h.view_mut((p0, p0), (6, 6));
-                        b += jp.transpose() * jp;
-                    }
-                    {
-                        let mut b = g.rows_mut(p0, 6);
-                        b += jp.transpose() * r;
-                    }
-                    if let Some(k) = ts {
-                        let jt: Matrix2x3<f64> = dproj * rot.matrix() * model.corner_jacobian(i) * w.sqrt();
-                        let t0 = 6 * nv + 3 * k;
-                        {
-                            let mut b = h.view_mut((t0, t0), (3, 3));
-                            b += jt.transpose() * jt;
-                        }
-                        {
-                            let mut b = g.rows_mut(t0, 3);
-                            b += jt.transpose() * r;
-                        }
-                        let cross = jp.transpose() * jt;
-                        {
-                            let mut b = h.view_mut((p0, t0), (6, 3));
-                            b += cross;
-                        }
-                        {
-                            let mut b = h.view_mut((t0, p0), (3, 6));
-                            b += cross.transpose();
-                        }
-                    }
-                }
-            }
-        }
-        for (k, &t) in free.iter().enumerate() {
-            let t0 = 6 * nv + 3 * k;
-            for j in 0..3 {
-                h[(t0 + j, t0 + j)] += prior[j] * prior[j];
-                g[t0 + j] += prior[j] * prior[j] * models[t].e[j];
-            }
-        }
-        Some((h, g))
-    };
-    let step = |state: &(Vec<View>, Vec<TagModel>), (h, g): &(DMatrix<f64>, DVector<f64>), lambda: f64| {
-        let step = damped(h, lambda, damping.diagonal_floor).cholesky()?.solve(&(-g));
-        let (mut trial_views, mut trial_models) = state.clone();
-        for (vi, v) in trial_views.iter_mut().enumerate() {
-            let d = step.fixed_rows::<6>(6 * vi).into_owned();
-            v.pose = perturb(&v.pose, &d);
-        }
-        for (k, &t) in free.iter().enumerate() {
-            trial_models[t].e += step.fixed_rows::<3>(6 * nv + 3 * k).into_owned();
-        }
-        Some((trial_views, trial_models))
-    };
-    // The normal equations always exist here: no abort, nothing to report.
-    let _ = lm::minimise(&mut state, &mut current, &damping, linearise, step, |(v, m)| cost(v, m));
-    views.clone_from_slice(&state.0);
-    models.clone_from_slice(&state.1);
 }

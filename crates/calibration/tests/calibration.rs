@@ -2,7 +2,9 @@
 //! must match the printed one (up to the turn of the whole body that views cannot tell), gross
 //! assembly errors must be found and named, and unseen tags kept nominal.
 
-use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, Finding, SeenTag, calibrate, check_focal};
+use jawtrack_calibration::{
+    CalibrationFrame, CalibrationOptions, Finding, Kept, SeenTag, SessionOptions, calibrate, check_focal, refine,
+};
 use jawtrack_marker::{BodyKind, Marker, PrintError, TagProvenance};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -278,4 +280,104 @@ fn a_wrong_focal_length_is_found_and_the_right_one_passes() {
     let wrong = check_focal(&Marker::default(), &with(3000.0)).expect("judged");
     eprintln!("focal length 3000, nominal marker: {wrong}");
     assert!(wrong.looks_wrong(), "{wrong}");
+}
+
+/// A marker calibrated from views that never showed tags 5–9 and 19–23, and a session that
+/// shows every tag.
+fn calibrated_with_gaps(rng: &mut Lcg) -> (Marker, Marker, Vec<CalibrationFrame>) {
+    let truth = printed(rng);
+    let (mut frames, _) = views(&truth, 40, 0.2, rng);
+    let missed = |id: u32| (5..=9).contains(&id) || (19..=23).contains(&id);
+    for f in &mut frames {
+        f.tags.retain(|t| !missed(t.id));
+    }
+    let cal = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates");
+    let (session, _) = views(&truth, 1500, 0.2, rng);
+    (truth, cal.marker, session)
+}
+
+#[test]
+fn a_session_places_the_tags_a_calibration_left_nominal_and_keeps_the_calibrated_ones() {
+    let mut rng = Lcg(11);
+    let (truth, marker, session) = calibrated_with_gaps(&mut rng);
+    let loose: Vec<u32> = marker.uncalibrated_tags().iter().map(|&(_, id)| id).collect();
+    assert_eq!(loose, [5, 6, 7, 8, 9, 19, 20, 21, 22, 23]);
+
+    let started = std::time::Instant::now();
+    let mut r = refine(&marker, &session, &SessionOptions::default()).expect("refines");
+    eprintln!("refined 1500 frames in {:.2} s", started.elapsed().as_secs_f64());
+    r.name_recording("session.jsonl");
+    assert!(r.changed());
+    for b in &r.bodies {
+        let placed: Vec<u32> = b.placed.iter().map(|p| p.id).collect();
+        let want: Vec<u32> =
+            loose.iter().copied().filter(|&id| marker.find_tag(id).map(|(k, _)| k) == Some(b.body)).collect();
+        assert_eq!(placed, want, "{}: {:?}", b.body, b.kept);
+        for p in &b.placed {
+            assert!(p.views >= 10 && p.rms_after_px < p.rms_before_px, "{p:?}");
+        }
+        assert!(b.rms_after_px < b.rms_before_px, "{b:?}");
+        assert_eq!(b.kept.len(), 12 - placed.len());
+        assert!(b.kept.iter().all(|k| matches!(k, Kept::Calibrated { .. })), "{:?}", b.kept);
+    }
+    // The gauge is untouched, to the bit; the placed tags now match the print.
+    for (_, tag) in marker.tags().filter(|(_, t)| !loose.contains(&t.id)) {
+        assert_eq!(r.marker.find_tag(tag.id).expect("tag").1, tag);
+    }
+    for kind in BodyKind::ALL {
+        let (before, after) = (shape_difference(&marker, &truth, kind), shape_difference(&r.marker, &truth, kind));
+        assert!(before > 0.05 && after < 0.02, "{kind}: {before:.4} mm off before, {after:.4} mm after");
+    }
+    assert!(r.marker.uncalibrated_tags().is_empty(), "{:?}", r.marker.uncalibrated_tags());
+    let body = r.marker.body(BodyKind::Mandible).expect("mandible");
+    assert_eq!(body.provenance.as_ref().expect("calibrated").recordings, ["session.jsonl"]);
+    let back = Marker::from_json(&r.marker.to_json()).expect("reads back");
+    assert_eq!(back, r.marker);
+}
+
+#[test]
+fn a_session_never_moves_a_calibrated_tag_nor_one_it_saw_too_little() {
+    let mut rng = Lcg(12);
+    let (_, marker, mut session) = calibrated_with_gaps(&mut rng);
+    // The session shows tag 7 in 5 frames only and the other loose tags never.
+    let mut shown = 0;
+    for f in &mut session {
+        f.tags.retain(|t| t.id < 5 || (10..19).contains(&t.id) || (t.id == 7 && shown < 5));
+        shown += usize::from(f.tags.iter().any(|t| t.id == 7));
+    }
+    let every_frame = SessionOptions { max_frames: session.len(), ..SessionOptions::default() };
+    let r = refine(&marker, &session, &every_frame).expect("refines");
+    assert!(!r.changed());
+    assert_eq!(r.marker, marker, "nothing placed: the marker is the one given");
+    let max = r.bodies.iter().find(|b| b.body == BodyKind::Maxilla).expect("maxilla");
+    assert!(max.kept.contains(&Kept::TooFewViews { id: 7, views: 5 }), "{:?}", max.kept);
+    // A calibrated marker's calibrated tags are all gauge: the session places only the tags
+    // its calibration left nominal (here tag 7, seen in too few of its 40 views).
+    let mut rng = Lcg(13);
+    let truth = printed(&mut rng);
+    let (frames, _) = views(&truth, 40, 0.2, &mut rng);
+    let cal = calibrate(&Marker::default(), &frames, &CalibrationOptions::default()).expect("calibrates").marker;
+    let loose: Vec<u32> = cal.uncalibrated_tags().iter().map(|&(_, id)| id).collect();
+    assert_eq!(loose, [7]);
+    let (session, _) = views(&truth, 200, 0.2, &mut rng);
+    let r = refine(&cal, &session, &SessionOptions::default()).expect("refines");
+    let placed: Vec<u32> = r.bodies.iter().flat_map(|b| b.placed.iter().map(|p| p.id)).collect();
+    assert_eq!(placed, loose);
+    for (_, tag) in cal.tags().filter(|(_, t)| t.id != 7) {
+        assert_eq!(r.marker.find_tag(tag.id).expect("tag").1, tag);
+    }
+}
+
+#[test]
+fn a_session_calibrates_a_nominal_marker_as_a_calibration_would() {
+    let mut rng = Lcg(14);
+    let truth = printed(&mut rng);
+    let (session, _) = views(&truth, 300, 0.2, &mut rng);
+    let r = refine(&Marker::default(), &session, &SessionOptions::default()).expect("refines");
+    for kind in BodyKind::ALL {
+        let after = shape_difference(&r.marker, &truth, kind);
+        assert!(after < 0.02, "{kind}: {after:.4} mm off");
+        assert_eq!(r.bodies.iter().find(|b| b.body == kind).expect("body").placed.len(), 12);
+    }
+    assert!(r.marker.is_calibrated() && r.marker.uncalibrated_tags().is_empty());
 }
