@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig};
 use jawtrack_calibration::{
-    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, SeenTag, calibrate,
+    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, Kept, Refinement, SeenTag, calibrate,
 };
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
@@ -140,6 +140,56 @@ pub(crate) fn print_report(cal: &Calibration) {
     if let Some(focal) = cal.focal.filter(FocalCheck::looks_wrong) {
         eprintln!("warning: {}", intrinsics_warning(&focal, cal.bodies.iter().map(|b| b.rms_after_px)));
     }
+}
+
+/// Prints what a session refinement changed, per body: the tags placed, those kept and why.
+pub(crate) fn print_refinement(r: &Refinement, seconds: f64) {
+    for b in &r.bodies {
+        say!(
+            "{}: {} views of the session; reprojection error {:.3} px with the marker given, {:.3} px refined",
+            b.body,
+            b.views,
+            b.rms_before_px,
+            b.rms_after_px
+        );
+        for f in &b.findings {
+            say!("  assembly: {f}");
+        }
+        if b.placed.is_empty() {
+            say!("  no tag moved");
+        } else {
+            say!("  placed  views  shift x mm  shift y mm  turn °   px before  px after");
+        }
+        for t in &b.placed {
+            say!(
+                "  {:6}  {:5}  {:10.3}  {:10.3}  {:6.2}   {:9.3}  {:8.3}",
+                t.id,
+                t.views,
+                t.placement.shift_x,
+                t.placement.shift_y,
+                t.placement.rotation.to_degrees(),
+                t.rms_before_px,
+                t.rms_after_px
+            );
+        }
+        let gauge = b.kept.iter().filter(|k| matches!(k, Kept::Calibrated { .. })).count();
+        if gauge > 0 {
+            say!("  {gauge} tags calibrated before kept as they were");
+        }
+        for k in &b.kept {
+            match k {
+                Kept::Calibrated { .. } => {}
+                Kept::NotBetter { .. } => say!("  {k}"),
+                Kept::TooFewViews { .. } => {
+                    eprintln!("warning: {k} (it stays nominal: film that face from a few angles)")
+                }
+            }
+        }
+    }
+    if let Some(focal) = r.focal.filter(FocalCheck::looks_wrong) {
+        eprintln!("warning: {}", intrinsics_warning(&focal, r.bodies.iter().map(|b| b.rms_after_px)));
+    }
+    say!("refined the marker from the session in {seconds:.1} s");
 }
 
 /// What to say when the views point to another focal length than the one given: shared by

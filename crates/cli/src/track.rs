@@ -6,8 +6,10 @@
 use crate::frames::open_frames;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use indicatif::ProgressBar;
+use jawtrack_apriltag::Detection;
 use jawtrack_apriltag::DetectorConfig;
-use jawtrack_calibration::{CalibrationFrame, FocalCheck, SeenTag, check_focal};
+use jawtrack_calibration::{CalibrationFrame, FocalCheck, SeenTag, SessionOptions, check_focal, refine};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
@@ -52,6 +54,12 @@ pub(crate) struct TrackArgs {
     /// Output file (JSON lines); `-` for standard output.
     #[arg(long)]
     out: PathBuf,
+    /// After tracking, place the tags the marker's calibration left nominal (or every tag, for
+    /// a nominal marker) from this session's own frames, keeping calibrated tags as they are;
+    /// write the refined marker here and the recording from the refined marker. A tag keeps
+    /// its place unless the session fits a new one better.
+    #[arg(long, value_name = "MARKER_OUT")]
+    refine_marker: Option<PathBuf>,
     #[command(flatten)]
     force: crate::output::ForceArgs,
     /// A video file to track instead of images (needs ffmpeg and ffprobe on the PATH). Frames
@@ -100,8 +108,40 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         smoother: a.smooth.then(SmootherConfig::default),
         ..TrackerConfig::default()
     };
+    if a.out.as_os_str() != "-" {
+        a.force.check_file(&a.out)?;
+    }
+    if let Some(path) = &a.refine_marker {
+        a.force.check_file(path)?;
+    }
     let mut tracker = Tracker::new(marker, config)?;
     tracker.set_registration(registration);
+    // With --refine-marker, a first pass keeps every frame's detections; the refined marker
+    // then solves them again, and only that second pass is written.
+    let (mut tracker, passes) = match &a.refine_marker {
+        None => (tracker, None),
+        Some(path) => {
+            let mut kept = Vec::new();
+            let bar = crate::progress::bar("tracking (1 of 2)", source.len().map(|n| n as u64), "frames");
+            while let Some(frame) = source.next_frame()? {
+                let tracked = frame.image.and_then(|image| {
+                    let view = image.view().map_err(|e| e.to_string())?;
+                    tracker.track(&view, &a.intrinsics, frame.t).map_err(|e| e.to_string())
+                });
+                kept.push(Kept { name: frame.name, t: frame.t, tracked: tracked.map(Detected::of) });
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+            let recording = match &a.video {
+                Some(v) => v.display().to_string(),
+                None => a.frames.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+            };
+            let refined = refine_marker(tracker.marker(), &kept, &a.intrinsics, path, &recording)?;
+            let mut again = Tracker::new(refined, config)?;
+            again.set_registration(tracker.registration().cloned());
+            (again, Some(kept))
+        }
+    };
     let out: Box<dyn Write> = if a.out.as_os_str() == "-" {
         Box::new(std::io::stdout())
     } else {
@@ -113,34 +153,52 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     header.settings = serde_json::json!({
         "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
         "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
+        "refine_marker": a.refine_marker.as_ref().map(|p| p.display().to_string()),
     });
     let mut out = RecordingWriter::new(out, header, &a.out.display().to_string())?;
-    let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
     let mut summary = Summary::default();
     let mut views = FocalViews::default();
     let mut index = 0;
-    while let Some(frame) = source.next_frame()? {
-        // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
-        let tracked = frame.image.and_then(|image| {
-            let view = image.view().map_err(|e| e.to_string())?;
-            tracker.track(&view, &a.intrinsics, frame.t).map_err(|e| e.to_string())
-        });
-        let record = match tracked {
-            Ok(r) => {
-                summary.add(&r, tracker.uncalibrated_tags());
-                views.add(&r, &a.intrinsics);
-                r.to_record(index, Some(&frame.name))
-            }
-            Err(why) => {
-                bar.suspend(|| summary.unreadable(&frame.name, &why));
-                FrameRecord::unreadable(index as u64, Some(&frame.name), frame.t)
-            }
+    let mut write =
+        |bar: &ProgressBar, tracker: &mut Tracker, name: &str, t: f64, tracked: Result<FrameResult, String>| {
+            let record = match tracked {
+                Ok(r) => {
+                    summary.add(&r, tracker.uncalibrated_tags());
+                    views.add(&r, &a.intrinsics);
+                    r.to_record(index, Some(name))
+                }
+                Err(why) => {
+                    bar.suspend(|| summary.unreadable(name, &why));
+                    FrameRecord::unreadable(index as u64, Some(name), t)
+                }
+            };
+            index += 1;
+            out.append(&record)
         };
-        out.append(&record)?;
-        bar.inc(1);
-        index += 1;
+    match passes {
+        Some(kept) => {
+            let bar = crate::progress::bar("tracking (2 of 2)", Some(kept.len() as u64), "frames");
+            for k in kept {
+                let tracked = k.tracked.map(|d| d.solve(&mut tracker, &a.intrinsics, k.t));
+                write(&bar, &mut tracker, &k.name, k.t, tracked)?;
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+        }
+        None => {
+            let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
+            while let Some(frame) = source.next_frame()? {
+                // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
+                let tracked = frame.image.and_then(|image| {
+                    let view = image.view().map_err(|e| e.to_string())?;
+                    tracker.track(&view, &a.intrinsics, frame.t).map_err(|e| e.to_string())
+                });
+                write(&bar, &mut tracker, &frame.name, frame.t, tracked)?;
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+        }
     }
-    bar.finish_and_clear();
     if summary.read == 0 {
         bail!(
             "none of the {index} frames could be read{}: nothing tracked ({} lists them, flagged `unreadable`)",
@@ -170,6 +228,60 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// A frame of the first pass of `--refine-marker`: its detections, or why it was unreadable.
+struct Kept {
+    name: String,
+    t: f64,
+    tracked: Result<Detected, String>,
+}
+
+/// What the first pass detected in a frame, and how.
+struct Detected {
+    detections: Vec<Detection>,
+    detection_s: f64,
+    searched: Option<jawtrack_apriltag::Roi>,
+}
+
+impl Detected {
+    fn of(r: FrameResult) -> Self {
+        Detected { detection_s: r.timings.detection_s, searched: r.searched, detections: r.detections }
+    }
+
+    /// The frame solved again by `tracker`, keeping the first pass's detection figures.
+    fn solve(self, tracker: &mut Tracker, camera: &CameraIntrinsics, t: f64) -> FrameResult {
+        let mut r = tracker.solve(self.detections, camera, t);
+        r.timings.detection_s = self.detection_s;
+        r.searched = self.searched;
+        r
+    }
+}
+
+/// Refines `marker` from the first pass's detections, says what changed, writes it to `path`
+/// and returns it.
+fn refine_marker(
+    marker: &Marker,
+    kept: &[Kept],
+    camera: &CameraIntrinsics,
+    path: &std::path::Path,
+    recording: &str,
+) -> Result<Marker> {
+    let frames: Vec<CalibrationFrame> = kept
+        .iter()
+        .filter_map(|k| k.tracked.as_ref().ok())
+        .map(|d| CalibrationFrame {
+            camera: *camera,
+            tags: d.detections.iter().map(|d| SeenTag { id: d.id, corners: d.corners }).collect(),
+        })
+        .collect();
+    let started = std::time::Instant::now();
+    let mut refinement = refine(marker, &frames, &SessionOptions::default()).context("refining the marker")?;
+    refinement.name_recording(recording);
+    crate::calibrate::print_refinement(&refinement, started.elapsed().as_secs_f64());
+    refinement.marker.save(path).with_context(|| format!("writing {}", path.display()))?;
+    say!("wrote the refined marker to {}", path.display());
+    Ok(refinement.marker)
 }
 
 /// The marker's tags seen in frames spread over the run, for judging the focal length
@@ -257,8 +369,8 @@ impl Summary {
             .map(|(kind, (frames, ids))| {
                 let ids: Vec<String> = ids.iter().map(u32::to_string).collect();
                 format!(
-                    "{kind}: {frames} frames rest on nominal tag{} {} (flagged {kind}:uncalibrated_tag): calibrate \
-                     with a recording that shows them",
+                    "{kind}: {frames} frames rest on nominal tag{} {} (flagged {kind}:uncalibrated_tag): \
+                     `--refine-marker` places them from this session, or calibrate with a recording that shows them",
                     if ids.len() == 1 { "" } else { "s" },
                     ids.join(", ")
                 )
