@@ -440,6 +440,7 @@ fn report(run: &Run, o: &Options, files: &[PathBuf], out: &Path) -> String {
         );
     }
 
+    md.push_str(&benchtop::session_report(run));
     let _ = writeln!(md, "## Flips (frames more than {FLIP_DEG}° off)\n");
     let _ = writeln!(md, "| column | static | hinge | excursion |\n|---|---|---|---|");
     for (c, col) in run.columns.iter().enumerate() {
@@ -692,6 +693,8 @@ mod tests {
             reference,
             calibration: Vec::new(),
             calibrated_marker: Marker::default(),
+            front_only: Vec::new(),
+            sessions: Vec::new(),
             bite_steps: vec![None, None],
             calibration_frames: 0,
             frames: Vec::new(),

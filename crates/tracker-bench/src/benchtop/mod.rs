@@ -18,15 +18,17 @@
 //! the two markers are parallel, where Z-Y-Z angles are singular (β = 0 leaves α and γ
 //! undefined). To first order, the components equal the Euler-angle errors about the same axes.
 
+mod session;
 mod tables;
 
+pub use session::{SessionSummary, report as session_report};
 pub use tables::*;
 
 use crate::frames::{self, Request};
 #[cfg(feature = "reference")]
 use crate::{opencv::OpenCv, reference};
 use anyhow::{Context, Result, bail};
-use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
+use jawtrack_apriltag::{Detection, Detector, DetectorConfig, ImageView};
 #[cfg(feature = "reference")]
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, SeenTag, calibrate};
@@ -69,12 +71,22 @@ pub enum MarkerFile {
     CalibratedBite,
     /// The marker as printed (the renderer's truth): what a perfect calibration would give.
     Printed,
+    /// Calibrated from the calibration recording's front faces only (no face below the
+    /// marker's equator): the tags a session then shows below are left nominal.
+    FrontOnly,
+    /// Calibrated, then refined from the judged scene itself (`jawtrack track --refine-marker`).
+    Refined,
+    /// Front faces only, then refined from the judged scene itself.
+    FrontOnlyRefined,
 }
 
 impl MarkerFile {
-    /// All four, in the order of the columns.
+    /// The four both stacks run, in the order of the columns.
     pub const ALL: [MarkerFile; 4] =
         [MarkerFile::Nominal, MarkerFile::Calibrated, MarkerFile::CalibratedBite, MarkerFile::Printed];
+
+    /// The session-refinement cases, our stack only, after `ALL`.
+    pub const SESSION: [MarkerFile; 3] = [MarkerFile::FrontOnly, MarkerFile::Refined, MarkerFile::FrontOnlyRefined];
 
     /// Its name in tables.
     pub fn name(self) -> &'static str {
@@ -83,6 +95,9 @@ impl MarkerFile {
             MarkerFile::Calibrated => "calibrated marker",
             MarkerFile::CalibratedBite => "calibrated marker + bite step",
             MarkerFile::Printed => "marker as printed",
+            MarkerFile::FrontOnly => "front-faces calibration",
+            MarkerFile::Refined => "calibrated + session refinement",
+            MarkerFile::FrontOnlyRefined => "front-faces calibration + session refinement",
         }
     }
 
@@ -93,6 +108,9 @@ impl MarkerFile {
             MarkerFile::Calibrated => "calibrated",
             MarkerFile::CalibratedBite => "calibrated_bite",
             MarkerFile::Printed => "printed",
+            MarkerFile::FrontOnly => "front_only",
+            MarkerFile::Refined => "refined",
+            MarkerFile::FrontOnlyRefined => "front_only_refined",
         }
     }
 }
@@ -225,6 +243,10 @@ pub struct Run {
     pub calibration: Vec<BodySummary>,
     /// The calibrated marker file.
     pub calibrated_marker: Marker,
+    /// The calibration from the front faces only, per body.
+    pub front_only: Vec<BodySummary>,
+    /// Each judged scene's session refinements.
+    pub sessions: Vec<SessionSummary>,
     /// The bite step per stack (ours, then the reference's), `None` when the stack had no
     /// closed-jaw pose.
     pub bite_steps: Vec<Option<BiteStep>>,
@@ -241,6 +263,7 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
     options.validate()?;
     let (reference_stack, reference) = ReferenceStack::start(options, progress)?;
     let mut columns: Vec<Column> = MarkerFile::ALL.map(|marker| Column { stack: Stack::Ours, marker }).to_vec();
+    columns.extend(MarkerFile::SESSION.map(|marker| Column { stack: Stack::Ours, marker }));
     if reference_stack.is_some() {
         columns.extend(MarkerFile::ALL.map(|marker| Column { stack: Stack::Reference, marker }));
     }
@@ -263,18 +286,22 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
         views.push(CalibrationFrame { camera: scene.truth.intrinsics, tags });
     }
     let cal = calibrate(&nominal, &views, &CalibrationOptions::default()).context("calibrating the marker")?;
-    let calibration = cal
-        .bodies
-        .iter()
-        .map(|b| BodySummary {
-            body: b.body.to_string(),
-            views: b.views,
-            rms_before_px: b.rms_before_px,
-            rms_after_px: b.rms_after_px,
-            calibrated_tags: b.tags.len(),
-            findings: b.findings.iter().map(ToString::to_string).collect(),
-        })
-        .collect();
+    let front = calibrate(&nominal, &session::front_faces_only(&views, &nominal), &CalibrationOptions::default())
+        .context("calibrating the marker from its front faces")?;
+    let summarise = |c: &jawtrack_calibration::Calibration| -> Vec<BodySummary> {
+        c.bodies
+            .iter()
+            .map(|b| BodySummary {
+                body: b.body.to_string(),
+                views: b.views,
+                rms_before_px: b.rms_before_px,
+                rms_after_px: b.rms_after_px,
+                calibrated_tags: b.tags.len(),
+                findings: b.findings.iter().map(ToString::to_string).collect(),
+            })
+            .collect()
+    };
+    let (calibration, front_only) = (summarise(&cal), summarise(&front));
 
     let mut stacks = Stacks { reference: reference_stack };
 
@@ -297,9 +324,9 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
         .collect();
     for (i, f) in bite_frames.iter().enumerate() {
         progress("tracking the closed jaw for the bite step", i, bite_frames.len());
-        let (ours, theirs) = stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?;
-        closed[0].extend(ours[1]);
-        closed[1].extend(theirs.and_then(|t| t[1]));
+        let r = stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?;
+        closed[0].extend(r.ours[1]);
+        closed[1].extend(r.theirs.and_then(|t| t[1]));
     }
     let bite = scene.truth.frames.first().map(|f| f.maxilla_from_mandible).context("an empty calibration recording")?;
     let scanned = Registration { maxilla_scan_from_mandible_scan_at_intercuspation: bite, ..Registration::identity() };
@@ -328,11 +355,14 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
                     .as_ref()
                     .and_then(|b| estimates[1].map(|e| b.registration.maxilla_scan_from_mandible_scan(&e))),
                 MarkerFile::Printed => estimates[2],
+                // Not in `ALL`: the session columns come from `session::judge`.
+                MarkerFile::FrontOnly | MarkerFile::Refined | MarkerFile::FrontOnlyRefined => None,
             })
             .to_vec()
     };
 
     let mut records = Vec::new();
+    let mut sessions = Vec::new();
     for kind in [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion] {
         let name = kind.name();
         let req = options.request(kind);
@@ -343,11 +373,25 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
         let markers = [nominal.clone(), cal.marker.clone(), printed];
         let mut trackers = new_trackers(&markers, &scene.truth)?;
         let total = scene.truth.frames.len();
+        let mut tracked = Vec::with_capacity(total);
         for (i, f) in scene.truth.frames.iter().enumerate() {
             progress(&format!("tracking the {name} scene"), i, total);
-            let (ours, theirs) = stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?;
-            let mut estimates = expand(ours, 0);
-            if let Some(theirs) = theirs {
+            tracked.push(stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?);
+        }
+        // The session cases need the whole scene's detections before judging any frame.
+        let detections: Vec<&[Detection]> = tracked.iter().map(|r| r.detections.as_slice()).collect();
+        let (session, summary) = session::judge(
+            kind,
+            &detections,
+            &scene.truth,
+            [&front.marker, &cal.marker],
+            &tracker_config(&scene.truth),
+        )?;
+        sessions.push(summary);
+        for ((f, r), extra) in scene.truth.frames.iter().zip(tracked).zip(session) {
+            let mut estimates = expand(r.ours, 0);
+            estimates.extend(extra);
+            if let Some(theirs) = r.theirs {
                 estimates.extend(expand(theirs, 1));
             }
             records.push(FrameRecord {
@@ -367,6 +411,8 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
         reference,
         calibration,
         calibrated_marker: cal.marker,
+        front_only,
+        sessions,
         bite_steps,
         calibration_frames,
         frames: records,
@@ -396,14 +442,25 @@ fn new_trackers(markers: &[Marker; 3], truth: &jawtrack_synth::GroundTruth) -> R
 /// marker files.
 type PerMarker = [Option<Pose>; 3];
 
+/// One frame through both pipelines.
+struct Tracked {
+    /// Our estimates.
+    ours: PerMarker,
+    /// Our calibrated tracker's detections.
+    detections: Vec<Detection>,
+    /// The reference stack's estimates, when it runs.
+    theirs: Option<PerMarker>,
+}
+
 /// Both pipelines.
 struct Stacks {
     reference: Option<ReferenceStack>,
 }
 
 impl Stacks {
-    /// `maxilla_from_mandible` of one frame by our trackers (one per marker file) and, when
-    /// it runs, by the reference stack with the same marker files.
+    /// `maxilla_from_mandible` of one frame by our trackers (one per marker file), with the
+    /// calibrated tracker's detections, and, when it runs, by the reference stack with the
+    /// same marker files.
     fn frame(
         &mut self,
         trackers: &mut [Tracker],
@@ -411,16 +468,23 @@ impl Stacks {
         path: &std::path::Path,
         truth: &jawtrack_synth::GroundTruth,
         t: f64,
-    ) -> Result<(PerMarker, Option<PerMarker>)> {
+    ) -> Result<Tracked> {
         let img = read_luma(path)?;
         let camera = &truth.intrinsics;
         let mut ours = [None; 3];
-        for (tracker, out) in trackers.iter_mut().zip(&mut ours) {
+        let mut detections = Vec::new();
+        for (i, (tracker, out)) in trackers.iter_mut().zip(&mut ours).enumerate() {
             let r = tracker.track(&img.view()?, camera, t).with_context(|| format!("tracking {}", path.display()))?;
             *out = r.maxilla_from_mandible;
+            if i == 1 {
+                detections = r.detections;
+            }
         }
-        let Some(reference) = self.reference.as_mut() else { return Ok((ours, None)) };
-        Ok((ours, Some(reference.frame(&img, markers, path, camera)?)))
+        let theirs = match self.reference.as_mut() {
+            Some(reference) => Some(reference.frame(&img, markers, path, camera)?),
+            None => None,
+        };
+        Ok(Tracked { ours, detections, theirs })
     }
 }
 
@@ -616,6 +680,8 @@ mod tests {
             reference: Err("not run".into()),
             calibration: Vec::new(),
             calibrated_marker: Marker::default(),
+            front_only: Vec::new(),
+            sessions: Vec::new(),
             bite_steps: vec![None],
             calibration_frames: 0,
             frames,
