@@ -8,7 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig};
 use jawtrack_calibration::{
-    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, Kept, Refinement, SeenTag, calibrate,
+    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, Kept, Refinement, SeenTag, SessionOptions,
+    calibrate, refine,
 };
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
@@ -17,7 +18,9 @@ use std::path::PathBuf;
 /// Arguments of `jawtrack calibrate-marker`.
 #[derive(Args)]
 pub(crate) struct CalibrateArgs {
-    /// The marker file to start from (default: the nominal 12.7 mm marker).
+    /// The marker file to start from (default: the nominal 12.7 mm marker). With a calibrated
+    /// marker, its calibrated tags are kept as they are and only the others are placed (never
+    /// worse: a tag moves only when the recordings fit its new place better).
     #[arg(long)]
     marker: Option<PathBuf>,
     /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2].
@@ -34,9 +37,10 @@ pub(crate) struct CalibrateArgs {
     /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     linear_edges: bool,
-    /// A video to read instead of images (needs ffmpeg and ffprobe on the PATH).
-    #[arg(long, conflicts_with = "frames")]
-    video: Option<PathBuf>,
+    /// A video to read (needs ffmpeg and ffprobe on the PATH); give it again for more
+    /// recordings: a tracked session's video places the tags a calibration recording missed.
+    #[arg(long)]
+    video: Vec<PathBuf>,
     /// Frames: image files (PNG, JPEG) or folders of them, the marker turned to show every face.
     #[arg(required_unless_present = "video")]
     frames: Vec<PathBuf>,
@@ -52,18 +56,29 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
         Some(p) => Marker::load(p)?,
         None => Marker::default(),
     };
-    let source = open_frames(a.video.as_deref(), &a.frames, None)?;
-    let frames = detect_views(source, &marker, &a.intrinsics, a.linear_edges)?;
+    let mut frames = Vec::new();
+    for video in &a.video {
+        frames.extend(detect_views(open_frames(Some(video), &[], None)?, &marker, &a.intrinsics, a.linear_edges)?);
+    }
+    if !a.frames.is_empty() {
+        frames.extend(detect_views(open_frames(None, &a.frames, None)?, &marker, &a.intrinsics, a.linear_edges)?);
+    }
     let options = CalibrationOptions { min_views: a.min_views, ..CalibrationOptions::default() };
-    let mut cal = calibrate(&marker, &frames, &options)?;
-    // The marker file names what it was calibrated from: the video, or the frames as given.
-    let recordings: Vec<String> = match &a.video {
-        Some(v) => vec![v.display().to_string()],
-        None => a.frames.iter().map(|p| p.display().to_string()).collect(),
+    // The marker file names what it was calibrated from: the videos and the frames as given.
+    let recordings: Vec<String> = a.video.iter().chain(&a.frames).map(|p| p.display().to_string()).collect();
+    let calibrated = if marker.is_calibrated() {
+        let started = std::time::Instant::now();
+        let mut r = refine(&marker, &frames, &SessionOptions { calibration: options, ..SessionOptions::default() })?;
+        r.name_recording(&recordings.join(", "));
+        print_refinement(&r, started.elapsed().as_secs_f64());
+        r.marker
+    } else {
+        let mut cal = calibrate(&marker, &frames, &options)?;
+        cal.name_recordings(&recordings);
+        print_report(&cal);
+        cal.marker
     };
-    cal.name_recordings(&recordings);
-    cal.marker.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
-    print_report(&cal);
+    calibrated.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
     say!("wrote {}", a.out.display());
     Ok(())
 }

@@ -121,6 +121,43 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     // Neither output is overwritten unless asked.
     refused(&run(&[]), "already exists");
     assert!(run(&["--force"]).status.success());
+    // `calibrate-marker` given a calibrated marker refines it the same way from any frames.
+    let again = dir.path().join("again.json");
+    let fixture = set.to_str().expect("utf-8");
+    let o = jawtrack(&[
+        "calibrate-marker",
+        "--intrinsics",
+        intrinsics,
+        "--marker",
+        s(&holes),
+        "--out",
+        s(&again),
+        fixture,
+        fixture,
+    ]);
+    let report = ok(&o);
+    assert!(report.contains("\n       2     12 ") && report.contains("\n      13     12 "), "{report}");
+    assert!(report.contains("tags calibrated before kept as they were"), "{report}");
+    let (a, b) = (std::fs::read_to_string(&refined).expect("marker"), std::fs::read_to_string(&again).expect("marker"));
+    let tags = |text: &str| -> Vec<serde_json::Value> {
+        let v: serde_json::Value = serde_json::from_str(text).expect("json");
+        v["bodies"]
+            .as_array()
+            .expect("bodies")
+            .iter()
+            .flat_map(|b| b["tags"].as_array().expect("tags").clone())
+            .collect()
+    };
+    // The same tags placed, and every other tag left exactly as it was in the input.
+    let holed = tags(&std::fs::read_to_string(&holes).expect("marker"));
+    for ((x, y), h) in tags(&a).iter().zip(tags(&b)).zip(&holed) {
+        if x["id"] == 2 || x["id"] == 13 {
+            assert_ne!(y["corners"], h["corners"], "tag {} placed", x["id"]);
+        } else {
+            assert_eq!(y["corners"], h["corners"], "tag {} kept", x["id"]);
+            assert_eq!(x["corners"], h["corners"], "tag {} kept", x["id"]);
+        }
+    }
 }
 
 /// Writes `calibrated` with the tags `ids` put back at their nominal place, marked nominal.
