@@ -167,16 +167,19 @@ case "${1:-}" in
     step="preparing the fixtures (raw luma frames and the poses jawtrack track gets)"
     rm -rf "$work/fixtures" "$work/out"
     mkdir -p "$work/fixtures" "$work/out"
-    set="static-1080p"
-    intrinsics=$(python3 -c 'import json,sys; i=json.load(open(sys.argv[1]))["intrinsics"]; print(",".join(repr(float(i[k])) for k in ("fx","fy","cx","cy","k1","k2")))' \
-      "$repo/fixtures/$set/ground_truth.json") || fail "reading fixtures/$set/ground_truth.json"
-    (cd "$repo" && cargo run --release -q -p jawtrack-test-support --example luma-pgm -- "fixtures/$set" "$work/fixtures/$set") \
-      || fail "converting fixtures/$set to PGM"
-    echo "$intrinsics" >"$work/fixtures/$set/intrinsics.txt"
-    # Tracked inside the root, beside the Swift tests: glibc's libm differs between Debian
-    # releases in the last bits of sin/cos, which the pose solver's iterations amplify to 1e-6 mm.
-    inside target/release/jawtrack track "fixtures/$set" --intrinsics "$intrinsics" \
-      --out "target/swift/fixtures/$set/track.jsonl" >/dev/null 2>&1 || fail "jawtrack track fixtures/$set"
+    # static-1080p for the pipeline and the screen; hinge-1080p (the lower jaw turning) for the
+    # marker calibration, whose views must come from different angles.
+    for set in static-1080p hinge-1080p; do
+      intrinsics=$(python3 -c 'import json,sys; i=json.load(open(sys.argv[1]))["intrinsics"]; print(",".join(repr(float(i[k])) for k in ("fx","fy","cx","cy","k1","k2")))' \
+        "$repo/fixtures/$set/ground_truth.json") || fail "reading fixtures/$set/ground_truth.json"
+      (cd "$repo" && cargo run --release -q -p jawtrack-test-support --example luma-pgm -- "fixtures/$set" "$work/fixtures/$set") \
+        || fail "converting fixtures/$set to PGM"
+      echo "$intrinsics" >"$work/fixtures/$set/intrinsics.txt"
+      # Tracked inside the root, beside the Swift tests: glibc's libm differs between Debian
+      # releases in the last bits of sin/cos, which the pose solver's iterations amplify to 1e-6 mm.
+      inside target/release/jawtrack track "fixtures/$set" --intrinsics "$intrinsics" \
+        --out "target/swift/fixtures/$set/track.jsonl" >/dev/null 2>&1 || fail "jawtrack track fixtures/$set"
+    done
     cp "$repo/fixtures/wire/golden.json" "$work/fixtures/wire-golden.json"
     "$repo/target/release/jawtrack" marker --out "$work/fixtures/marker.json" >/dev/null || fail "jawtrack marker"
     linker=(-Xlinker -L/repo/target/release -Xlinker -rpath -Xlinker /repo/target/release)

@@ -1,5 +1,6 @@
 // Adapts SwiftUI's ObservableObject to JawTrackKit's AppController: builds it over the Apple
-// adapters (UserDefaults, Keychain, camera, Documents, UDP) and publishes its ScreenState.
+// adapters (UserDefaults, Keychain, camera, Documents, UDP) and publishes its ScreenState and
+// the marker calibration's CalibrationScreen.
 import AVFoundation
 import JawTrackKit
 import UIKit
@@ -7,6 +8,7 @@ import UIKit
 @MainActor
 final class AppModel: ObservableObject {
     @Published private(set) var state: ScreenState
+    @Published private(set) var calibration: CalibrationScreen
     let camera: CameraController
     /// The screen's logic: the views call it for every action.
     let controller: AppController
@@ -22,7 +24,9 @@ final class AppModel: ObservableObject {
         self.camera = camera
         self.controller = controller
         state = controller.state
+        calibration = controller.markerCalibration.state
         controller.onChange = { [weak self] in self?.state = $0 }
+        controller.markerCalibration.onChange = { [weak self] in self?.calibration = $0 }
     }
 
     /// First appearance: the screen stays on; the camera permission (asked the first time,

@@ -1,5 +1,6 @@
 // Adapts SwiftUI to JawTrackKit's ScreenState and AppController: lays out the camera screen
-// (preview and overlay, status bar, Record / Transmit / Calibrate bite / Settings, the alerts)
+// (preview and overlay, status bar, Record / Transmit / Calibrate bite / Calibrate marker /
+// Settings, the alerts; the marker calibration's panel in place of the buttons while it is open)
 // and forwards every tap and scene phase to the controller.
 import JawTrackKit
 import SwiftUI
@@ -24,7 +25,11 @@ struct ContentView: View {
                     .frame(maxWidth: .infinity, alignment: .leading)
                     .padding(.horizontal, 8)
                 Spacer()
-                controls
+                if model.calibration.isOpen {
+                    CalibrationView(screen: model.calibration, controller: controller.markerCalibration)
+                } else {
+                    controls
+                }
             }
         }
         .onAppear { model.start() }
@@ -61,6 +66,10 @@ struct ContentView: View {
             .toggleStyle(.button)
             Button { controller.calibrateBite() } label: { Label("Calibrate bite", systemImage: "mouth") }
                 .disabled(state.isCalibrating)
+            Button { controller.openMarkerCalibration() } label: {
+                Label(CalibrationText.open, systemImage: "cube").labelStyle(.iconOnly)
+            }
+            .disabled(!state.canCalibrateMarker)
             Button {
                 controller.settingsOpened()
                 showingSettings = true

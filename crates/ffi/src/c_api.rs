@@ -307,17 +307,31 @@ unsafe fn track_with(
     run: impl FnOnce(&mut Engine, &Intrinsics) -> Result<crate::FrameResult, (JtStatus, String)>,
 ) -> JtStatus {
     guarded(|| {
-        if intrinsics.is_null() {
-            return Err((JtStatus::NullPointer, "intrinsics is null".into()));
-        }
-        // SAFETY: checked non-null; the caller promises a valid JtIntrinsics.
-        let i = unsafe { *intrinsics };
-        let intrinsics = Intrinsics { fx: i.fx, fy: i.fy, cx: i.cx, cy: i.cy, k1: i.k1, k2: i.k2 };
-        if !t.is_finite() {
-            return Err(invalid(format!("t = {t} is not a time")));
-        }
-        let engine = engine(handle)?;
-        let result = run(&mut lock(&engine), &intrinsics)?;
+        let tracked = (|| {
+            if intrinsics.is_null() {
+                return Err((JtStatus::NullPointer, "intrinsics is null".into()));
+            }
+            // SAFETY: checked non-null; the caller promises a valid JtIntrinsics.
+            let i = unsafe { *intrinsics };
+            let intrinsics = Intrinsics { fx: i.fx, fy: i.fy, cx: i.cx, cy: i.cy, k1: i.k1, k2: i.k2 };
+            if !t.is_finite() {
+                return Err(invalid(format!("t = {t} is not a time")));
+            }
+            let engine = engine(handle)?;
+            let result = run(&mut lock(&engine), &intrinsics)?;
+            Ok(result)
+        })();
+        let result = match tracked {
+            Ok(result) => result,
+            Err(e) => {
+                // A frame refused leaves no view for a calibration to take (the one before
+                // would be taken twice).
+                if let Ok(engine) = engine(handle) {
+                    lock(&engine).view = None;
+                }
+                return Err(e);
+            }
+        };
         if !summary_out.is_null() {
             // SAFETY: checked non-null; the caller promises it is writable.
             unsafe { *summary_out = summarise(&result) };

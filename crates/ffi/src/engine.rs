@@ -1,11 +1,12 @@
 //! One tracker behind both doors: runs a frame, turns the tracker's result into the records
-//! the app reads (with the overlay already in the preview's coordinates), offers the tracker's
-//! intercuspation step, and converts results back into the recording schema for the recorder
-//! and the link.
+//! the app reads (with the overlay already in the preview's coordinates), keeps the frame's
+//! detections for a marker calibration ([`TrackedView`]), offers the tracker's intercuspation
+//! step, and converts results back into the recording schema for the recorder and the link.
 
 use crate::error::invalid;
 use crate::{Intrinsics, JawTrackError, Settings};
 use jawtrack_apriltag::ImageView;
+use jawtrack_calibration::SeenTag;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use jawtrack_recording::{BiteRecord, BodyRecord, FrameRecord, TimingsRecord};
@@ -136,12 +137,26 @@ impl IntercuspationResult {
     }
 }
 
+/// The last frame tracked as a marker calibration takes it ([`crate::Calibrator`]): the
+/// marker's tags in pixels, the camera, and the bodies' poses.
+#[derive(Debug, Clone)]
+pub(crate) struct TrackedView {
+    /// The frame's camera.
+    pub(crate) camera: CameraIntrinsics,
+    /// The marker's tags detected, corners in pixels.
+    pub(crate) tags: Vec<SeenTag>,
+    /// The bodies the tracker solved, with their camera-from-body poses.
+    pub(crate) poses: Vec<(BodyKind, Pose)>,
+}
+
 /// A tracker with what the app needs around it.
 pub(crate) struct Engine {
     tracker: Tracker,
     pub(crate) settings: Settings,
     frame: u64,
     pub(crate) last: Option<FrameResult>,
+    /// The last frame's detections, `None` when the last frame could not be tracked.
+    pub(crate) view: Option<TrackedView>,
     times: VecDeque<f64>,
     /// Luma of BGRA frames, reused between frames.
     pub(crate) luma: Vec<u8>,
@@ -154,7 +169,7 @@ fn kind_name(kind: BodyKind) -> String {
 impl Engine {
     pub(crate) fn new(marker: Marker, settings: Settings) -> Result<Self, JawTrackError> {
         let tracker = Tracker::new(marker, settings.tracker_config()?)?;
-        Ok(Engine { tracker, settings, frame: 0, last: None, times: VecDeque::new(), luma: Vec::new() })
+        Ok(Engine { tracker, settings, frame: 0, last: None, view: None, times: VecDeque::new(), luma: Vec::new() })
     }
 
     /// Keeps the bodies' motion, the registration and the recent jaw poses: a settings change
@@ -170,6 +185,7 @@ impl Engine {
         self.tracker.set_registration(None);
         self.frame = 0;
         self.last = None;
+        self.view = None;
         self.times.clear();
     }
 
@@ -183,6 +199,8 @@ impl Engine {
         intrinsics: &Intrinsics,
         t: f64,
     ) -> Result<FrameResult, JawTrackError> {
+        // A frame that fails leaves no view: a calibration must not take the one before twice.
+        self.view = None;
         if !t.is_finite() {
             return Err(JawTrackError::frame(format!("frame time {t} is not a number")));
         }
@@ -245,6 +263,11 @@ impl Engine {
             fps,
         };
         self.frame += 1;
+        self.view = Some(TrackedView {
+            camera,
+            tags: r.detections.iter().map(|d| SeenTag { id: d.id, corners: d.corners }).collect(),
+            poses: BodyKind::ALL.iter().filter_map(|&k| Some((k, r.body(k)?.camera_from_body))).collect(),
+        });
         self.last = Some(result.clone());
         Ok(result)
     }

@@ -1,9 +1,11 @@
 //! The one error the app sees, and the one place every crate's own error is mapped to it
 //! (`From`), so a call site only writes `?`. Variants say what the app can act on: which
 //! setting to correct, that the frame or the camera is wrong, that the marker file or the
-//! pairing key must be replaced, which file could not be written.
+//! pairing key must be replaced, that a marker calibration needs other views, which file could
+//! not be written.
 
 use jawtrack_apriltag::DetectError;
+use jawtrack_calibration::CalibrationError;
 use jawtrack_marker::MarkerError;
 use jawtrack_pose::GeometryError;
 use jawtrack_recording::RecordingError;
@@ -66,6 +68,13 @@ pub enum JawTrackError {
         /// How far they turned about their mean (°).
         spread_deg: f64,
         /// The same, in words.
+        message: String,
+    },
+    /// The marker calibration cannot be made from the views collected: show the marker's faces
+    /// from more angles (or start again), then solve again.
+    #[error("{message}")]
+    Calibration {
+        /// Why, and what to do.
         message: String,
     },
     /// Anything else the caller gave is not usable (a matrix, JSON, a closed recording); the
@@ -183,6 +192,23 @@ impl From<RegistrationError> for JawTrackError {
     }
 }
 
+impl From<CalibrationError> for JawTrackError {
+    fn from(e: CalibrationError) -> Self {
+        match e {
+            CalibrationError::NoViews => JawTrackError::Calibration {
+                message: "no view shows two tags of one marker: nothing to calibrate from. Turn the marker so that \
+                          two faces or more face the camera, from several angles"
+                    .into(),
+            },
+            CalibrationError::BadFrame { .. } => JawTrackError::InvalidIntrinsics { message: e.to_string() },
+            // The calibrated marker failed its checks: views that contradict each other.
+            _ => JawTrackError::Calibration {
+                message: format!("{e}. The views contradict each other: start again and show each face steadily"),
+            },
+        }
+    }
+}
+
 impl From<KeyError> for JawTrackError {
     fn from(e: KeyError) -> Self {
         JawTrackError::InvalidKey { message: e.to_string() }
@@ -220,6 +246,10 @@ mod tests {
         assert!(matches!(e, JawTrackError::InvalidMarker { .. }) && e.to_string().starts_with("marker file"));
         let e: JawTrackError = "nope".parse::<jawtrack_wire::Key>().expect_err("not a key").into();
         assert!(matches!(e, JawTrackError::InvalidKey { .. }), "{e:?}");
+        let e: JawTrackError = CalibrationError::NoViews.into();
+        assert!(matches!(&e, JawTrackError::Calibration { message } if message.contains("Turn the marker")), "{e:?}");
+        let e: JawTrackError = CalibrationError::BadFrame { frame: 2, reason: "fx is 0".into() }.into();
+        assert!(matches!(e, JawTrackError::InvalidIntrinsics { .. }), "{e:?}");
         let e: JawTrackError = RecordingError::Exists { path: "/tmp/s.jsonl".into() }.into();
         assert!(matches!(&e, JawTrackError::Io { path, .. } if path == "/tmp/s.jsonl"), "{e:?}");
         let e: JawTrackError = BiteRefusal::TooShort { needed_s: 0.3, span_s: 0.1, frames: 7 }.into();

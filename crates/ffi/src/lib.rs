@@ -2,8 +2,8 @@
 //!
 //! Two doors into the same trackers:
 //! - a **uniffi** API for control and results ([`Tracker`], [`Settings`], [`FrameResult`],
-//!   [`Recorder`], [`LinkEncoder`], [`AppSettings`]), from which Swift (and, for the tests
-//!   here, Python) bindings are generated;
+//!   [`Recorder`], [`LinkEncoder`], [`AppSettings`], and the marker calibration's
+//!   [`Calibrator`]), from which Swift (and, for the tests here, Python) bindings are generated;
 //! - plain **C** entry points ([`c_api`], header `include/jawtrack.h` made by cbindgen) that
 //!   track a camera frame in place: the luma plane's pointer, size and bytes per row go
 //!   straight to the detector, no copy. Swift calls them inside
@@ -11,15 +11,24 @@
 //!   result with [`Tracker::last_result`].
 //!
 //! Everything the app decides that can be decided without UIKit lives here: settings ranges,
-//! intrinsics scaled to the delivered frame, the overlay's geometry, the recording schema and
-//! the link's datagrams. No panic crosses either door: uniffi turns one into an error, and the
-//! C functions catch it and return [`c_api::JtStatus::Panic`].
+//! intrinsics scaled to the delivered frame, the overlay's geometry, the recording schema,
+//! the link's datagrams, and the marker calibration: [`Calibrator::add_view`] takes the frame a
+//! tracker tracked last (its tags in pixels and its camera, so no pixels go through twice),
+//! [`CalibrationProgress`] says which tags still need views, [`Calibrator::solve`] gives the
+//! per-tag result and [`Calibrator::save`] writes the marker file, never over one unless asked.
+//! No panic crosses either door: uniffi turns one into an error, and the C functions catch it
+//! and return [`c_api::JtStatus::Panic`].
 
 pub mod c_api;
+mod calibrator;
 mod engine;
 mod error;
 mod settings;
 
+pub use calibrator::{
+    BodyCalibrationResult, BodyViews, CalibrationProgress, Calibrator, MarkerCalibrationResult, TagCalibrationResult,
+    TagViews, ViewOutcome,
+};
 pub use engine::{
     AxisOverlay, BodyPose, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
 };
@@ -125,8 +134,15 @@ impl Tracker {
         intrinsics: Intrinsics,
         t: f64,
     ) -> Result<FrameResult, JawTrackError> {
-        let view = ImageView::new(&luma, width as usize, height as usize, bytes_per_row as usize)?;
-        lock(&self.engine).track(&view, &intrinsics, t)
+        let mut engine = lock(&self.engine);
+        match ImageView::new(&luma, width as usize, height as usize, bytes_per_row as usize) {
+            Ok(view) => engine.track(&view, &intrinsics, t),
+            Err(e) => {
+                // A frame refused leaves no view for a calibration to take.
+                engine.view = None;
+                Err(e.into())
+            }
+        }
     }
 
     /// The result of the last frame tracked (by either door), if any.

@@ -1,5 +1,5 @@
 """The uniffi Python bindings of jawtrack-ffi driving the same objects the Swift app uses:
-Tracker, Recorder, LinkEncoder and the settings checks, on the hinge fixture.
+Tracker, Recorder, LinkEncoder, Calibrator and the settings checks, on the hinge fixture.
 
 Run by tests/python.rs, which builds the library, generates the bindings into a folder and
 passes: BINDINGS_DIR FRAMES_DIR EXPECTED_JSON OUT_DIR. The frames are binary PGM files; the
@@ -105,6 +105,107 @@ class Bindings(unittest.TestCase):
         self.assertEqual(bite["session"], lines[1]["session"])
         self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in zip(bite["maxilla_from_mandible"],
                                                                              cal.maxilla_from_mandible)))
+
+    def test_the_calibrator_collects_views_from_tracked_frames_solves_and_saves(self):
+        tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
+        cal = jawtrack.Calibrator(tracker.marker_json(), 3)
+        start = cal.progress()
+        self.assertEqual((start.views, start.min_views, len(start.tags), len(start.needs_views)), (0, 3, 24, 24))
+        self.assertEqual(start.min_turn_deg, 5.0)
+        self.assertFalse(start.can_solve)
+        with self.assertRaises(jawtrack.JawTrackError.Calibration) as e:
+            cal.solve()
+        self.assertIn("3 views", e.exception.message)
+        self.assertIn("no frame to add", cal.add_view(tracker).note)
+        progress = []
+        for i, (w, h, pixels) in enumerate(frames()):
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0)
+            progress.append(cal.add_view(tracker))
+        first, last = progress[0], progress[-1]
+        self.assertTrue(first.added)
+        self.assertEqual([b.body for b in first.bodies], ["maxilla", "mandible"])
+        self.assertEqual([b.last for b in first.bodies], [jawtrack.ViewOutcome.ADDED] * 2)
+        self.assertEqual(first.views, 1)
+        # Views grow with the lower jaw's opening; the upper jaw holds still: one view.
+        counts = [p.views for p in progress]
+        self.assertEqual(counts, sorted(counts))
+        self.assertGreaterEqual(last.views, 3, counts)
+        self.assertEqual(last.bodies[0].views, 1)
+        views = {t.id: t.views for t in last.tags}
+        self.assertEqual({t.body for t in last.tags if t.id < 12}, {"maxilla"})
+        self.assertTrue(all(views[i] <= 1 for i in range(12)), views)
+        ready = sorted(i for i, v in views.items() if v >= 3)
+        self.assertTrue(ready and all(i >= 12 for i in ready), views)
+        # The tags still short of views are named, body by body.
+        self.assertEqual(sorted(last.needs_views), sorted(i for i, v in views.items() if v < 3))
+        self.assertEqual(last.bodies[1].needs_views, [i for i in range(12, 24) if views[i] < 3])
+        self.assertEqual(last.bodies[1].tags_ready, len(ready))
+        self.assertTrue(last.can_solve)
+        self.assertFalse(last.complete)
+        # The same frame again is the same view.
+        again = cal.add_view(tracker)
+        self.assertFalse(again.added)
+        self.assertEqual(again.views, last.views)
+        self.assertEqual([b.last for b in again.bodies], [jawtrack.ViewOutcome.SAME_VIEW] * 2)
+        self.assertIn("seen from this angle already", again.note)
+
+        result = cal.solve()
+        self.assertEqual([b.body for b in result.bodies], ["maxilla", "mandible"])
+        self.assertEqual(result.bodies[1].views, last.bodies[1].views)
+        self.assertEqual(result.bodies[1].tags_calibrated, len(ready))
+        self.assertEqual(len(result.tags), 24)
+        rows = {r.id: r for r in result.tags}
+        for i in ready:
+            r = rows[i]
+            self.assertTrue(r.calibrated, r)
+            self.assertEqual(r.views, views[i])
+            self.assertLess(max(abs(r.shift_x_mm), abs(r.shift_y_mm)), 1.0, r)
+            self.assertLess(abs(r.turn_deg), 5.0, r)
+            self.assertLessEqual(r.rms_after_px, r.rms_before_px + 1e-9, r)
+        for i in set(rows) - set(ready):
+            self.assertFalse(rows[i].calibrated)
+            self.assertIsNone(rows[i].shift_x_mm)
+            self.assertIsNone(rows[i].rms_after_px)
+        self.assertTrue(any("too few to calibrate" in f for f in result.findings), result.findings)
+        self.assertIsNone(result.focal_warning)
+
+        path = OUT / "calibrated_marker.json"
+        cal.save(str(path), False)
+        saved = json.loads(path.read_text())
+        self.assertEqual(saved, json.loads(result.marker_json))
+        status = {t["id"]: t["calibration"] for b in saved["bodies"] for t in b["tags"]}
+        for i in ready:
+            self.assertEqual(status[i]["status"], "calibrated")
+            self.assertEqual(status[i]["views"], views[i])
+        self.assertEqual(status[0], {"status": "nominal", "views": 1})
+        # The file tracks.
+        calibrated = jawtrack.Tracker(jawtrack.default_settings(), path.read_text())
+        w, h, pixels = frames()[0]
+        self.assertIsNotNone(calibrated.track_luma(pixels, w, h, w, INTRINSICS, 0.0).maxilla_from_mandible)
+        # Never replaced without being asked.
+        before = path.read_text()
+        with self.assertRaises(jawtrack.JawTrackError.Io) as e:
+            cal.save(str(path), False)
+        self.assertIn("already exists", e.exception.message)
+        self.assertTrue(e.exception.path.endswith("calibrated_marker.json"))
+        self.assertEqual(path.read_text(), before)
+        cal.save(str(path), True)
+        self.assertEqual(json.loads(path.read_text()), saved)
+        self.assertEqual(sorted(p.name for p in OUT.glob("*calibrated_marker*")), ["calibrated_marker.json"])
+
+        # A calibrated file starts a new calibration afresh, from its nominal marker.
+        afresh = jawtrack.Calibrator(path.read_text(), 3).progress()
+        self.assertEqual((afresh.views, len(afresh.needs_views)), (0, 24))
+        cal.reset()
+        self.assertEqual(cal.progress().views, 0)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
+            cal.save(str(OUT / "other.json"), False)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidMarker) as e:
+            jawtrack.Calibrator('{"version": 7}', 3)
+        self.assertIn("version", e.exception.message)
+        with self.assertRaises(jawtrack.JawTrackError.InvalidSetting) as e:
+            jawtrack.Calibrator(None, 0)
+        self.assertEqual(e.exception.setting, "min_views")
 
     def test_misuse_raises_errors_naming_the_problem(self):
         bad = jawtrack.default_settings()

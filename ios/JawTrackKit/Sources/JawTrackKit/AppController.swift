@@ -53,12 +53,14 @@ public struct ScreenState {
 
     /// Settings are locked while recording (a recording has one set of settings).
     public var canOpenSettings: Bool { !isRecording }
+    /// The marker is calibrated only while not recording (a recording has one marker file).
+    public var canCalibrateMarker: Bool { !isRecording }
 }
 
-/// The screen's logic: wires camera, pipeline, settings, recording, link and calibration, and
-/// turns every outcome into state or a message. Call it on one thread (the main thread in the
-/// app); results from the pipeline come back through `deliver`. `onChange` gets the state after
-/// every change.
+/// The screen's logic: wires camera, pipeline, settings, recording, link, the bite calibration
+/// and the marker calibration's screen (`markerCalibration`), and turns every outcome into state
+/// or a message. Call it on one thread (the main thread in the app); results from the pipeline
+/// come back through `deliver`. `onChange` gets the state after every change.
 public final class AppController {
     public private(set) var state = ScreenState() {
         didSet { onChange?(state) }
@@ -66,6 +68,8 @@ public final class AppController {
     public var onChange: ((ScreenState) -> Void)?
     public let settings: SettingsStore
     public let pipeline: FramePipeline
+    /// The marker calibration screen's logic; a marker it saves is tracked at once.
+    public let markerCalibration: CalibrationController
 
     private let camera: CameraControl
     private let documents: URL?
@@ -83,14 +87,16 @@ public final class AppController {
     private var settingsOpen = false
     private var link: LinkSession?
 
-    /// `documents`: where recordings go and a calibrated `marker.json` is looked for.
-    /// `deliver` runs a closure on the controller's thread (`DispatchQueue.main.async` in the app),
-    /// `schedule` after a delay in seconds on that thread.
+    /// `documents`: where recordings go and a calibrated `marker.json` is looked for (and saved
+    /// by the marker calibration). `deliver` runs a closure on the controller's thread
+    /// (`DispatchQueue.main.async` in the app), `schedule` after a delay in seconds on that
+    /// thread; `calibrationQueue` is where marker calibrations are solved.
     public init(
         settings: SettingsStore,
         camera: CameraControl,
         documents: URL?,
         pipeline: FramePipeline = FramePipeline(),
+        calibrationQueue: DispatchQueue = DispatchQueue(label: "org.jawtrack.calibration", qos: .userInitiated),
         makeTransport: @escaping TransportFactory,
         clock: @escaping () -> Double = { Date().timeIntervalSince1970 },
         deliver: @escaping (@escaping () -> Void) -> Void = { DispatchQueue.main.async(execute: $0) },
@@ -106,6 +112,10 @@ public final class AppController {
         self.clock = clock
         self.deliver = deliver
         self.schedule = schedule
+        markerCalibration = CalibrationController(
+            pipeline: pipeline, documents: documents, queue: calibrationQueue, deliver: deliver
+        )
+        markerCalibration.useSavedMarker = { [weak self] in try self?.reloadMarker() }
         pipeline.setReportHandler { [weak self] report in
             deliver { self?.show(report) }
         }
@@ -214,8 +224,18 @@ public final class AppController {
         }
     }
 
-    /// A calibrated marker file put in Documents as `marker.json` (from `jawtrack
-    /// calibrate-marker`, copied with the Files app); nil: the nominal marker.
+    /// A new tracker for the `marker.json` in Documents (just saved by the marker calibration):
+    /// tracking uses it from the next frame. The bite registration belongs to the old marker
+    /// and goes with it.
+    private func reloadMarker() throws {
+        let newTracker = try Tracker(settings: settings.settings.tracker, markerJson: try markerJSON())
+        tracker = newTracker
+        pipeline.use(tracker: newTracker)
+    }
+
+    /// A calibrated marker file in Documents as `marker.json`: saved by the marker calibration,
+    /// or made by `jawtrack calibrate-marker` and copied with the Files app; nil: the nominal
+    /// marker.
     private func markerJSON() throws -> String? {
         guard let url = documents?.appendingPathComponent("marker.json"),
               FileManager.default.fileExists(atPath: url.path)
@@ -251,6 +271,9 @@ public final class AppController {
             next.message = UserMessage(title: "Recording stopped", text: problem)
         }
         state = next
+        if let progress = report.calibration {
+            markerCalibration.show(progress)
+        }
     }
 
     // MARK: Settings
@@ -412,6 +435,17 @@ public final class AppController {
             format: "%u frames averaged over %.2f s; held within %.2f mm and %.2f°. The lower scan moved %.2f mm and turned %.2f°.",
             bite.frames, bite.spanS, bite.spreadMm, bite.spreadDeg, bite.translationMm, bite.rotationDeg
         )
+    }
+
+    /// Opens the marker calibration screen, unless recording.
+    public func openMarkerCalibration() {
+        guard state.canCalibrateMarker else {
+            state.message = UserMessage(
+                title: CalibrationText.title, text: "Stop the recording first: a recording keeps one marker file."
+            )
+            return
+        }
+        markerCalibration.open()
     }
 
     /// Dismisses the alert.

@@ -35,7 +35,8 @@ public func userText(_ error: Error) -> String {
         switch error {
         case .InvalidSetting(_, let message), .InvalidFrame(let message), .InvalidIntrinsics(let message),
              .InvalidMarker(let message), .InvalidKey(let message), .NotEnoughFrames(_, _, let message),
-             .JawMoving(_, _, let message), .InvalidArgument(let message), .Io(_, let message), .Link(let message):
+             .JawMoving(_, _, let message), .Calibration(let message), .InvalidArgument(let message),
+             .Io(_, let message), .Link(let message):
             return message
         }
     }

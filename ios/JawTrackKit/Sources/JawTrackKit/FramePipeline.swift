@@ -17,11 +17,14 @@ public struct FrameReport {
     public var recordedFrames: UInt64?
     /// Why the recording stopped by itself.
     public var recordingProblem: String?
+    /// Where the marker calibration stands after this frame, while one collects views.
+    public var calibration: CalibrationProgress?
 }
 
 /// The per-frame work, on one serial queue that owns the tracker, the recorder and the link:
 /// each frame is tracked in place (`FrameDoor`, no copy) with its own intrinsics, then its
-/// result goes to the recorder, the link and the screen. A frame older than the last one is
+/// result goes to the marker calibration (when one collects views), the recorder, the link and
+/// the screen. A frame older than the last one is
 /// dropped, and gaps in the frame times are counted as frames the camera dropped (the capture
 /// output discards frames that arrive while one is being tracked, so the queue never falls
 /// behind).
@@ -40,6 +43,8 @@ public final class FramePipeline {
     private var camera: CaptureConfiguration?
     private var makeVideo: VideoSinkFactory?
     private var link: LinkSession?
+    /// The marker calibration each tracked frame is offered to, while it collects views.
+    private var calibrator: Calibrator?
     private var recording = Recording.idle
     /// Why the recording ended outside a frame's turn, for the next frame's report.
     private var lateRecordingProblem: String?
@@ -82,6 +87,30 @@ public final class FramePipeline {
             self.link?.stop()
             self.link = link
         }
+    }
+
+    /// Starts a marker calibration from the marker the tracker uses (a calibrated one starts
+    /// afresh from the nominal marker of its size): every frame tracked from now on is offered
+    /// to it as a view, and its report says where the calibration stands.
+    public func startMarkerCalibration(minViews: UInt32, completion: @escaping (Result<Calibrator, Error>) -> Void) {
+        queue.async {
+            guard let tracker = self.tracker else {
+                completion(.failure(AppError(message: "The tracker is not running.")))
+                return
+            }
+            do {
+                let calibrator = try Calibrator(markerJson: tracker.markerJson(), minViews: minViews)
+                self.calibrator = calibrator
+                completion(.success(calibrator))
+            } catch {
+                completion(.failure(error))
+            }
+        }
+    }
+
+    /// Offers the frames tracked from now on to `calibrator` (nil: to none).
+    public func feed(calibrator: Calibrator?) {
+        queue.async { self.calibrator = calibrator }
     }
 
     public func update(trackerSettings: JawTrackCore.Settings, completion: @escaping (Error?) -> Void) {
@@ -167,6 +196,7 @@ public final class FramePipeline {
             intrinsics = resolved.intrinsics
             try FrameDoor.track(frame.buffer, handle: tracker.frameHandle(), intrinsics: resolved.intrinsics, time: frame.time)
             report.result = tracker.lastResult()
+            report.calibration = calibrator?.addView(tracker: tracker)
         } catch {
             report.problem = userText(error)
         }

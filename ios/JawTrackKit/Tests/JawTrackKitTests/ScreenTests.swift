@@ -204,8 +204,11 @@ final class ScreenTests: XCTestCase {
         for i in 0..<13 {
             camera.play(set.frames[0], time: Double(i) / 30, cameraMatrix: set.cameraMatrix)
         }
+        // Held until the state is checked: the step itself is quick enough to finish first.
+        controller.pipeline.queue.suspend()
         controller.calibrateBite()
         XCTAssertTrue(controller.state.isCalibrating)
+        controller.pipeline.queue.resume()
         controller.pipeline.queue.sync {}
         XCTAssertEqual(controller.state.message?.title, "Bite calibrated")
         XCTAssertTrue(
