@@ -195,7 +195,7 @@ pub(crate) fn print_refinement(r: &Refinement, seconds: f64) {
             match k {
                 Kept::Calibrated { .. } => {}
                 Kept::NotBetter { .. } => say!("  {k}"),
-                Kept::TooFewViews { .. } => {
+                Kept::TooFewViewpoints { .. } => {
                     eprintln!("warning: {k} (it stays nominal: film that face from a few angles)")
                 }
             }

@@ -105,6 +105,15 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
 
     let marker = a.out.join("calibrated_marker.json");
     run.calibrated_marker.save(&marker).with_context(|| format!("writing {}", marker.display()))?;
+    let mut markers = vec![("front_faces_marker.json".to_owned(), &run.front_only_marker)];
+    for s in &run.sessions {
+        for (case, m) in ["front_faces", "calibrated"].iter().zip(&s.markers) {
+            markers.push((format!("{case}_refined_on_{}_marker.json", s.scene.name()), m));
+        }
+    }
+    for (name, m) in markers {
+        m.save(&a.out.join(&name)).with_context(|| format!("writing {name} in {}", a.out.display()))?;
+    }
     let mut files = write_csv(&run, &a.out)?;
     files.extend(write_plots(&run, &a.out)?);
     let report = report(&run, &options, &files, &a.out);
@@ -694,6 +703,7 @@ mod tests {
             calibration: Vec::new(),
             calibrated_marker: Marker::default(),
             front_only: Vec::new(),
+            front_only_marker: Marker::default(),
             sessions: Vec::new(),
             bite_steps: vec![None, None],
             calibration_frames: 0,

@@ -245,6 +245,8 @@ pub struct Run {
     pub calibrated_marker: Marker,
     /// The calibration from the front faces only, per body.
     pub front_only: Vec<BodySummary>,
+    /// The front-faces marker file.
+    pub front_only_marker: Marker,
     /// Each judged scene's session refinements.
     pub sessions: Vec<SessionSummary>,
     /// The bite step per stack (ours, then the reference's), `None` when the stack had no
@@ -412,6 +414,7 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
         calibration,
         calibrated_marker: cal.marker,
         front_only,
+        front_only_marker: front.marker,
         sessions,
         bite_steps,
         calibration_frames,
@@ -681,6 +684,7 @@ mod tests {
             calibration: Vec::new(),
             calibrated_marker: Marker::default(),
             front_only: Vec::new(),
+            front_only_marker: Marker::default(),
             sessions: Vec::new(),
             bite_steps: vec![None],
             calibration_frames: 0,

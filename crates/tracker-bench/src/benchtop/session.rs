@@ -9,7 +9,7 @@
 use super::{DynamicRow, ErrorParts, MarkerFile, MeanSd, Run, Stack, StaticRow, dynamic_rows, static_rows};
 use anyhow::{Context, Result};
 use jawtrack_apriltag::Detection;
-use jawtrack_calibration::{CalibrationFrame, SeenTag, SessionOptions, refine};
+use jawtrack_calibration::{CalibrationFrame, Kept, SeenTag, SessionOptions, refine};
 use jawtrack_marker::Marker;
 use jawtrack_pose::Pose;
 use jawtrack_synth::{GroundTruth, SceneKind};
@@ -41,6 +41,10 @@ pub struct SessionSummary {
     /// Per marker refined (front faces only, then the full calibration): tags placed, and
     /// the refinement's time on one core (s).
     pub refined: [(Vec<u32>, f64); 2],
+    /// Per marker refined, the tags not calibrated before that kept their place, and why.
+    pub kept: [Vec<String>; 2],
+    /// The refined markers, in the same order.
+    pub markers: [Marker; 2],
 }
 
 /// The session columns (`MarkerFile::SESSION`) of every frame of a scene: each frame's
@@ -63,12 +67,20 @@ pub(super) fn judge(
         .collect();
     let mut refined = Vec::new();
     let mut placed = Vec::new();
-    for marker in [front, calibrated] {
+    let mut kept = [Vec::new(), Vec::new()];
+    for (k, marker) in [front, calibrated].into_iter().enumerate() {
         let started = Instant::now();
         let r = refine(marker, &frames, &SessionOptions::default())
             .with_context(|| format!("refining the marker from the {} scene", scene.name()))?;
         let seconds = started.elapsed().as_secs_f64();
         placed.push((r.bodies.iter().flat_map(|b| b.placed.iter().map(|p| p.id)).collect::<Vec<u32>>(), seconds));
+        kept[k] = r
+            .bodies
+            .iter()
+            .flat_map(|b| &b.kept)
+            .filter(|k| !matches!(k, Kept::Calibrated { .. }))
+            .map(ToString::to_string)
+            .collect();
         refined.push(r.marker);
     }
     // In the order of `MarkerFile::SESSION`.
@@ -85,8 +97,9 @@ pub(super) fn judge(
         .map(|(d, f)| trackers.iter_mut().map(|t| t.solve(d.to_vec(), &camera, f.t).maxilla_from_mandible).collect())
         .collect();
     let mut placed = placed.into_iter();
+    let refined_markers = [refined[0].clone(), refined[1].clone()];
     let refined = [placed.next().unwrap_or_default(), placed.next().unwrap_or_default()];
-    Ok((estimates, SessionSummary { scene, frames: detections.len(), refined }))
+    Ok((estimates, SessionSummary { scene, frames: detections.len(), refined, kept, markers: refined_markers }))
 }
 
 /// The report's section on the session cases: the front-faces calibration, what each scene's
@@ -103,8 +116,11 @@ pub fn report(run: &Run) -> String {
         "The front-faces calibration uses the same calibration recording with every tag on a face below the \
          marker's equator left out. Each judged scene is then tracked once, the marker is refined from that \
          scene's detections (`jawtrack track --refine-marker`: calibrated tags held, the others placed when seen \
-         in {} views and fitted better), and the scene's detections are solved again with the refined marker.\n",
-        SessionOptions::default().calibration.min_views
+         from {} directions {}° apart, not more than {}° from face-on, and fitted better), and the scene's \
+         detections are solved again with the refined marker.\n",
+        SessionOptions::default().min_viewpoints,
+        SessionOptions::default().min_turn_deg,
+        SessionOptions::default().max_obliquity_deg
     );
     for b in &run.front_only {
         let _ = writeln!(md, "- front faces, {}: {} tags calibrated, {} views", b.body, b.calibrated_tags, b.views);
@@ -126,6 +142,13 @@ pub fn report(run: &Run) -> String {
             ids(&s.refined[1].0),
             s.refined[1].1
         );
+    }
+    for s in &run.sessions {
+        for (name, kept) in ["front-faces", "calibrated"].iter().zip(&s.kept) {
+            if !kept.is_empty() {
+                let _ = writeln!(md, "\n{} scene, {name} marker: {}", s.scene.name(), kept.join("; "));
+            }
+        }
     }
     let header = cases.iter().map(|m| m.name()).collect::<Vec<_>>().join(" | ");
     let _ = writeln!(md, "\nMean position / orientation error of `maxilla_from_mandible` (mm / °):\n");
