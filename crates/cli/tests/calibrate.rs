@@ -82,9 +82,8 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     assert!(after.0 < 0.07 && after.1 < 0.15, "{after:?}");
 
     // Tags 2 and 13, which every fixture frame shows, put back to their nominal place as if
-    // the calibration had never seen them; a session that turns the marker (the calibration
-    // recording, tracked) places them again. The fixture alone could not: it films the marker
-    // from one direction, from which a tag is never placed.
+    // the calibration had never seen them; a session (the calibration recording, tracked)
+    // places them again, and the fixture is judged with the refined marker.
     let holes = dir.path().join("holes.json");
     unplace(Path::new(calibrated), &[2, 13], &holes);
     let (with_holes, refined_poses) = (dir.path().join("holes.jsonl"), dir.path().join("refined.jsonl"));

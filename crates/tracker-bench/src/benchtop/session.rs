@@ -116,10 +116,8 @@ pub fn report(run: &Run) -> String {
         "The front-faces calibration uses the same calibration recording with every tag on a face below the \
          marker's equator left out. Each judged scene is then tracked once, the marker is refined from that \
          scene's detections (`jawtrack track --refine-marker`: calibrated tags held, the others placed when seen \
-         from {} directions {}° apart, not more than {}° from face-on, and fitted better), and the scene's \
-         detections are solved again with the refined marker.\n",
-        SessionOptions::default().min_viewpoints,
-        SessionOptions::default().min_turn_deg,
+         within {}° of face-on and fitted better), and the scene's detections are solved again with the \
+         refined marker.\n",
         SessionOptions::default().max_obliquity_deg
     );
     for b in &run.front_only {
