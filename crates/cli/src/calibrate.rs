@@ -13,6 +13,7 @@ use jawtrack_calibration::{
 };
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack calibrate-marker`.
@@ -70,7 +71,7 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
         let started = std::time::Instant::now();
         let mut r = refine(&marker, &frames, &SessionOptions { calibration: options, ..SessionOptions::default() })?;
         r.name_recording(&recordings.join(", "));
-        print_refinement(&r, started.elapsed().as_secs_f64());
+        print_refinement(&r, started.elapsed().as_secs_f64(), false);
         r.marker
     } else {
         let mut cal = calibrate(&marker, &frames, &options)?;
@@ -157,26 +158,27 @@ pub(crate) fn print_report(cal: &Calibration) {
     }
 }
 
-/// Prints what a session refinement changed, per body: the tags placed, those kept and why.
-pub(crate) fn print_refinement(r: &Refinement, seconds: f64) {
+/// Says what a session refinement changed, per body: the tags placed, those kept and why; on
+/// standard output, or on standard error when standard output carries the recording.
+pub(crate) fn print_refinement(r: &Refinement, seconds: f64, to_stderr: bool) {
+    let mut text = String::new();
     for b in &r.bodies {
-        say!(
+        let _ = writeln!(
+            text,
             "{}: {} views of the session; reprojection error {:.3} px with the marker given, {:.3} px refined",
-            b.body,
-            b.views,
-            b.rms_before_px,
-            b.rms_after_px
+            b.body, b.views, b.rms_before_px, b.rms_after_px
         );
         for f in &b.findings {
-            say!("  assembly: {f}");
+            let _ = writeln!(text, "  assembly: {f}");
         }
         if b.placed.is_empty() {
-            say!("  no tag moved");
+            let _ = writeln!(text, "  no tag moved");
         } else {
-            say!("  placed  views  shift x mm  shift y mm  turn °   px before  px after");
+            let _ = writeln!(text, "  placed  views  shift x mm  shift y mm  turn °   px before  px after");
         }
         for t in &b.placed {
-            say!(
+            let _ = writeln!(
+                text,
                 "  {:6}  {:5}  {:10.3}  {:10.3}  {:6.2}   {:9.3}  {:8.3}",
                 t.id,
                 t.views,
@@ -189,22 +191,24 @@ pub(crate) fn print_refinement(r: &Refinement, seconds: f64) {
         }
         let gauge = b.kept.iter().filter(|k| matches!(k, Kept::Calibrated { .. })).count();
         if gauge > 0 {
-            say!("  {gauge} tags calibrated before kept as they were");
+            let _ = writeln!(text, "  {gauge} tags calibrated before kept as they were");
         }
-        for k in &b.kept {
-            match k {
-                Kept::Calibrated { .. } => {}
-                Kept::NotBetter { .. } => say!("  {k}"),
-                Kept::TooFewViewpoints { .. } => {
-                    eprintln!("warning: {k} (it stays nominal: film that face from a few angles)")
-                }
-            }
+        for k in b.kept.iter().filter(|k| matches!(k, Kept::NotBetter { .. })) {
+            let _ = writeln!(text, "  {k}");
         }
+    }
+    let _ = write!(text, "refined the marker from the session in {seconds:.1} s");
+    if to_stderr {
+        eprintln!("{text}");
+    } else {
+        say!("{text}");
+    }
+    for k in r.bodies.iter().flat_map(|b| &b.kept).filter(|k| matches!(k, Kept::TooFewViewpoints { .. })) {
+        eprintln!("warning: {k} (it stays nominal: film that face from a few angles)");
     }
     if let Some(focal) = r.focal.filter(FocalCheck::looks_wrong) {
         eprintln!("warning: {}", intrinsics_warning(&focal, r.bodies.iter().map(|b| b.rms_after_px)));
     }
-    say!("refined the marker from the session in {seconds:.1} s");
 }
 
 /// What to say when the views point to another focal length than the one given: shared by

@@ -136,7 +136,8 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
                 Some(v) => v.display().to_string(),
                 None => a.frames.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
             };
-            let refined = refine_marker(tracker.marker(), &kept, &a.intrinsics, path, &recording)?;
+            let refined =
+                refine_marker(tracker.marker(), &kept, &a.intrinsics, path, &recording, a.out.as_os_str() == "-")?;
             let mut again = Tracker::new(refined, config)?;
             again.set_registration(tracker.registration().cloned());
             (again, Some(kept))
@@ -266,6 +267,7 @@ fn refine_marker(
     camera: &CameraIntrinsics,
     path: &std::path::Path,
     recording: &str,
+    to_stderr: bool,
 ) -> Result<Marker> {
     let frames: Vec<CalibrationFrame> = kept
         .iter()
@@ -278,9 +280,10 @@ fn refine_marker(
     let started = std::time::Instant::now();
     let mut refinement = refine(marker, &frames, &SessionOptions::default()).context("refining the marker")?;
     refinement.name_recording(recording);
-    crate::calibrate::print_refinement(&refinement, started.elapsed().as_secs_f64());
+    // With `--out -` the recording is standard output: the report goes to standard error.
+    crate::calibrate::print_refinement(&refinement, started.elapsed().as_secs_f64(), to_stderr);
     refinement.marker.save(path).with_context(|| format!("writing {}", path.display()))?;
-    say!("wrote the refined marker to {}", path.display());
+    eprintln!("wrote the refined marker to {}", path.display());
     Ok(refinement.marker)
 }
 

@@ -110,6 +110,15 @@ fn calibrating_the_marker_from_a_turned_recording_restores_the_accuracy() {
     eprintln!("static fixture: tags 2, 13 nominal {holed:.3?}, placed by the session {refilled:.3?} (mm, °)");
     assert!(refilled.0 < holed.0 && refilled.1 < holed.1, "{holed:?} → {refilled:?}");
     assert!(refilled.0 < after.0 + 0.02 && refilled.1 < after.1 + 0.03, "{after:?} vs {refilled:?}");
+    // A recording written to standard output stays a recording: the report goes to stderr.
+    let piped = dir.path().join("piped.json");
+    let o =
+        jawtrack(&[&args[..3], &["--marker", s(&holes), "--refine-marker", s(&piped), "--out", "-", frames]].concat());
+    let stdout = ok(&o);
+    let lines: Vec<serde_json::Value> =
+        stdout.lines().map(|l| serde_json::from_str(l).expect("every line of the recording is JSON")).collect();
+    assert!(lines[0]["recording"].is_object() && lines.len() > 10, "{stdout}");
+    assert_eq!(placed(&stderr(&o)), [2, 13], "{}", stderr(&o));
     // Neither output is overwritten unless asked.
     refused(&run(&[]), "already exists");
     assert!(run(&["--force"]).status.success());
