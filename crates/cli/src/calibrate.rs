@@ -9,7 +9,7 @@ use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig};
 use jawtrack_calibration::{
     Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, Kept, Refinement, SeenTag, SessionOptions,
-    calibrate, refine,
+    TagCorrection, calibrate, refine,
 };
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
@@ -138,16 +138,7 @@ pub(crate) fn print_report(cal: &Calibration) {
         }
         say!("  tag  views  shift x mm  shift y mm  turn °   px before  px after");
         for t in &b.tags {
-            say!(
-                "  {:3}  {:5}  {:10.3}  {:10.3}  {:6.2}   {:9.3}  {:8.3}",
-                t.id,
-                t.views,
-                t.placement.shift_x,
-                t.placement.shift_y,
-                t.placement.rotation.to_degrees(),
-                t.rms_before_px,
-                t.rms_after_px
-            );
+            say!("{}", correction_row(t, "tag".len()));
         }
         for f in b.findings.iter().filter(|f| matches!(f, Finding::Uncalibrated { .. })) {
             eprintln!("warning: {f} (turn the marker to show that face from a few angles)");
@@ -156,6 +147,20 @@ pub(crate) fn print_report(cal: &Calibration) {
     if let Some(focal) = cal.focal.filter(FocalCheck::looks_wrong) {
         eprintln!("warning: {}", intrinsics_warning(&focal, cal.bodies.iter().map(|b| b.rms_after_px)));
     }
+}
+
+/// One row of a table of tag corrections, under a header whose first column is `id_width` wide.
+fn correction_row(t: &TagCorrection, id_width: usize) -> String {
+    format!(
+        "  {:>id_width$}  {:5}  {:10.3}  {:10.3}  {:6.2}   {:9.3}  {:8.3}",
+        t.id,
+        t.views,
+        t.placement.shift_x,
+        t.placement.shift_y,
+        t.placement.rotation.to_degrees(),
+        t.rms_before_px,
+        t.rms_after_px
+    )
 }
 
 /// Says what a session refinement changed, per body: the tags placed, those kept and why; on
@@ -177,17 +182,7 @@ pub(crate) fn print_refinement(r: &Refinement, seconds: f64, to_stderr: bool) {
             let _ = writeln!(text, "  placed  views  shift x mm  shift y mm  turn °   px before  px after");
         }
         for t in &b.placed {
-            let _ = writeln!(
-                text,
-                "  {:6}  {:5}  {:10.3}  {:10.3}  {:6.2}   {:9.3}  {:8.3}",
-                t.id,
-                t.views,
-                t.placement.shift_x,
-                t.placement.shift_y,
-                t.placement.rotation.to_degrees(),
-                t.rms_before_px,
-                t.rms_after_px
-            );
+            let _ = writeln!(text, "{}", correction_row(t, "placed".len()));
         }
         let gauge = b.kept.iter().filter(|k| matches!(k, Kept::Calibrated { .. })).count();
         if gauge > 0 {
