@@ -3,7 +3,7 @@
 //! (`jawtrack_recording`), after a header line naming the camera, marker and settings. Every
 //! line is flushed as it is written, so a killed run leaves a readable file.
 
-use crate::frames::open_frames;
+use crate::frames::{Frame, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::ProgressBar;
@@ -57,7 +57,8 @@ pub(crate) struct TrackArgs {
     /// After tracking, place the tags the marker's calibration left nominal (or every tag, for
     /// a nominal marker) from this session's own frames, keeping calibrated tags as they are;
     /// write the refined marker here and the recording from the refined marker. A tag keeps
-    /// its place unless the session fits a new one better.
+    /// its place unless the session fits a new one better. An existing file here is replaced
+    /// only with --force, as --out is.
     #[arg(long, value_name = "MARKER_OUT")]
     refine_marker: Option<PathBuf>,
     #[command(flatten)]
@@ -124,10 +125,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             let mut kept = Vec::new();
             let bar = crate::progress::bar("tracking (1 of 2)", source.len().map(|n| n as u64), "frames");
             while let Some(frame) = source.next_frame()? {
-                let tracked = frame.image.and_then(|image| {
-                    let view = image.view().map_err(|e| e.to_string())?;
-                    tracker.track(&view, &a.intrinsics, frame.t).map_err(|e| e.to_string())
-                });
+                let tracked = track_frame(&mut tracker, &frame, &a.intrinsics);
                 kept.push(Kept { name: frame.name, t: frame.t, tracked: tracked.map(Detected::of) });
                 bar.inc(1);
             }
@@ -190,10 +188,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
             while let Some(frame) = source.next_frame()? {
                 // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
-                let tracked = frame.image.and_then(|image| {
-                    let view = image.view().map_err(|e| e.to_string())?;
-                    tracker.track(&view, &a.intrinsics, frame.t).map_err(|e| e.to_string())
-                });
+                let tracked = track_frame(&mut tracker, &frame, &a.intrinsics);
                 write(&bar, &mut tracker, &frame.name, frame.t, tracked)?;
                 bar.inc(1);
             }
@@ -229,6 +224,13 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// One frame tracked, or why it could not be decoded or tracked.
+fn track_frame(tracker: &mut Tracker, frame: &Frame, camera: &CameraIntrinsics) -> Result<FrameResult, String> {
+    let image = frame.image.as_ref().map_err(Clone::clone)?;
+    let view = image.view().map_err(|e| e.to_string())?;
+    tracker.track(&view, camera, frame.t).map_err(|e| e.to_string())
 }
 
 /// A frame of the first pass of `--refine-marker`: its detections, or why it was unreadable.
