@@ -126,7 +126,8 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             let bar = crate::progress::bar("tracking (1 of 2)", source.len().map(|n| n as u64), "frames");
             while let Some(frame) = source.next_frame()? {
                 let tracked = track_frame(&mut tracker, &frame, &a.intrinsics);
-                kept.push(Kept { name: frame.name, t: frame.t, tracked: tracked.map(Detected::of) });
+                let rows = frame.image.as_ref().map_or(0, |i| i.height);
+                kept.push(Kept { name: frame.name, t: frame.t, tracked: tracked.map(|r| Detected::of(r, rows)) });
                 bar.inc(1);
             }
             bar.finish_and_clear();
@@ -243,18 +244,20 @@ struct Kept {
 /// What the first pass detected in a frame, and how.
 struct Detected {
     detections: Vec<Detection>,
+    /// The frame's height (px): its rows' times under a rolling shutter.
+    rows: usize,
     detection_s: f64,
     searched: Option<jawtrack_apriltag::Roi>,
 }
 
 impl Detected {
-    fn of(r: FrameResult) -> Self {
-        Detected { detection_s: r.timings.detection_s, searched: r.searched, detections: r.detections }
+    fn of(r: FrameResult, rows: usize) -> Self {
+        Detected { detection_s: r.timings.detection_s, searched: r.searched, detections: r.detections, rows }
     }
 
     /// The frame solved again by `tracker`, keeping the first pass's detection figures.
     fn solve(self, tracker: &mut Tracker, camera: &CameraIntrinsics, t: f64) -> FrameResult {
-        let mut r = tracker.solve(self.detections, camera, t);
+        let mut r = tracker.solve(self.detections, camera, t, self.rows);
         r.timings.detection_s = self.detection_s;
         r.searched = self.searched;
         r

@@ -414,19 +414,19 @@ mod tests {
         let lone_frame = |lone: u32, new: Option<Settings>| {
             let mut engine = Engine::new(marker.clone(), default_settings()).expect("engine");
             for i in 0..2 {
-                engine.tracker.solve(frame(&[12, 13, 14]), &camera, f64::from(i) / 30.0);
+                engine.tracker.solve(frame(&[12, 13, 14]), &camera, f64::from(i) / 30.0, 1080);
             }
             if let Some(settings) = new {
                 engine.update_settings(settings).expect("valid settings");
             }
-            engine.tracker.solve(frame(&[lone]), &camera, 2.0 / 30.0).flags
+            engine.tracker.solve(frame(&[lone]), &camera, 2.0 / 30.0, 1080).flags
         };
         // A tag whose pose alone has a mirror solution: ambiguous on a fresh tracker.
         let ambiguous = Flag::Ambiguous(BodyKind::Mandible);
         let lone = (12..24)
             .find(|&id| {
                 let mut engine = Engine::new(marker.clone(), default_settings()).expect("engine");
-                engine.tracker.solve(frame(&[id]), &camera, 0.0).flags.contains(&ambiguous)
+                engine.tracker.solve(frame(&[id]), &camera, 0.0, 1080).flags.contains(&ambiguous)
             })
             .expect("some single tag is ambiguous");
         let kept = lone_frame(lone, None);

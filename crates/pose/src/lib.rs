@@ -1,6 +1,7 @@
 //! Geometry shared by everything that reasons about where things are: rigid transforms in
 //! millimetres ([`Pose`]), the pinhole camera with radial distortion ([`CameraIntrinsics`]),
-//! the pose of a rigid body from its points in an image ([`pnp`]), and the median its users
+//! the pose of a rigid body from its points in an image ([`pnp`]), a body moving while a rolling
+//! shutter reads the frame ([`motion`]), and the median its users
 //! share ([`median`]).
 //!
 //! Conventions: camera frame x right, y down, z forward (OpenCV); pixel centres at integer
@@ -9,11 +10,13 @@
 
 mod camera;
 pub mod lm;
+pub mod motion;
 pub mod pnp;
 mod rigid;
 pub mod stats;
 
 pub use camera::CameraIntrinsics;
+pub use motion::{RollingShutter, Velocity};
 pub use pnp::{Alternative, BodyPose, Observation, PnpError, PnpOptions, solve_pnp};
 pub use rigid::Pose;
 pub use stats::median;
@@ -44,4 +47,7 @@ pub enum GeometryError {
     /// Intrinsics that cannot describe a camera.
     #[error("intrinsics: {0}")]
     BadIntrinsics(String),
+    /// A rolling shutter that cannot be.
+    #[error("rolling shutter: {0}")]
+    BadShutter(String),
 }

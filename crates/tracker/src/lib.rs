@@ -20,7 +20,9 @@
 //! a pose that is not finite is never returned. New settings ([`Tracker::set_config`]) keep
 //! the motion tracked so far. With a calibrated marker, a body whose pose uses a tag the
 //! calibration left at its nominal place is flagged `uncalibrated_tag`
-//! ([`Tracker::uncalibrated_tags`]); a nominal marker never is.
+//! ([`Tracker::uncalibrated_tags`]); a nominal marker never is. Under a rolling shutter
+//! ([`TrackerConfig::readout_s`]) every corner is carried from its row's time to the frame's
+//! before the bodies are solved, so both are reported at the same instant.
 
 pub mod bite;
 pub mod registration;
@@ -34,10 +36,13 @@ pub use smoothing::{Smoother, SmootherConfig};
 
 use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi};
 use jawtrack_marker::{BodyKind, Marker};
-use jawtrack_pose::{BodyPose, CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
+use jawtrack_pose::motion::to_frame_time;
+use jawtrack_pose::{
+    BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, solve_pnp,
+};
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use nalgebra::{Matrix6, Point2, Point3};
-use roi::Timed;
+use roi::{BodyState, Timed};
 use std::time::Instant;
 
 /// How the tracker searches each frame.
@@ -80,6 +85,11 @@ pub struct TrackerConfig {
     pub smoother: Option<SmootherConfig>,
     /// When the maximal-intercuspation step accepts a bite.
     pub bite: BiteRule,
+    /// Time the camera takes to read a frame from its first row to its last (s); 0 for a
+    /// global shutter. With a readout, each body's corners are carried to the frame's time (its
+    /// centre row's) at the velocity its recent poses give, so both bodies are solved at the
+    /// same instant ([`jawtrack_pose::motion`]).
+    pub readout_s: f64,
 }
 
 impl Default for TrackerConfig {
@@ -93,6 +103,7 @@ impl Default for TrackerConfig {
             prior_max_age_s: 0.5,
             smoother: None,
             bite: BiteRule::default(),
+            readout_s: 0.0,
         }
     }
 }
@@ -195,36 +206,6 @@ pub enum TrackError {
     /// A setting out of range.
     #[error("tracker setting: {0}")]
     BadConfig(String),
-}
-
-/// What the tracker remembers of one body.
-#[derive(Debug, Clone, Default)]
-struct BodyState {
-    /// The last two times and poses it was solved, newest last.
-    history: Vec<Timed>,
-    /// The tags used the last time it was solved in the frame before.
-    tags: Vec<u32>,
-}
-
-impl BodyState {
-    fn last(&self) -> Option<&Timed> {
-        self.history.last()
-    }
-
-    fn remember(&mut self, t: f64, pose: Pose, tags: &[u32]) {
-        self.history.push((t, pose));
-        if self.history.len() > 2 {
-            self.history.remove(0);
-        }
-        self.tags = tags.to_vec();
-    }
-
-    /// The pose expected at `t`.
-    fn predict(&self, t: f64) -> Option<Pose> {
-        let last = self.last()?;
-        let previous = (self.history.len() == 2).then(|| &self.history[0]);
-        Some(roi::extrapolate(previous, last, t))
-    }
 }
 
 /// Tracks the two marker bodies through a sequence of frames.
@@ -412,7 +393,7 @@ impl Tracker {
         }
         self.since_full = if searched.is_none() { 0 } else { self.since_full + 1 };
         let detection_s = start.elapsed().as_secs_f64();
-        let mut result = self.solve(detections, camera, t);
+        let mut result = self.solve(detections, camera, t, frame.height());
         result.searched = searched;
         result.timings.detection_s = detection_s;
         Ok(result)
@@ -450,18 +431,25 @@ impl Tracker {
     }
 
     /// Solves both bodies from detections already made (e.g. by a detector elsewhere) in a
-    /// frame taken at `t` (s).
-    pub fn solve(&mut self, detections: Vec<Detection>, camera: &CameraIntrinsics, t: f64) -> FrameResult {
+    /// frame of `rows` rows taken at `t` (s): the time of its centre row.
+    pub fn solve(&mut self, detections: Vec<Detection>, camera: &CameraIntrinsics, t: f64, rows: usize) -> FrameResult {
         let start = Instant::now();
+        // The readout was validated with the settings.
+        let shutter = RollingShutter::new(self.config.readout_s, rows).unwrap_or_else(|_| RollingShutter::global());
         let mut flags = Vec::new();
         if detections.is_empty() {
             flags.push(Flag::NoTags);
         }
         let mut solved: [Option<(BodyPose, Vec<u32>)>; 2] = [None, None];
+        let mut seen: [Option<Pose>; 2] = [None, None];
         for kind in BodyKind::ALL {
             let observations = self.observations(kind, &detections);
             let prior = self.predicted(kind, t);
-            let Ok(pose) = solve_pnp(&observations, camera, prior.as_ref(), &self.config.pnp) else { continue };
+            let Ok((pose, observations, raw)) = self.solve_at(kind, observations, camera, prior.as_ref(), t, &shutter)
+            else {
+                continue;
+            };
+            seen[slot(kind)] = raw;
             solved[slot(kind)] = Some(self.drop_flicker(kind, pose, observations, camera, prior.as_ref()));
         }
         let mut bodies: [Option<BodyResult>; 2] = [None, None];
@@ -486,10 +474,11 @@ impl Tracker {
         }
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
-                Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, &b.tags),
+                Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
                 None => {
                     flags.push(Flag::Lost(kind));
                     self.bodies[slot(kind)].tags.clear();
+                    self.bodies[slot(kind)].seen.clear();
                 }
             }
         }
@@ -555,6 +544,52 @@ impl Tracker {
             }
         }
         out
+    }
+
+    /// `kind`'s pose at the frame's time `t` from its observations `seen`, the observations it
+    /// was solved from, and (under a rolling shutter) its pose solved from them as seen. With a
+    /// global shutter, the pose as seen. Under a rolling shutter, the observations are carried
+    /// to `t` at the body's velocity, taken at `t` from its poses as seen in this frame and the
+    /// two before: those are a function of the observations alone, so an error in one
+    /// frame's velocity never feeds the next (velocities from the carried poses do, and at a
+    /// 10 ms readout that loop rang). Without a recent pose the velocity is unknown and the
+    /// frame is solved as seen.
+    fn solve_at(
+        &self,
+        kind: BodyKind,
+        seen: Vec<Observation>,
+        camera: &CameraIntrinsics,
+        prior: Option<&Pose>,
+        t: f64,
+        shutter: &RollingShutter,
+    ) -> Result<(BodyPose, Vec<Observation>, Option<Pose>), PnpError> {
+        let as_seen = solve_pnp(&seen, camera, prior, &self.config.pnp)?;
+        if shutter.is_global() {
+            return Ok((as_seen, seen, None));
+        }
+        // A lone tag's mirror solution would make a velocity of nothing: take the one nearer
+        // the prior.
+        let raw = match (&as_seen.alternative, prior) {
+            (Some(alt), Some(p))
+                if alt.camera_from_body.rotation().angle_to(&p.rotation())
+                    < as_seen.camera_from_body.rotation().angle_to(&p.rotation()) =>
+            {
+                alt.camera_from_body
+            }
+            _ => as_seen.camera_from_body,
+        };
+        let mut timed: Vec<Timed> =
+            self.bodies[slot(kind)].seen.iter().filter(|(s, _)| *s < t && self.recent(*s, t)).copied().collect();
+        timed.push((t, raw));
+        // Seen as a whole, the body is where it was at its corners' mean row time, so its poses
+        // as seen run that much ahead of the frame times they are filed under.
+        let ahead = seen.iter().map(|o| shutter.offset_s(o.pixel.y)).sum::<f64>() / seen.len().max(1) as f64;
+        let Some(velocity) = Velocity::at(&timed, t - ahead).filter(Velocity::is_finite) else {
+            return Ok((as_seen, seen, Some(raw)));
+        };
+        let carried = to_frame_time(&seen, shutter, camera, &raw, &velocity);
+        let pose = solve_pnp(&carried, camera, Some(&raw), &self.config.pnp)?;
+        Ok((pose, carried, Some(raw)))
     }
 
     /// Drops a tag that just appeared beside tags tracked in the frame before and fits far
@@ -649,6 +684,7 @@ fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
             return Err(TrackError::BadConfig(format!("{name} must be a positive number, got {v}")));
         }
     }
+    RollingShutter::new(c.readout_s, 2).map_err(|e| TrackError::BadConfig(e.to_string()))?;
     let s = &c.search;
     if !(s.margin.is_finite() && s.margin >= 0.0 && s.min_margin_px.is_finite() && s.min_margin_px >= 0.0) {
         return Err(TrackError::BadConfig(format!(

@@ -1,5 +1,5 @@
-//! Where to look next: each marker's pose extrapolated to the coming frame at constant
-//! velocity, and the image region its tags will cover.
+//! Where to look next: what the tracker remembers of each marker, its pose extrapolated to
+//! the coming frame at constant velocity, and the image region its tags will cover.
 
 use jawtrack_apriltag::Roi;
 use jawtrack_pose::{CameraIntrinsics, Pose};
@@ -24,6 +24,46 @@ pub fn extrapolate(previous: Option<&Timed>, last: &Timed, t: f64) -> Pose {
     let rotation = UnitQuaternion::from_scaled_axis(turn.scaled_axis() * k) * p1.rotation();
     let translation = p1.translation() + (p1.translation() - p0.translation()) * k;
     Pose::from_parts(rotation, translation)
+}
+
+/// What the tracker remembers of one body.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct BodyState {
+    /// The last two times and poses it was solved, newest last.
+    pub(crate) history: Vec<Timed>,
+    /// Under a rolling shutter, the last three poses solved from the corners as seen (not
+    /// carried to the frame's time), newest last: what its velocity is taken from.
+    pub(crate) seen: Vec<Timed>,
+    /// The tags used the last time it was solved in the frame before.
+    pub(crate) tags: Vec<u32>,
+}
+
+impl BodyState {
+    pub(crate) fn last(&self) -> Option<&Timed> {
+        self.history.last()
+    }
+
+    pub(crate) fn remember(&mut self, t: f64, pose: Pose, seen: Option<Pose>, tags: &[u32]) {
+        self.history.push((t, pose));
+        if self.history.len() > 2 {
+            self.history.remove(0);
+        }
+        match seen {
+            Some(p) => self.seen.push((t, p)),
+            None => self.seen.clear(),
+        }
+        if self.seen.len() > 3 {
+            self.seen.remove(0);
+        }
+        self.tags = tags.to_vec();
+    }
+
+    /// The pose expected at `t`.
+    pub(crate) fn predict(&self, t: f64) -> Option<Pose> {
+        let last = self.last()?;
+        let previous = (self.history.len() == 2).then(|| &self.history[0]);
+        Some(extrapolate(previous, last, t))
+    }
 }
 
 /// The box around `points` (body frame) seen through `camera_from_body`, grown by `margin`

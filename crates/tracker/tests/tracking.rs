@@ -11,6 +11,9 @@ use jawtrack_synth::{Realism, SceneKind, SceneOptions, SynthConfig, Synthesizer}
 use jawtrack_tracker::{BiteRefusal, Flag, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector2, Vector3};
 
+/// Rows of the frames the hand-made detections stand for (a global shutter ignores them).
+const ROWS: usize = 1080;
+
 #[test]
 fn steady_tracking_searches_only_the_expected_region() {
     let config = SynthConfig {
@@ -99,14 +102,14 @@ fn a_tag_that_flickers_in_with_a_large_error_is_dropped() {
         d.extend(detections(&marker, man_ids, &mandible, &camera));
         d
     };
-    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 14]), &camera, 0.0);
+    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 14]), &camera, 0.0, ROWS);
     assert!(r.flags.is_empty(), "{:?}", r.flags);
     // Tag 3 appears, misread 4 px off: dropped, and the pose stays exact.
     let mut d = both(&[0, 1, 2, 3], &[12, 13, 14]);
     for c in &mut d.iter_mut().find(|d| d.id == 3).expect("tag 3").corners {
         c[0] += 4.0;
     }
-    let r = tracker.solve(d, &camera, 1.0 / 30.0);
+    let r = tracker.solve(d, &camera, 1.0 / 30.0, ROWS);
     let body = r.maxilla.as_ref().expect("maxilla");
     assert_eq!(body.tags, vec![0, 1, 2]);
     assert_eq!(body.rejected_tags, vec![3]);
@@ -114,7 +117,7 @@ fn a_tag_that_flickers_in_with_a_large_error_is_dropped() {
     let (angle, dist) = body.camera_from_body.distance_to(&maxilla);
     assert!(angle < 1e-9 && dist < 1e-9);
     // Seen correctly, the same newcomer is kept.
-    let r = tracker.solve(both(&[0, 1, 2, 3], &[12, 13, 14]), &camera, 2.0 / 30.0);
+    let r = tracker.solve(both(&[0, 1, 2, 3], &[12, 13, 14]), &camera, 2.0 / 30.0, ROWS);
     assert_eq!(r.maxilla.as_ref().expect("maxilla").tags, vec![0, 1, 2, 3]);
     assert!(r.flags.is_empty(), "{:?}", r.flags);
 }
@@ -151,14 +154,14 @@ fn a_pose_on_a_nominal_tag_of_a_calibrated_marker_is_flagged() {
         r.flags.iter().copied().filter(|f| matches!(f, Flag::UncalibratedTag(_))).collect()
     };
     // Every tag used calibrated: no flag.
-    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 14]), &camera, 0.0);
+    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 14]), &camera, 0.0, ROWS);
     assert!(r.flags.is_empty(), "{:?}", r.flags);
     // The mandible's pose rests partly on nominal tag 17.
-    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 17]), &camera, 1.0 / 30.0);
+    let r = tracker.solve(both(&[0, 1, 2], &[12, 13, 17]), &camera, 1.0 / 30.0, ROWS);
     assert_eq!(r.mandible.as_ref().expect("mandible").tags, [12, 13, 17]);
     assert_eq!(uncalibrated(&r), [Flag::UncalibratedTag(BodyKind::Mandible)]);
     // Both bodies on a nominal tag.
-    let r = tracker.solve(both(&[0, 2, 3], &[13, 17]), &camera, 2.0 / 30.0);
+    let r = tracker.solve(both(&[0, 2, 3], &[13, 17]), &camera, 2.0 / 30.0, ROWS);
     assert_eq!(uncalibrated(&r), [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::UncalibratedTag));
     assert_eq!(r.to_record(2, None).flags.last().map(String::as_str), Some("mandible:uncalibrated_tag"));
 }
@@ -176,7 +179,7 @@ fn a_nominal_marker_never_flags_uncalibrated_tags() {
         assert!(tracker.uncalibrated_tags().is_empty());
         let mut d = detections(&marker, &[0, 3], &maxilla, &camera);
         d.extend(detections(&marker, &[13, 17], &mandible, &camera));
-        let r = tracker.solve(d, &camera, 0.0);
+        let r = tracker.solve(d, &camera, 0.0, ROWS);
         assert!(r.maxilla.is_some() && r.mandible.is_some());
         assert!(!r.flags.iter().any(|f| matches!(f, Flag::UncalibratedTag(_))), "{:?}", r.flags);
     }
@@ -191,7 +194,7 @@ fn a_lone_tag_is_settled_by_history_or_the_other_body_and_flagged_otherwise() {
         let mut t = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
         let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
         d.extend(detections(&marker, &[id], &mandible, &camera));
-        t.solve(d, &camera, 0.0).flags.contains(&Flag::Ambiguous(BodyKind::Mandible))
+        t.solve(d, &camera, 0.0, ROWS).flags.contains(&Flag::Ambiguous(BodyKind::Mandible))
     };
     let lone = (12..24).find(|&id| probe(id)).expect("some single tag is ambiguous");
     let close = |p: &Pose, q: &Pose| p.distance_to(q).0.to_degrees() < 0.01;
@@ -201,18 +204,18 @@ fn a_lone_tag_is_settled_by_history_or_the_other_body_and_flagged_otherwise() {
     let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
     let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
     d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
-    tracker.solve(d, &camera, 0.0);
+    tracker.solve(d, &camera, 0.0, ROWS);
     let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
     d.extend(detections(&marker, &[lone], &mandible, &camera));
-    let r = tracker.solve(d, &camera, 0.4);
+    let r = tracker.solve(d, &camera, 0.4, ROWS);
     assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
     assert!(r.flags.contains(&Flag::SingleTag(BodyKind::Mandible)));
     assert!(close(&r.mandible.expect("mandible").camera_from_body, &mandible));
 
     // Settled by its own recent pose, the other body out of view.
     let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
-    tracker.solve(detections(&marker, &[12, 13, 14], &mandible, &camera), &camera, 0.0);
-    let r = tracker.solve(detections(&marker, &[lone], &mandible, &camera), &camera, 1.0 / 30.0);
+    tracker.solve(detections(&marker, &[12, 13, 14], &mandible, &camera), &camera, 0.0, ROWS);
+    let r = tracker.solve(detections(&marker, &[lone], &mandible, &camera), &camera, 1.0 / 30.0, ROWS);
     assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
     assert!(close(&r.mandible.expect("mandible").camera_from_body, &mandible));
 }
@@ -236,7 +239,7 @@ fn registration_maps_the_jaw_into_the_scans() {
     tracker.set_registration(Some(registration));
     let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
     d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
-    let r = tracker.solve(d.clone(), &camera, 0.0);
+    let r = tracker.solve(d.clone(), &camera, 0.0, ROWS);
     let want = registration.maxilla_scan_from_mandible_scan(&(maxilla.inverse() * mandible));
     let got = r.maxilla_scan_from_mandible_scan.expect("registered");
     let (angle, dist) = got.distance_to(&want);
@@ -246,13 +249,13 @@ fn registration_maps_the_jaw_into_the_scans() {
     // Held for 0.4 s, the intercuspation step makes this bite the scanned intercuspal pose
     // (identity here).
     for i in 1..=12 {
-        tracker.solve(d.clone(), &camera, f64::from(i) / 30.0);
+        tracker.solve(d.clone(), &camera, f64::from(i) / 30.0, ROWS);
     }
     let (bite, cal) = tracker.calibrate_intercuspation().expect("calibrates");
     assert_eq!(bite.frames, 13);
     assert!(bite.maxilla_from_mandible.distance_to(&(maxilla.inverse() * mandible)).1 < 1e-9, "{bite:?}");
     assert!(cal.translation_mm > 1.0, "the registration above is not the bite: {cal:?}");
-    let r = tracker.solve(d, &camera, 13.0 / 30.0);
+    let r = tracker.solve(d, &camera, 13.0 / 30.0, ROWS);
     let (angle, dist) = r.maxilla_scan_from_mandible_scan.expect("registered").distance_to(&Pose::identity());
     assert!(angle < 1e-9 && dist < 1e-9, "{angle} rad {dist} mm");
 }
@@ -268,7 +271,7 @@ fn a_tag_that_never_fits_the_marker_file_is_reported() {
         // Tag 3 glued a quarter turn off: its corners pair with the wrong model corners.
         let t3 = d.iter_mut().find(|d| d.id == 3).expect("tag 3");
         t3.corners = [t3.corners[1], t3.corners[2], t3.corners[3], t3.corners[0]];
-        let r = tracker.solve(d, &camera, i as f64 / 30.0);
+        let r = tracker.solve(d, &camera, i as f64 / 30.0, ROWS);
         assert_eq!(r.maxilla.expect("maxilla").rejected_tags, vec![3], "frame {i}");
     }
     assert_eq!(tracker.mismatched_tags(5), vec![(3, 8, 8)]);
@@ -309,10 +312,10 @@ fn a_lone_tag_on_its_mirror_solution_reports_that_solutions_covariance() {
     // The body was last seen (through three tags) at the mirror pose, so the lone tag's frame
     // takes the mirror over the better-fitting true pose.
     let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
-    tracker.solve(detections(&marker, &[12, 13, 14], &mirror, &camera), &camera, 0.0);
+    tracker.solve(detections(&marker, &[12, 13, 14], &mirror, &camera), &camera, 0.0, ROWS);
     let d = detections(&marker, &[lone], &mandible, &camera);
     let observations = tracker.observations(BodyKind::Mandible, &d);
-    let r = tracker.solve(d, &camera, 1.0 / 30.0);
+    let r = tracker.solve(d, &camera, 1.0 / 30.0, ROWS);
     assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
     let body = r.mandible.expect("mandible");
     assert!(body.camera_from_body.distance_to(&mirror).0 < 1e-6, "the mirror is taken");
@@ -340,10 +343,10 @@ fn a_lone_tag_follows_the_other_body_when_the_head_moves() {
     let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
     let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
     d.extend(detections(&marker, &[12, 13, 14], &mirror, &camera));
-    tracker.solve(d, &camera, 0.0);
+    tracker.solve(d, &camera, 0.0, ROWS);
     let mut d = detections(&marker, &[0, 1, 2], &(head * maxilla), &camera);
     d.extend(detections(&marker, &[lone], &mandible, &camera));
-    let r = tracker.solve(d, &camera, 0.1);
+    let r = tracker.solve(d, &camera, 0.1, ROWS);
     assert!(!r.flags.contains(&Flag::Ambiguous(BodyKind::Mandible)), "{:?}", r.flags);
     let taken = r.mandible.expect("mandible").camera_from_body;
     assert!(taken.distance_to(&mandible).0.to_degrees() < 0.01, "the head's motion is followed, not the old pose");
@@ -359,10 +362,10 @@ fn a_stale_relative_pose_does_not_settle_a_lone_tag() {
         let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");
         let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
         d.extend(detections(&marker, &[12, 13, 14], &mandible, &camera));
-        tracker.solve(d, &camera, 0.0);
+        tracker.solve(d, &camera, 0.0, ROWS);
         let mut d = detections(&marker, &[0, 1, 2], &maxilla, &camera);
         d.extend(detections(&marker, &[lone], &mandible, &camera));
-        tracker.solve(d, &camera, age)
+        tracker.solve(d, &camera, age, ROWS)
     };
     // Long after both bodies were last seen together the relative pose no longer chooses.
     let r = lone_frame_after(20.0 * limit);
@@ -392,7 +395,7 @@ fn new_settings_keep_the_motion() {
     let lone_frame = |new: Option<TrackerConfig>| {
         let mut tracker = Tracker::new(marker.clone(), smoothing).expect("tracker");
         for i in 0..3 {
-            tracker.solve(frame(i, &[12, 13, 14]), &camera, f64::from(i) / 30.0);
+            tracker.solve(frame(i, &[12, 13, 14]), &camera, f64::from(i) / 30.0, ROWS);
         }
         if let Some(config) = new {
             let bad = TrackerConfig { flicker_px: -1.0, ..config };
@@ -401,7 +404,7 @@ fn new_settings_keep_the_motion() {
             tracker.set_config(config).expect("valid settings");
             assert_eq!(tracker.config(), &config);
         }
-        tracker.solve(frame(3, &[lone]), &camera, 3.0 / 30.0)
+        tracker.solve(frame(3, &[lone]), &camera, 3.0 / 30.0, ROWS)
     };
     let raw = maxilla.inverse() * opened(3);
     let unchanged = lone_frame(None);

@@ -58,6 +58,7 @@ pub(super) fn judge(
     config: &TrackerConfig,
 ) -> Result<(Vec<Vec<Option<Pose>>>, SessionSummary)> {
     let camera = truth.intrinsics;
+    let rows = truth.image_size[1] as usize;
     let frames: Vec<CalibrationFrame> = detections
         .iter()
         .map(|d| CalibrationFrame {
@@ -94,7 +95,9 @@ pub(super) fn judge(
     let estimates = detections
         .iter()
         .zip(&truth.frames)
-        .map(|(d, f)| trackers.iter_mut().map(|t| t.solve(d.to_vec(), &camera, f.t).maxilla_from_mandible).collect())
+        .map(|(d, f)| {
+            trackers.iter_mut().map(|t| t.solve(d.to_vec(), &camera, f.t, rows).maxilla_from_mandible).collect()
+        })
         .collect();
     let mut placed = placed.into_iter();
     let refined_markers = [refined[0].clone(), refined[1].clone()];
