@@ -217,16 +217,32 @@ fn track_writes_one_line_per_frame_with_the_jaw_pose() {
     assert_eq!(lines.len(), 7, "a header and six frames");
     assert_eq!(lines[0]["recording"]["source"], "jawtrack track");
     assert_eq!(lines[0]["recording"]["intrinsics"]["fx"], 1500.0);
-    for (i, (line, f)) in lines[1..].iter().zip(truth["frames"].as_array().expect("frames")).enumerate() {
-        assert_eq!(line["frame"], i);
-        assert!(line["maxilla"]["cov"].as_array().is_some_and(|c| c.len() == 36));
-        // The nominal marker (print errors unknown): the mandible in the maxilla within 1 mm.
-        let got: Vec<f64> = serde_json::from_value(line["maxilla_from_mandible"].clone()).expect("4x4 matrix");
-        let want: Vec<f64> = serde_json::from_value(f["maxilla_from_mandible"].clone()).expect("truth matrix");
-        let d = ((got[3] - want[3]).powi(2) + (got[7] - want[7]).powi(2) + (got[11] - want[11]).powi(2)).sqrt();
-        assert!(d < 1.0, "frame {i}: {d:.3} mm from the truth");
-        assert_eq!(&got[12..], &[0.0, 0.0, 0.0, 1.0]);
-    }
+    let near_truth = |lines: &[serde_json::Value]| {
+        for (i, (line, f)) in lines[1..].iter().zip(truth["frames"].as_array().expect("frames")).enumerate() {
+            assert_eq!(line["frame"], i);
+            assert!(line["maxilla"]["cov"].as_array().is_some_and(|c| c.len() == 36));
+            // The nominal marker (print errors unknown): the mandible in the maxilla within 1 mm.
+            let got: Vec<f64> = serde_json::from_value(line["maxilla_from_mandible"].clone()).expect("4x4 matrix");
+            let want: Vec<f64> = serde_json::from_value(f["maxilla_from_mandible"].clone()).expect("truth matrix");
+            let d = ((got[3] - want[3]).powi(2) + (got[7] - want[7]).powi(2) + (got[11] - want[11]).powi(2)).sqrt();
+            assert!(d < 1.0, "frame {i}: {d:.3} mm from the truth");
+            assert_eq!(&got[12..], &[0.0, 0.0, 0.0, 1.0]);
+        }
+    };
+    near_truth(&lines);
+    // With a rolling shutter: the header says how the frames were tracked, and the fixture's
+    // jumps between views (taken as 30 fps footage) do not spoil the poses.
+    let k = "1500,1500,959.5,539.5";
+    let timed = jawtrack(&["track", "--intrinsics", k, "--readout-ms", "5", "--exposure-ms", "2", "--out", "-", set]);
+    assert!(timed.status.success(), "{}", stderr(&timed));
+    let timed: Vec<serde_json::Value> =
+        String::from_utf8_lossy(&timed.stdout).lines().map(|l| serde_json::from_str(l).expect("json line")).collect();
+    assert_eq!(timed[0]["recording"]["readout_s"], 0.005);
+    assert_eq!(timed[0]["recording"]["exposure_s"], 0.002);
+    assert_eq!(timed.len(), 7, "a header and six frames");
+    near_truth(&timed);
+    refused(&jawtrack(&["track", "--intrinsics", k, "--readout-ms", "-1", "--out", out, set]), "--readout-ms");
+    refused(&jawtrack(&["track", "--intrinsics", k, "--exposure-ms", "0", "--out", out, set]), "--exposure-ms");
     refused(&jawtrack(&["track", "--intrinsics", "1500,1500,959.5", "--out", out, set]), "intrinsics");
     refused(
         &jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", out, "/nonexistent"]),

@@ -313,6 +313,7 @@ pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
         session: None,
         path: None,
         t: r.t,
+        exposure_s: None,
         maxilla: body(&r.maxilla, "camera_from_maxilla")?,
         mandible: body(&r.mandible, "camera_from_mandible")?,
         maxilla_from_mandible: r

@@ -142,6 +142,7 @@ mod tests {
             session: None,
             path: None,
             t: 0.25,
+            exposure_s: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: pose,

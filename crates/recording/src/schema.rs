@@ -72,6 +72,14 @@ pub struct RecordingHeader {
     /// The camera, when known.
     #[serde(default)]
     pub intrinsics: Option<CameraIntrinsics>,
+    /// The camera's rolling-shutter readout, first row to last (s; 0 = global shutter), as the
+    /// frames were tracked with: re-tracking them takes the same. `None` when not known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub readout_s: Option<f64>,
+    /// The exposure every frame was taken with (s), when it was one and known; a frame's own
+    /// exposure, when it varies, is on its line ([`FrameRecord::exposure_s`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exposure_s: Option<f64>,
     /// The marker file's JSON, when known.
     #[serde(default)]
     pub marker: Option<Value>,
@@ -96,6 +104,8 @@ impl RecordingHeader {
             session: Some(SessionId::random()),
             device: None,
             intrinsics: None,
+            readout_s: None,
+            exposure_s: None,
             marker: None,
             settings: Value::Null,
             key_id: None,
@@ -147,8 +157,11 @@ pub struct FrameRecord {
     /// The image file the frame came from, if any.
     #[serde(default)]
     pub path: Option<String>,
-    /// Capture time (s).
+    /// Capture time (s): that of the frame's centre row.
     pub t: f64,
+    /// The frame's exposure (s), when the camera reported it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exposure_s: Option<f64>,
     /// The upper jaw's marker.
     pub maxilla: Option<BodyRecord>,
     /// The lower jaw's marker.
@@ -212,6 +225,7 @@ impl FrameRecord {
             session: None,
             path: path.map(str::to_owned),
             t,
+            exposure_s: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: None,

@@ -115,6 +115,7 @@ mod tests {
             session: None,
             path: None,
             t: i as f64 / 30.0,
+            exposure_s: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: None,

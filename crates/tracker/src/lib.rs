@@ -181,6 +181,7 @@ impl FrameResult {
             session: None,
             path: path.map(str::to_owned),
             t: self.t,
+            exposure_s: None,
             maxilla: self.maxilla.as_ref().map(body),
             mandible: self.mandible.as_ref().map(body),
             maxilla_from_mandible: self.maxilla_from_mandible,
@@ -207,6 +208,14 @@ pub enum TrackError {
     #[error("tracker setting: {0}")]
     BadConfig(String),
 }
+
+/// Fastest a marker is taken to move in the camera frame (mm/s; a chewing jaw's incisor peaks
+/// at 60–150 mm/s, the head and the hand add less): poses that imply more are a cut in the
+/// footage or a wrong pose, and their velocity would carry the corners anywhere, so the
+/// frame is solved as seen.
+const MAX_SPEED_MM_S: f64 = 1000.0;
+/// Fastest a marker is taken to turn (rad/s), for the same reason.
+const MAX_TURN_RAD_S: f64 = 20.0;
 
 /// Tracks the two marker bodies through a sequence of frames.
 #[derive(Debug)]
@@ -552,8 +561,8 @@ impl Tracker {
     /// to `t` at the body's velocity, taken at `t` from its poses as seen in this frame and the
     /// two before: those are a function of the observations alone, so an error in one
     /// frame's velocity never feeds the next (velocities from the carried poses do, and at a
-    /// 10 ms readout that loop rang). Without a recent pose the velocity is unknown and the
-    /// frame is solved as seen.
+    /// 10 ms readout that loop rang). Without a recent pose, or with poses that imply an
+    /// implausible speed, the velocity is unknown and the frame is solved as seen.
     fn solve_at(
         &self,
         kind: BodyKind,
@@ -584,7 +593,9 @@ impl Tracker {
         // Seen as a whole, the body is where it was at its corners' mean row time, so its poses
         // as seen run that much ahead of the frame times they are filed under.
         let ahead = seen.iter().map(|o| shutter.offset_s(o.pixel.y)).sum::<f64>() / seen.len().max(1) as f64;
-        let Some(velocity) = Velocity::at(&timed, t - ahead).filter(Velocity::is_finite) else {
+        let plausible =
+            |v: &Velocity| v.is_finite() && v.linear.norm() <= MAX_SPEED_MM_S && v.angular.norm() <= MAX_TURN_RAD_S;
+        let Some(velocity) = Velocity::at(&timed, t - ahead).filter(plausible) else {
             return Ok((as_seen, seen, Some(raw)));
         };
         let carried = to_frame_time(&seen, shutter, camera, &raw, &velocity);

@@ -437,6 +437,7 @@ mod tests {
             session: None,
             path: None,
             t,
+            exposure_s: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: Some(m),

@@ -308,6 +308,7 @@ impl PosePacket {
             session: Some(SessionId(header.session)),
             path: None,
             t: self.t,
+            exposure_s: None,
             maxilla: self.maxilla.as_ref().map(body),
             mandible: self.mandible.as_ref().map(body),
             maxilla_from_mandible: self.maxilla_from_mandible,
