@@ -37,7 +37,7 @@ pub(crate) fn run(a: &DemoArgs) -> Result<()> {
         seed: a.seed,
         realism: Realism::default(),
         // One cycle per opening (10, 20, 30, 40 mm) sampled at 4 frames/s: 32 frames.
-        options: SceneOptions { frames_per_view: 1, cycles: 1, fps: 4.0 },
+        options: SceneOptions { frames_per_view: 1, cycles: 1, fps: 4.0, ..SceneOptions::default() },
         marker: jawtrack_marker::Marker::default(),
         stride: 1,
         max_frames: None,
@@ -62,7 +62,7 @@ fn calibrate_from_recording(a: &DemoArgs) -> Result<Marker> {
         intrinsics: None,
         seed: a.seed,
         realism: Realism::default(),
-        options: SceneOptions { frames_per_view: 1, cycles: 1, fps: 30.0 },
+        options: SceneOptions { frames_per_view: 1, cycles: 1, fps: 30.0, ..SceneOptions::default() },
         marker: Marker::default(),
         stride: 1,
         max_frames: None,

@@ -6,7 +6,7 @@ use clap::Args;
 use clap::builder::{PossibleValue, TypedValueParser};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_synth::{Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use jawtrack_synth::{Orientation, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
@@ -37,10 +37,24 @@ pub(crate) struct SynthArgs {
     /// Exact geometry: no blur, noise, gamma, print error, occluders or glare.
     #[arg(long)]
     clean: bool,
+    /// Exposure time (ms), overriding the realism settings' (0 = an instant, no motion blur).
+    #[arg(long, value_name = "MS", allow_hyphen_values = true)]
+    exposure_ms: Option<f64>,
+    /// Rolling-shutter readout (ms): the time from the first to the last row of the frame,
+    /// overriding the realism settings' (0 = a global shutter). Row r of H is exposed
+    /// centred at t + (r − (H−1)/2)/(H−1) × readout; the truth puts each tag corner where its
+    /// own row saw it.
+    #[arg(long, value_name = "MS", allow_hyphen_values = true)]
+    readout_ms: Option<f64>,
+    /// Chew scene: the phone held in landscape, so the rows run across the face and the
+    /// readout reaches the lower marker about half a readout after the upper one (default:
+    /// upright, both markers in the same rows).
+    #[arg(long)]
+    landscape: bool,
     /// Frames per camera view (static scene).
     #[arg(long, default_value_t = 2)]
     frames_per_view: usize,
-    /// Cycles per opening / glide (hinge, excursion, chew).
+    /// Cycles per opening / glide (hinge, excursion), chewing cycles in all (chew).
     #[arg(long, default_value_t = 2)]
     cycles: usize,
     /// Frame rate of the dynamic scenes (frames/s).
@@ -74,20 +88,38 @@ impl TypedValueParser for SceneParser {
     }
 }
 
+/// The realism settings: `--clean`, `--realism FILE` or the defaults, then `--exposure-ms` and
+/// `--readout-ms` over them.
 pub(crate) fn load_realism(a: &SynthArgs) -> Result<Realism> {
-    if a.clean {
-        return Ok(Realism::clean());
-    }
-    match &a.realism {
-        None => Ok(Realism::default()),
-        Some(p) => {
-            let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-            serde_json::from_str(&text).with_context(|| format!("{}: not a realism settings file", p.display()))
+    let mut realism = if a.clean {
+        Realism::clean()
+    } else {
+        match &a.realism {
+            None => Realism::default(),
+            Some(p) => {
+                let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+                serde_json::from_str(&text).with_context(|| format!("{}: not a realism settings file", p.display()))?
+            }
+        }
+    };
+    for (flag, ms, seconds) in [
+        ("--exposure-ms", a.exposure_ms, &mut realism.exposure_s),
+        ("--readout-ms", a.readout_ms, &mut realism.readout_s),
+    ] {
+        if let Some(ms) = ms {
+            if !ms.is_finite() || ms < 0.0 {
+                bail!("{flag} must be a non-negative number of milliseconds, got {ms}");
+            }
+            *seconds = ms / 1000.0;
         }
     }
+    Ok(realism)
 }
 
 pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfig> {
+    if a.landscape && scene != SceneKind::Chew {
+        bail!("--landscape applies to the chew scene only (the {} scene is filmed upright)", scene.name());
+    }
     let marker = match &a.marker {
         Some(p) => Marker::load(p)?,
         None => Marker::default(),
@@ -98,7 +130,12 @@ pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfi
         intrinsics: a.intrinsics,
         seed: a.seed,
         realism: load_realism(a)?,
-        options: SceneOptions { frames_per_view: a.frames_per_view, cycles: a.cycles, fps: a.fps },
+        options: SceneOptions {
+            frames_per_view: a.frames_per_view,
+            cycles: a.cycles,
+            fps: a.fps,
+            orientation: if a.landscape { Orientation::Landscape } else { Orientation::Upright },
+        },
         marker,
         stride: a.stride,
         max_frames: a.max_frames,

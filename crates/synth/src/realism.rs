@@ -1,6 +1,7 @@
 //! Realism settings: everything that makes a rendered frame look like a phone's, each with a
 //! default and drawn from the scene's seed so that a frame can be made again exactly.
 
+use jawtrack_pose::RollingShutter;
 use serde::{Deserialize, Serialize};
 
 /// How a frame departs from the ideal pinhole image. `Realism::default()` is a plausible iPhone
@@ -17,8 +18,12 @@ pub struct Realism {
     pub focus_distance_mm: Option<f64>,
     /// Exposure time (s) for motion blur; 0 renders an instant.
     pub exposure_s: f64,
-    /// Most sub-frames averaged for motion blur (enough for ≤ 1 px motion between them).
+    /// Most sub-frames averaged for motion blur with a global shutter (enough for ≤ 1 px
+    /// motion between them). A rolling shutter places its rows' instants by motion alone.
     pub max_subframes: u32,
+    /// Rolling-shutter readout (s): the time from the first to the last row of the delivered
+    /// buffer; 0 is a global shutter. Row r is exposed centred at [`Realism::row_time`].
+    pub readout_s: f64,
     /// Electrons collected at white paper in full light (shot noise); 0 = no noise at all.
     pub full_well_e: f64,
     /// Read noise (electrons, standard deviation).
@@ -52,6 +57,7 @@ impl Default for Realism {
             focus_distance_mm: None,
             exposure_s: 1.0 / 120.0,
             max_subframes: 24,
+            readout_s: 0.0,
             // After the phone's own denoising: about 1.3 DN of noise at mid-grey.
             full_well_e: 8000.0,
             read_noise_e: 3.0,
@@ -88,12 +94,22 @@ impl Realism {
         }
     }
 
+    /// Centre of the exposure of image row `y` (0-based, fractional rows allowed) in a frame of
+    /// `height` rows whose centre row is exposed at `t`: the readout sweeps the rows top to
+    /// bottom, row 0 at `t − readout_s/2` and the last row at `t + readout_s/2` (the tracker's
+    /// own rule, [`RollingShutter::offset_s`], so renders and tracking agree by construction).
+    pub fn row_time(&self, t: f64, y: f64, height: u32) -> f64 {
+        let shutter = RollingShutter::new(self.readout_s, height as usize).unwrap_or_else(|_| RollingShutter::global());
+        t + shutter.offset_s(y)
+    }
+
     /// Checks the numbers, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         let fields = [
             ("f_number", self.f_number),
             ("focal_length_mm", self.focal_length_mm),
             ("exposure_s", self.exposure_s),
+            ("readout_s", self.readout_s),
             ("full_well_e", self.full_well_e),
             ("read_noise_e", self.read_noise_e),
             ("vignetting", self.vignetting),
@@ -125,9 +141,31 @@ impl Realism {
         {
             return Err(format!("realism.focus_distance_mm must exceed the focal length, got {d}"));
         }
+        if self.readout_s >= 1.0 {
+            return Err(format!("realism.readout_s must be under 1 s, got {}", self.readout_s));
+        }
         if self.max_subframes == 0 {
             return Err("realism.max_subframes must be at least 1".into());
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_read_top_to_bottom_over_the_readout() {
+        let r = Realism { readout_s: 0.010, ..Realism::default() };
+        assert_eq!(r.row_time(2.0, 0.0, 1080), 2.0 - 0.005);
+        assert_eq!(r.row_time(2.0, 539.5, 1080), 2.0);
+        assert!((r.row_time(2.0, 1079.0, 1080) - 2.005).abs() < 1e-15);
+        // A global shutter exposes every row at the frame's time.
+        assert_eq!(Realism::default().row_time(2.0, 17.0, 1080), 2.0);
+        assert_eq!(Realism::default().readout_s, 0.0, "renders stay global-shutter by default");
+        // Settings files written before the readout existed read as a global shutter.
+        let old: Realism = serde_json::from_str(r#"{"exposure_s": 0.004}"#).expect("reads");
+        assert_eq!((old.exposure_s, old.readout_s), (0.004, 0.0));
     }
 }

@@ -408,21 +408,26 @@ fn corner_rays(cam: &Camera, win: [usize; 4]) -> Vec<Vector3<f64>> {
 /// The pixel window `[x0, y0, x1, y1)` that holds every body of the scene, or `None` if no
 /// body is on screen.
 pub fn bodies_window(scene: &RenderScene<'_>) -> Option<[usize; 4]> {
+    (0..scene.bodies.len()).filter_map(|i| body_window(scene, i)).reduce(window_union)
+}
+
+/// The pixel window `[x0, y0, x1, y1)` that holds body `index` of the scene, or `None` if it
+/// is off screen (or there is no such body).
+pub fn body_window(scene: &RenderScene<'_>, index: usize) -> Option<[usize; 4]> {
     let cam = &scene.camera;
     let (w, h) = (f64::from(cam.width), f64::from(cam.height));
-    scene
-        .bodies
-        .iter()
-        .filter_map(|b| sphere_bbox(cam, &b.camera_from_body.translation(), Dodecahedron::new(b.edge).circumradius()))
-        .map(|b| {
-            let x0 = b[0].floor().clamp(0.0, w) as usize;
-            let y0 = b[1].floor().clamp(0.0, h) as usize;
-            let x1 = (b[2].ceil() + 1.0).clamp(0.0, w) as usize;
-            let y1 = (b[3].ceil() + 1.0).clamp(0.0, h) as usize;
-            [x0, y0, x1, y1]
-        })
-        .filter(|b| b[2] > b[0] && b[3] > b[1])
-        .reduce(|a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])])
+    let b = scene.bodies.get(index)?;
+    let b = sphere_bbox(cam, &b.camera_from_body.translation(), Dodecahedron::new(b.edge).circumradius())?;
+    let x0 = b[0].floor().clamp(0.0, w) as usize;
+    let y0 = b[1].floor().clamp(0.0, h) as usize;
+    let x1 = (b[2].ceil() + 1.0).clamp(0.0, w) as usize;
+    let y1 = (b[3].ceil() + 1.0).clamp(0.0, h) as usize;
+    (x1 > x0 && y1 > y0).then_some([x0, y0, x1, y1])
+}
+
+/// The smallest window holding both.
+pub fn window_union(a: [usize; 4], b: [usize; 4]) -> [usize; 4] {
+    [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]
 }
 
 /// Renders the linear radiance and depth of one instant.

@@ -2,8 +2,10 @@
 //! where the camera looks from.
 //!
 //! Head frame (mm): origin at the upper incisal point, X toward the patient's left, Y down,
-//! Z posterior (into the head). The phone faces the patient held in portrait, so the head's
-//! vertical runs along the image's long side (image x = head down at azimuth 0).
+//! Z posterior (into the head). The image is the phone's landscape sensor buffer, read out row
+//! by row from the top (see [`Orientation`]); held upright (portrait, every scene but a
+//! landscape chew), the head's vertical runs along the buffer's long side (image x = head down
+//! at azimuth 0).
 //!
 //! Both markers sit 38 mm in front of the incisors, their camera-facing vertex (+Z of the body)
 //! pointing anteriorly: the maxilla marker 22 mm above the incisal point, the mandible marker
@@ -29,7 +31,15 @@ pub enum SceneKind {
     Hinge,
     /// Left, right and protrusive glides of 4–6 mm.
     Excursion,
-    /// Fast chewing cycles with a long exposure (motion blur), hand-held.
+    /// Fast chewing on a tripod 120 mm straight in front of the markers: cycles of 0.6–0.8 s
+    /// opening 15–25 mm with a 3–6 mm sideways swing, the first one fast enough that the
+    /// incisor passes 100 mm/s; phone upright or landscape ([`SceneOptions::orientation`]).
+    /// At 1080p (1080 rows, row 539.5 read at the frame's time), with the jaw closed, the
+    /// markers' centres fall in these rows:
+    /// - upright: both in row 539.5, read together; the swing moves the mandible marker
+    ///   10–12.5 rows per mm of swing (at most ±75 rows at 6 mm);
+    /// - landscape: the maxilla marker in row 89.5 and the mandible marker in row 639.5, read
+    ///   0.51 of the readout later; a 25 mm opening lowers the mandible marker to row ≈ 990.
     Chew,
     /// A marker-calibration recording: the jaw at rest seen from every side the camera can
     /// reach (azimuth −75…75°, elevation −45…45°, 110 mm), so each tag is seen from several
@@ -106,12 +116,16 @@ pub enum JawMotion {
         /// Out-and-back duration (s).
         period_s: f64,
     },
-    /// Chewing: opening with a lateral loop, repeated.
+    /// Chewing: a raised-cosine hinge opening with a lateral loop (out to one side while
+    /// opening, back on the other while closing), periodic from `start_s`.
     Chew {
         /// Peak incisal opening (mm).
         opening_mm: f64,
         /// Peak lateral displacement (mm).
         lateral_mm: f64,
+        /// When a cycle starts, closed (s).
+        #[serde(default)]
+        start_s: f64,
         /// Cycle duration (s).
         period_s: f64,
     },
@@ -186,16 +200,15 @@ impl Rig {
                     }
                 }
             }
-            JawMotion::Chew { opening_mm, lateral_mm, period_s } => {
-                let phase = TAU * t / period_s;
+            JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s } => {
+                let phase = TAU * (t - start_s) / period_s;
                 let open = 0.5 * (1.0 - phase.cos());
                 let hinge =
                     rotation_about(&self.mounting.hinge_point, &Vector3::x_axis(), self.hinge_angle(opening_mm * open));
-                // Out on one side, back on the other: a loop in the frontal plane.
-                let lateral = Pose::from_parts(
-                    UnitQuaternion::identity(),
-                    Vector3::new(lateral_mm * phase.sin() * open, 0.0, 0.0),
-                );
+                // Out on one side, back on the other: a loop in the frontal plane. sin·(1 − cos)/2
+                // peaks at 3√3/8, scaled out so that `lateral_mm` is the peak.
+                let swing = phase.sin() * open / (3.0 * 3f64.sqrt() / 8.0);
+                let lateral = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(lateral_mm * swing, 0.0, 0.0));
                 lateral * hinge
             }
         }
@@ -204,6 +217,17 @@ impl Rig {
     /// Maxilla and mandible marker poses in the head frame at time `t`.
     pub fn markers(&self, motion: &JawMotion, t: f64) -> (Pose, Pose) {
         (self.mounting.head_from_maxilla, self.jaw(motion, t) * self.mounting.head_from_mandible_rest)
+    }
+
+    /// Speed (mm/s) at `t` of the lower incisal point relative to the maxilla, read from the
+    /// markers' relative pose as a tracker would: a central difference over ±0.5 ms.
+    pub fn incisor_speed(&self, motion: &JawMotion, t: f64) -> f64 {
+        const HALF_STEP_S: f64 = 0.5e-3;
+        let incisor = |t: f64| {
+            let (maxilla, mandible) = self.markers(motion, t);
+            self.mounting.lower_incisor(&(maxilla.inverse() * mandible))
+        };
+        (incisor(t + HALF_STEP_S) - incisor(t - HALF_STEP_S)).norm() / (2.0 * HALF_STEP_S)
     }
 }
 
@@ -220,6 +244,26 @@ pub struct View {
     pub target: [f64; 3],
     /// Hand-held: the seed of a smooth tremor; `None` is a tripod.
     pub hand_seed: Option<u64>,
+    /// How the phone is held (absent in older files: upright).
+    #[serde(default)]
+    pub orientation: Orientation,
+}
+
+/// How the phone is held, that is how its landscape sensor buffer lies on the face. The
+/// readout sweeps the buffer's rows from the top (y = 0) down, so the orientation decides
+/// which parts of the face are read when (see [`crate::Realism::row_time`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Orientation {
+    /// Portrait: buffer x runs down the head, so the rows are vertical lines on the face and
+    /// the readout sweeps across it, from the patient's left (row 0) to the right. The two
+    /// markers, one above the other, lie in the same rows and are read at the same times.
+    #[default]
+    Upright,
+    /// Landscape: buffer x runs across the face toward the patient's left, the rows are
+    /// horizontal and the readout sweeps down the face, so the upper marker is read about
+    /// half a readout before the lower one.
+    Landscape,
 }
 
 /// Hand tremor amplitudes: about 1 mm and 0.5° in each axis, from 0.3 to 4 Hz.
@@ -234,9 +278,13 @@ impl View {
         let dir_from_target = Vector3::new(az.sin() * el.cos(), -el.sin(), -az.cos() * el.cos());
         let position = target + dir_from_target * self.distance_mm;
         let forward = (target - position).normalize();
-        // Portrait: image x follows the head's "down" (+Y) as seen by the camera.
-        let x = (Vector3::y() - forward * forward.y).normalize();
-        let y = forward.cross(&x);
+        // Upright: image x follows the head's "down" (+Y) as seen by the camera; landscape
+        // turns the phone a quarter turn about its optical axis so that image y does.
+        let down = (Vector3::y() - forward * forward.y).normalize();
+        let (x, y) = match self.orientation {
+            Orientation::Upright => (down, forward.cross(&down)),
+            Orientation::Landscape => (down.cross(&forward), down),
+        };
         let r = Matrix3::from_rows(&[x.transpose(), y.transpose(), forward.transpose()]);
         let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
         let nominal = Pose::from_parts(rot, -(rot * position));
@@ -282,11 +330,13 @@ pub struct SceneOptions {
     pub cycles: usize,
     /// Frame rate (frames/s) of the dynamic scenes.
     pub fps: f64,
+    /// How the phone is held in the chew scene (the others are filmed upright).
+    pub orientation: Orientation,
 }
 
 impl Default for SceneOptions {
     fn default() -> Self {
-        SceneOptions { frames_per_view: 2, cycles: 2, fps: 30.0 }
+        SceneOptions { frames_per_view: 2, cycles: 2, fps: 30.0, orientation: Orientation::Upright }
     }
 }
 
@@ -296,7 +346,14 @@ fn one_cycle(start: f64, period: f64, dt: f64, view: View, motion: JawMotion) ->
     (0..n).map(move |i| FrameSpec { t: start + i as f64 * dt, view, motion })
 }
 
-/// The frames of a scene. `seed` draws the hand tremor and the glide amplitudes.
+/// Where the chew scene's camera looks (head frame, mm): the markers' depth, 14 mm below the
+/// incisal point. Landscape frames only 86 mm of the face's height at 120 mm, less than the
+/// markers span with the jaw open; this keeps at least two tags of each marker detectable
+/// through 25 mm openings (the maxilla marker's upper tag stays out of the frame).
+const CHEW_TARGET: [f64; 3] = [0.0, 14.0, -38.0];
+
+/// The frames of a scene. `seed` draws the hand tremor, the glide amplitudes and the chewing
+/// cycles.
 pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<FrameSpec> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_cee5);
     let dt = 1.0 / opts.fps;
@@ -313,6 +370,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                             elevation_deg: 0.0,
                             target: [0.0, 0.0, -38.0],
                             hand_seed: hand.then(|| rng.random()),
+                            orientation: Orientation::Upright,
                         };
                         for _ in 0..opts.frames_per_view {
                             frames.push(FrameSpec { t, view, motion: JawMotion::Rest });
@@ -331,6 +389,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                 elevation_deg: 0.0,
                 target: [0.0, 20.0, -34.0],
                 hand_seed: None,
+                orientation: Orientation::Upright,
             };
             let period = 2.0;
             let mut start = 0.0;
@@ -354,6 +413,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                     elevation_deg: 0.0,
                     target: [0.0, 2.0, -38.0],
                     hand_seed: None,
+                    orientation: Orientation::Upright,
                 };
                 for _ in 0..opts.cycles {
                     let amplitude_mm = rng.random_range(4.0..6.0);
@@ -365,15 +425,38 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
         }
         SceneKind::Chew => {
             let view = View {
-                distance_mm: 110.0,
-                azimuth_deg: 20.0,
-                elevation_deg: 10.0,
-                target: [0.0, 10.0, -36.0],
-                hand_seed: Some(rng.random()),
+                distance_mm: 120.0,
+                azimuth_deg: 0.0,
+                elevation_deg: 0.0,
+                target: CHEW_TARGET,
+                hand_seed: None,
+                orientation: opts.orientation,
             };
-            let motion = JawMotion::Chew { opening_mm: 18.0, lateral_mm: 5.0, period_s: 0.8 };
-            let n = (opts.cycles as f64 * 0.8 / dt).round() as usize;
-            frames.extend((0..n).map(|k| FrameSpec { t: k as f64 * dt, view, motion }));
+            let mut cycles = Vec::with_capacity(opts.cycles);
+            let mut start_s = 0.0;
+            for i in 0..opts.cycles {
+                // The first cycle fast: 23–25 mm in 0.60–0.62 s peaks above 115 mm/s.
+                let (opening_mm, period_s) = if i == 0 {
+                    (rng.random_range(23.0..25.0), rng.random_range(0.60..0.62))
+                } else {
+                    (rng.random_range(15.0..25.0), rng.random_range(0.6..0.8))
+                };
+                let lateral_mm = rng.random_range(3.0..6.0);
+                cycles.push(JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s });
+                start_s += period_s;
+            }
+            // The camera runs at a steady rate through the cycles; each frame moves as the cycle
+            // it falls in.
+            let n = (start_s / dt).round() as usize;
+            frames.extend((0..n).map(|k| {
+                let t = k as f64 * dt;
+                let motion = cycles
+                    .iter()
+                    .copied()
+                    .rfind(|m| matches!(m, JawMotion::Chew { start_s, .. } if *start_s <= t))
+                    .unwrap_or(JawMotion::Rest);
+                FrameSpec { t, view, motion }
+            }));
         }
         SceneKind::Calibration => {
             let mut t = 0.0;
@@ -385,6 +468,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                         elevation_deg: elevation,
                         target: [0.0, 0.0, -38.0],
                         hand_seed: None,
+                        orientation: Orientation::Upright,
                     };
                     for _ in 0..opts.frames_per_view {
                         frames.push(FrameSpec { t, view, motion: JawMotion::Rest });
@@ -441,6 +525,7 @@ mod tests {
             elevation_deg: 10.0,
             target: [0.0, 0.0, -38.0],
             hand_seed: None,
+            orientation: Orientation::Upright,
         };
         let c = v.camera_from_head(0.0);
         let target = c.transform_point(&Point3::new(0.0, 0.0, -38.0));
@@ -461,7 +546,122 @@ mod tests {
         assert_eq!(scene_frames(SceneKind::Static, &o, 1).len(), 2 * 9 * 2);
         assert_eq!(scene_frames(SceneKind::Hinge, &o, 1).len(), 4 * 2 * 60);
         assert_eq!(scene_frames(SceneKind::Excursion, &o, 1).len(), 3 * 2 * 60);
-        assert_eq!(scene_frames(SceneKind::Chew, &o, 1).len(), 48);
         assert_eq!(scene_frames(SceneKind::Calibration, &o, 1).len(), 3 * 6 * 2);
+    }
+
+    /// The chew cycles' motions, in order.
+    fn chew_cycles(frames: &[FrameSpec]) -> Vec<(f64, f64, f64, f64)> {
+        let mut cycles: Vec<(f64, f64, f64, f64)> = Vec::new();
+        for f in frames {
+            let JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s } = f.motion else {
+                panic!("not a chewing frame: {:?}", f.motion)
+            };
+            if cycles.last().is_none_or(|c| c.2 != start_s) {
+                cycles.push((opening_mm, lateral_mm, start_s, period_s));
+            }
+        }
+        cycles
+    }
+
+    #[test]
+    fn chew_is_fast_chewing_on_a_tripod() {
+        let rig = Rig::default();
+        for seed in 1..=8 {
+            for fps in [30.0, 60.0] {
+                let opts = SceneOptions { fps, cycles: 3, ..SceneOptions::default() };
+                let frames = scene_frames(SceneKind::Chew, &opts, seed);
+                assert!(frames.iter().all(|f| f.view.hand_seed.is_none()
+                    && f.view.distance_mm == 120.0
+                    && f.view.azimuth_deg == 0.0
+                    && f.view.orientation == Orientation::Upright));
+                let cycles = chew_cycles(&frames);
+                assert_eq!(cycles.len(), 3, "seed {seed}");
+                let mut end = 0.0;
+                for &(opening, lateral, start, period) in &cycles {
+                    assert!((15.0..=25.0).contains(&opening) && (3.0..=6.0).contains(&lateral), "{cycles:?}");
+                    assert!((0.6..=0.8).contains(&period) && start == end, "{cycles:?}");
+                    end += period;
+                }
+                assert_eq!(frames.len(), (end * fps).round() as usize);
+                assert!(frames.windows(2).all(|w| (w[1].t - w[0].t - 1.0 / fps).abs() < 1e-9), "a steady frame rate");
+                let peak = frames.iter().map(|f| rig.incisor_speed(&f.motion, f.t)).fold(0.0, f64::max);
+                assert!(peak >= 100.0, "seed {seed} at {fps} fps: the incisor peaks at {peak:.0} mm/s");
+            }
+        }
+    }
+
+    #[test]
+    fn a_chewing_cycle_opens_and_swings_as_far_as_it_says() {
+        let rig = Rig::default();
+        let p = Point3::from(rig.mounting.lower_incisal_point);
+        let motion = JawMotion::Chew { opening_mm: 20.0, lateral_mm: 4.0, start_s: 1.0, period_s: 0.7 };
+        let moved = |t: f64| rig.jaw(&motion, t).transform_point(&p) - p;
+        assert!(moved(1.0).norm() < 1e-12 && moved(1.7).norm() < 1e-9, "closed at each cycle's ends");
+        // The opening's chord at mid-cycle (the swing is zero there), the swing's peak anywhere.
+        assert!((moved(1.35).norm() - 20.0).abs() < 1e-9);
+        let swing = (0..=7000).map(|i| moved(1.0 + 0.7 * f64::from(i) / 7000.0).x).fold(0.0f64, |a, x| a.max(x.abs()));
+        assert!((swing - 4.0).abs() < 1e-3, "peak swing {swing}");
+    }
+
+    /// The rows the scene documents for the markers ([`Orientation`]).
+    #[test]
+    fn chew_markers_fall_in_the_documented_rows() {
+        let k = crate::Resolution::P1080.default_intrinsics();
+        let rig = Rig::default();
+        let rows = |orientation: Orientation| {
+            let opts = SceneOptions { orientation, cycles: 1, fps: 240.0, ..SceneOptions::default() };
+            let frames = scene_frames(SceneKind::Chew, &opts, 1);
+            let centre_rows: Vec<(f64, f64)> = frames
+                .iter()
+                .map(|f| {
+                    let (maxilla, mandible) = rig.markers(&f.motion, f.t);
+                    let camera_from_head = f.view.camera_from_head(f.t);
+                    let row = |body: Pose| {
+                        k.project(&(camera_from_head * body).transform_point(&Point3::origin()))
+                            .map_or(f64::NAN, |p| p.y)
+                    };
+                    (row(maxilla), row(mandible))
+                })
+                .collect();
+            let mandible = centre_rows.iter().map(|r| r.1);
+            let range = (mandible.clone().fold(f64::INFINITY, f64::min), mandible.fold(f64::NEG_INFINITY, f64::max));
+            let swing = chew_cycles(&frames)[0].1;
+            (centre_rows[0], range, swing)
+        };
+        let ((maxilla, mandible), range, swing) = rows(Orientation::Upright);
+        eprintln!("upright: centre rows {maxilla:.1} and {mandible:.1}; mandible {range:.1?} while chewing");
+        assert!((maxilla - 539.5).abs() < 1e-6 && (mandible - 539.5).abs() < 1e-6);
+        let per_mm = [539.5 - range.0, range.1 - 539.5].map(|d| d / swing);
+        assert!(per_mm.iter().all(|r| (10.0..=12.5).contains(r)), "{per_mm:?} rows per mm of swing");
+        let ((maxilla, mandible), range, _) = rows(Orientation::Landscape);
+        eprintln!("landscape: centre rows {maxilla:.1} and {mandible:.1}; mandible {range:.1?} while chewing");
+        assert!((maxilla - 89.5).abs() < 1e-6 && (mandible - 639.5).abs() < 1e-6);
+        assert!(range.0 > 639.0 && range.1 < 1000.0, "{range:?}");
+    }
+
+    #[test]
+    fn landscape_turns_the_phone_a_quarter_turn() {
+        let v = View {
+            distance_mm: 120.0,
+            azimuth_deg: 0.0,
+            elevation_deg: 0.0,
+            target: CHEW_TARGET,
+            hand_seed: None,
+            orientation: Orientation::Landscape,
+        };
+        let c = v.camera_from_head(0.0);
+        // Image x toward the patient's left, image y down the head.
+        assert!(c.transform_vector(&Vector3::x()).x > 0.999 && c.transform_vector(&Vector3::y()).y > 0.999);
+        let upright = View { orientation: Orientation::Upright, ..v }.camera_from_head(0.0);
+        let place = |p: Pose| p.inverse().translation();
+        assert!((place(upright) - place(c)).norm() < 1e-9, "same place, only turned");
+        // Files written before the field existed are upright.
+        let old = r#"{"distance_mm": 100.0, "azimuth_deg": 0.0, "elevation_deg": 0.0, "target": [0, 0, 0],
+            "hand_seed": null}"#;
+        let view: View = serde_json::from_str(old).expect("an old view reads");
+        assert_eq!(view.orientation, Orientation::Upright);
+        let old = r#"{"kind": "chew", "opening_mm": 18.0, "lateral_mm": 5.0, "period_s": 0.8}"#;
+        let motion: JawMotion = serde_json::from_str(old).expect("an old chew reads");
+        assert!(matches!(motion, JawMotion::Chew { start_s, .. } if start_s == 0.0));
     }
 }

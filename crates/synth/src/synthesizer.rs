@@ -3,8 +3,9 @@
 use crate::SynthError;
 use crate::post::{self, Glare};
 use crate::realism::Realism;
-use crate::render::{self, Camera, PlacedBody, Plane, RenderScene, Shape, render_linear, sees_body_many};
+use crate::render::{self, Camera, LinearImage, PlacedBody, Plane, RenderScene, Shape, render_linear, sees_body_many};
 use crate::scenes::{FrameSpec, Rig, SceneKind, SceneOptions, scene_frames};
+use crate::shutter;
 use crate::truth::{FrameTruth, GroundTruth, PrintErrorTruth, TagTruth};
 use jawtrack_marker::{BodyKind, Marker, PrintError};
 use jawtrack_pose::{CameraIntrinsics, Pose, median};
@@ -12,7 +13,6 @@ use nalgebra::{Point2, Point3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use std::path::Path;
 
 /// Frame sizes the renderer offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,6 +125,9 @@ pub struct Synthesizer {
 }
 
 const FACE_ALBEDO: f32 = 0.42;
+
+/// Points of the face plane (head X, Y; mm) whose motion bounds the background's.
+const FACE_PROBE: [[f64; 2]; 5] = [[0.0, 0.0], [-60.0, -60.0], [60.0, -60.0], [-60.0, 60.0], [60.0, 60.0]];
 
 impl Synthesizer {
     /// Prepares a scene: draws the print errors, the clutter and the frame list.
@@ -290,27 +293,60 @@ impl Synthesizer {
             }
         }
 
-        // Motion blur: enough sub-frames that nothing moves more than 1 px between two (the
-        // blur stays symmetric about mid-exposure, so the true pose is its centre).
+        let (mut img, sub) = if realism.readout_s > 0.0 {
+            self.render_rolling(&spec, &extra, &cam_head)
+        } else {
+            self.render_global(&spec, &extra, &cam_head)
+        };
+
+        // Autofocus locks on what has contrast: the tags facing the camera (median depth).
+        let focus_mm = (realism.f_number > 0.0).then(|| {
+            realism.focus_distance_mm.unwrap_or_else(|| {
+                median(tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z))
+                    .unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
+            })
+        });
+        if let Some(focus) = focus_mm {
+            post::defocus(&mut img, |d| {
+                post::defocus_sigma_px(&k, realism.f_number, realism.focal_length_mm, focus, d)
+            });
+        }
+        post::add_glare(&mut img, &glare);
+        post::illumination(&mut img, realism.vignetting, realism.lighting_gradient, self.gradient_dir);
+        post::sensor_noise(&mut img, realism.full_well_e, realism.read_noise_e, &mut rng);
+        let luma = post::encode_u8(&img, realism.gamma);
+
+        let scene_mid = self.scene_at(&cam_head, cam_max, cam_man, &extra);
+        let tags = self.tag_truth(&spec, &scene_mid, &extra);
+        let truth = FrameTruth {
+            index,
+            file: format!("frame_{index:04}.png"),
+            t: spec.t,
+            camera_from_maxilla: cam_max,
+            camera_from_mandible: cam_man,
+            maxilla_from_mandible: cam_max.inverse() * cam_man,
+            camera_from_head: cam_head,
+            subframes: sub,
+            incisor_speed_mm_s: self.rig.incisor_speed(&spec.motion, spec.t),
+            focus_mm,
+            glare,
+            occluder,
+            tags,
+            spec,
+        };
+        Ok(Frame { width: self.camera.width, height: self.camera.height, luma, truth })
+    }
+
+    /// A global shutter's image: every row exposed over the same window, averaging enough
+    /// sub-frames that nothing moves more than 1 px between two (the blur stays symmetric about
+    /// mid-exposure, so the true pose is its centre). Returns the image and the sub-frames.
+    fn render_global(&self, spec: &FrameSpec, extra: &[Plane], cam_head: &Pose) -> (LinearImage, u32) {
+        let realism = &self.config.realism;
         let sub = if realism.exposure_s > 0.0 {
             let (t0, t1) = (spec.t - realism.exposure_s / 2.0, spec.t + realism.exposure_s / 2.0);
-            let a = self.poses_at(&spec, t0);
-            let b = self.poses_at(&spec, t1);
-            let probe = |p: &(Pose, Pose, Pose)| -> Vec<Point2<f64>> {
-                [p.1, p.2]
-                    .iter()
-                    .flat_map(|pose| {
-                        [
-                            Vector3::new(15.0, 0.0, 0.0),
-                            Vector3::new(0.0, 15.0, 0.0),
-                            Vector3::new(0.0, 0.0, 15.0),
-                            Vector3::zeros(),
-                        ]
-                        .map(|v| k.project(&pose.transform_point(&Point3::from(v))).unwrap_or(Point2::origin()))
-                    })
-                    .collect()
-            };
-            let moved = probe(&a).iter().zip(probe(&b)).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max);
+            let a = self.poses_at(spec, t0);
+            let b = self.poses_at(spec, t1);
+            let moved = shutter::largest_motion(&self.body_probe(&a), &self.body_probe(&b));
             (moved.ceil() as u32).clamp(1, realism.max_subframes)
         } else {
             1
@@ -327,8 +363,8 @@ impl Synthesizer {
         let scenes: Vec<RenderScene<'_>> = times
             .iter()
             .map(|&t| {
-                let (ch, cx, cm) = self.poses_at(&spec, t);
-                self.scene_at(&ch, cx, cm, &extra)
+                let (ch, cx, cm) = self.poses_at(spec, t);
+                self.scene_at(&ch, cx, cm, extra)
             })
             .collect();
         let mid = sub as usize / 2;
@@ -336,13 +372,10 @@ impl Synthesizer {
         if sub > 1 {
             // With the camera still (a tripod) only the markers move: re-render just their
             // window for each sub-frame. A moving camera moves everything.
-            let still = times.iter().all(|&t| self.poses_at(&spec, t).0.distance_to(&cam_head) == (0.0, 0.0));
+            let still = times.iter().all(|&t| self.poses_at(spec, t).0.distance_to(cam_head) == (0.0, 0.0));
             let full = [0, 0, self.camera.width as usize, self.camera.height as usize];
             let win = if still {
-                scenes
-                    .iter()
-                    .filter_map(render::bodies_window)
-                    .reduce(|a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])])
+                scenes.iter().filter_map(render::bodies_window).reduce(render::window_union)
             } else {
                 Some(full)
             };
@@ -363,42 +396,65 @@ impl Synthesizer {
                 }
             }
         }
+        (img, sub)
+    }
 
-        // Autofocus locks on what has contrast: the tags facing the camera (median depth).
-        let focus_mm = (realism.f_number > 0.0).then(|| {
-            realism.focus_distance_mm.unwrap_or_else(|| {
-                median(tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z))
-                    .unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
-            })
-        });
-        if let Some(focus) = focus_mm {
-            post::defocus(&mut img, |d| {
-                post::defocus_sigma_px(&k, realism.f_number, realism.focal_length_mm, focus, d)
-            });
-        }
-        post::add_glare(&mut img, &glare);
-        post::illumination(&mut img, realism.vignetting, realism.lighting_gradient, self.gradient_dir);
-        post::sensor_noise(&mut img, realism.full_well_e, realism.read_noise_e, &mut rng);
-        let luma = post::encode_u8(&img, realism.gamma);
-
-        let scene_mid = self.scene_at(&cam_head, cam_max, cam_man, &extra);
-        let tags = self.tag_truth(&scene_mid, &cam_max, &cam_man);
-        let truth = FrameTruth {
-            index,
-            file: format!("frame_{index:04}.png"),
-            t: spec.t,
-            camera_from_maxilla: cam_max,
-            camera_from_mandible: cam_man,
-            maxilla_from_mandible: cam_max.inverse() * cam_man,
-            camera_from_head: cam_head,
-            subframes: sub,
-            focus_mm,
-            glare,
-            occluder,
-            tags,
-            spec,
+    /// A rolling shutter's image (see [`shutter`]). Returns the image and the most instants a
+    /// row averaged.
+    fn render_rolling(&self, spec: &FrameSpec, extra: &[Plane], cam_head: &Pose) -> (LinearImage, u32) {
+        let realism = &self.config.realism;
+        let scene_at = |t: f64| {
+            let (ch, cx, cm) = self.poses_at(spec, t);
+            self.scene_at(&ch, cx, cm, extra)
         };
-        Ok(Frame { width: self.camera.width, height: self.camera.height, luma, truth })
+        // The markers bound the motion of everything with a still camera; a moving one moves the
+        // face too, so it is probed as well.
+        let probe_at = |t: f64| {
+            let poses = self.poses_at(spec, t);
+            let k = &self.camera.intrinsics;
+            let mut pts = self.body_probe(&poses);
+            pts.extend(FACE_PROBE.map(|[x, y]| {
+                let p = poses.0.transform_point(&Point3::new(x, y, self.rig.face_plane_z));
+                k.project(&p).unwrap_or(Point2::origin())
+            }));
+            pts
+        };
+        let height = self.camera.height;
+        let span = [
+            realism.row_time(spec.t, 0.0, height) - realism.exposure_s / 2.0,
+            spec.t,
+            realism.row_time(spec.t, f64::from(height - 1), height) + realism.exposure_s / 2.0,
+        ];
+        let still = span.iter().all(|&t| self.poses_at(spec, t).0.distance_to(cam_head) == (0.0, 0.0));
+        let mut img = render_linear(&scene_at(spec.t));
+        let rolling = shutter::Rolling {
+            realism,
+            t: spec.t,
+            scene_at: &scene_at,
+            probe_at: &probe_at,
+            still,
+            step_px: shutter::STEP_PX,
+        };
+        let most = rolling.render_into(&mut img);
+        (img, most)
+    }
+
+    /// Image points (px) whose motion bounds the markers': each body's origin and points 15 mm
+    /// along its axes.
+    fn body_probe(&self, poses: &(Pose, Pose, Pose)) -> Vec<Point2<f64>> {
+        let k = &self.camera.intrinsics;
+        [poses.1, poses.2]
+            .iter()
+            .flat_map(|pose| {
+                [
+                    Vector3::new(15.0, 0.0, 0.0),
+                    Vector3::new(0.0, 15.0, 0.0),
+                    Vector3::new(0.0, 0.0, 15.0),
+                    Vector3::zeros(),
+                ]
+                .map(|v| k.project(&pose.transform_point(&Point3::from(v))).unwrap_or(Point2::origin()))
+            })
+            .collect()
     }
 
     /// Tags facing the camera: (id, centre in camera frame, view angle in degrees).
@@ -416,13 +472,20 @@ impl Synthesizer {
         out
     }
 
-    fn tag_truth(&self, scene: &RenderScene<'_>, cam_max: &Pose, cam_man: &Pose) -> Vec<TagTruth> {
+    /// The truth of every tag facing the camera at the frame's time. Each point is where it is
+    /// seen: with a rolling shutter, at its own row's mid-exposure time.
+    fn tag_truth(&self, spec: &FrameSpec, scene: &RenderScene<'_>, extra: &[Plane]) -> Vec<TagTruth> {
         let k = &self.camera.intrinsics;
+        let realism = &self.config.realism;
         let (w, h) = (f64::from(self.camera.width), f64::from(self.camera.height));
         let mut out = Vec::new();
         for (bi, kind) in BodyKind::ALL.iter().enumerate() {
             let Some(body) = self.true_marker.body(*kind) else { continue };
-            let pose = if *kind == BodyKind::Maxilla { cam_max } else { cam_man };
+            let body_at = |t: f64| {
+                let (_, cam_max, cam_man) = self.poses_at(spec, t);
+                if *kind == BodyKind::Maxilla { cam_max } else { cam_man }
+            };
+            let pose = &body_at(spec.t);
             let scene_index = scene.bodies.iter().position(|b| std::ptr::eq(b.body, body)).unwrap_or(bi);
             for tag in &body.tags {
                 let c = pose.transform_point(&Point3::from(tag.center)).coords;
@@ -431,7 +494,10 @@ impl Synthesizer {
                 if cos <= 0.0 {
                     continue;
                 }
-                let proj = |p: nalgebra::Vector3<f64>| k.project(&pose.transform_point(&Point3::from(p)));
+                let proj = |p: Vector3<f64>| {
+                    let at = |t: f64| k.project(&body_at(t).transform_point(&Point3::from(p)));
+                    shutter::seen_at(realism, spec.t, self.camera.height, at)
+                };
                 let Some(corners) = tag.corners.iter().map(|c| proj(*c)).collect::<Option<Vec<_>>>() else { continue };
                 let Some(center) = proj(tag.center) else { continue };
                 let inside = |p: &Point2<f64>| p.x >= 0.0 && p.y >= 0.0 && p.x <= w - 1.0 && p.y <= h - 1.0;
@@ -440,7 +506,19 @@ impl Synthesizer {
                     .flat_map(|i| (0..9).map(move |j| (f64::from(i) / 4.0 - 1.0, f64::from(j) / 4.0 - 1.0)))
                     .filter_map(|(u, v)| proj(tag.point_at(u * 0.98, v * 0.98)))
                     .collect();
-                let seen = sees_body_many(scene, scene_index, &samples);
+                let seen = if realism.readout_s > 0.0 {
+                    // Each sample against the scene at its own row's time.
+                    samples
+                        .iter()
+                        .map(|p| {
+                            let (ch, cx, cm) = self.poses_at(spec, realism.row_time(spec.t, p.y, self.camera.height));
+                            let at_row = self.scene_at(&ch, cx, cm, extra);
+                            sees_body_many(&at_row, scene_index, &[*p]).first().copied().unwrap_or(false)
+                        })
+                        .collect()
+                } else {
+                    sees_body_many(scene, scene_index, &samples)
+                };
                 let visible = samples.iter().zip(&seen).filter(|(p, s)| **s && inside(p)).count();
                 let min_side = (0..4).map(|i| (corners[(i + 1) % 4] - corners[i]).norm()).fold(f64::INFINITY, f64::min);
                 out.push(TagTruth {
@@ -525,83 +603,6 @@ fn make_occluder(tag_center: &Vector3<f64>, rng: &mut ChaCha8Rng) -> Plane {
     }
 }
 
-/// Writes an 8-bit gray PNG. The encoder's fast mode (fdeflate) is both the quickest and, on
-/// noisy frames, the smallest: measured 5 ms and 910 kB against 520 ms and 913 kB for "best".
-fn write_png(path: &Path, frame: &Frame) -> Result<(), Box<dyn std::error::Error>> {
-    use image::ImageEncoder;
-    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
-    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    PngEncoder::new_with_quality(file, CompressionType::Fast, FilterType::Adaptive).write_image(
-        &frame.luma,
-        frame.width,
-        frame.height,
-        image::ExtendedColorType::L8,
-    )?;
-    Ok(())
-}
-
-/// What `write_scene` reports.
-#[derive(Debug, Clone)]
-pub struct SceneSummary {
-    /// Frames written.
-    pub frames: usize,
-    /// Tags a detector should find, per frame: (min, mean, max).
-    pub detectable_tags: (usize, f64, usize),
-    /// Median shortest tag side among those (px).
-    pub median_tag_side_px: f64,
-    /// Largest displacement of the mandible marker from its first pose (mm).
-    pub max_mandible_travel_mm: f64,
-    /// Seconds spent rendering.
-    pub seconds: f64,
-}
-
-/// Renders every frame of a scene into `dir` (PNG per frame and `ground_truth.json`, written
-/// last), calling `progress(done, total)` after each frame.
-pub fn write_scene(
-    config: SynthConfig,
-    dir: &Path,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<SceneSummary, SynthError> {
-    let io =
-        |p: &Path, e: &dyn std::fmt::Display| SynthError::Io { path: p.display().to_string(), reason: e.to_string() };
-    let synth = Synthesizer::new(config)?;
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
-    let start = std::time::Instant::now();
-    let mut truth = synth.header();
-    let mut counts = Vec::new();
-    let mut sides = Vec::new();
-    let mut first = None;
-    let mut travel: f64 = 0.0;
-    for i in 0..synth.len() {
-        let frame = synth.render(i)?;
-        let path = dir.join(&frame.truth.file);
-        write_png(&path, &frame).map_err(|e| io(&path, &e))?;
-        let detectable: Vec<&TagTruth> = frame.truth.tags.iter().filter(|t| t.should_be_detected()).collect();
-        counts.push(detectable.len());
-        sides.extend(detectable.iter().map(|t| t.min_side_px));
-        let m = frame.truth.maxilla_from_mandible;
-        let f = *first.get_or_insert(m);
-        travel = travel.max((m.translation() - f.translation()).norm());
-        truth.frames.push(frame.truth);
-        progress(i + 1, synth.len());
-    }
-    let path = dir.join("ground_truth.json");
-    let text = serde_json::to_string_pretty(&truth).map_err(|e| io(&path, &e))?;
-    std::fs::write(&path, text).map_err(|e| io(&path, &e))?;
-    let n = counts.len().max(1);
-    Ok(SceneSummary {
-        frames: counts.len(),
-        detectable_tags: (
-            counts.iter().copied().min().unwrap_or(0),
-            counts.iter().sum::<usize>() as f64 / n as f64,
-            counts.iter().copied().max().unwrap_or(0),
-        ),
-        median_tag_side_px: median(sides).unwrap_or(0.0),
-        max_mandible_travel_mm: travel,
-        seconds: start.elapsed().as_secs_f64(),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -623,5 +624,107 @@ mod tests {
         let c = SynthConfig::new(SceneKind::Static);
         let s = Synthesizer::new(c).expect("defaults are valid");
         assert!(s.render(s.len()).is_err(), "a frame past the end is an error, not a panic");
+    }
+
+    #[test]
+    fn readout_must_be_a_non_negative_number() {
+        for bad in [-0.001, f64::NAN, f64::INFINITY] {
+            let mut c = SynthConfig::new(SceneKind::Chew);
+            c.realism.readout_s = bad;
+            let e = Synthesizer::new(c).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(e.contains("readout_s"), "{bad}: {e}");
+        }
+    }
+
+    /// A fast chewing frame with a 10 ms readout: the truth's corners are each at its own
+    /// row's time (rows read later are seen later), the poses at the frame's time, and the
+    /// incisor's speed recorded.
+    #[test]
+    fn rolling_shutter_truth_is_seen_at_each_row_time() {
+        let mut c = SynthConfig::new(SceneKind::Chew);
+        c.realism = Realism { readout_s: 0.010, ..Realism::clean() };
+        c.options.orientation = crate::scenes::Orientation::Landscape;
+        let synth = Synthesizer::new(c).expect("valid");
+        let global =
+            Synthesizer::new(SynthConfig { realism: Realism::clean(), ..synth.config.clone() }).expect("valid");
+        // A quarter of the first, fast cycle: the jaw opens at full speed.
+        let spec = synth.frames[5];
+        let speed = synth.rig.incisor_speed(&spec.motion, spec.t);
+        assert!(speed > 100.0, "{speed} mm/s");
+        let (ch, cx, cm) = synth.poses_at(&spec, spec.t);
+        let scene = synth.scene_at(&ch, cx, cm, &[]);
+        let rolled = synth.tag_truth(&spec, &scene, &[]);
+        let still = global.tag_truth(&spec, &scene, &[]);
+        assert_eq!(rolled.len(), still.len());
+        let k = synth.camera.intrinsics;
+        let mut moved: f64 = 0.0;
+        for (r, s) in rolled.iter().zip(&still) {
+            let (kind, tag) = synth.true_marker.find_tag(r.id).expect("tag");
+            for (corner, seen) in tag.corners.iter().zip(&r.corners) {
+                let t = synth.config.realism.row_time(spec.t, seen[1], synth.camera.height);
+                let pose = synth.poses_at(&spec, t);
+                let pose = if kind == BodyKind::Maxilla { pose.1 } else { pose.2 };
+                let p = k.project(&pose.transform_point(&Point3::from(*corner))).expect("in front");
+                assert!((p.x - seen[0]).abs() < 1e-8 && (p.y - seen[1]).abs() < 1e-8, "tag {}", r.id);
+            }
+            let shift = (0..4).map(|i| (r.corners[i][1] - s.corners[i][1]).abs()).fold(0.0, f64::max);
+            if kind == BodyKind::Maxilla {
+                assert!(shift < 1e-9, "the maxilla does not move");
+            } else {
+                moved = moved.max(shift);
+            }
+        }
+        // Opening at > 100 mm/s ≈ 1000 px/s down the rows, read up to 4 ms from the centre row.
+        assert!(moved > 1.0, "the mandible's corners moved only {moved} px");
+    }
+
+    /// A rolling-shutter frame end to end: rendered row by row, and every tag the truth calls
+    /// detectable reads back at the truth's corners.
+    #[test]
+    fn a_rolling_shutter_frame_shows_its_tags_at_the_truths_corners() {
+        let mut c = SynthConfig::new(SceneKind::Chew);
+        c.realism = Realism { readout_s: 0.010, exposure_s: 0.002, ..Realism::clean() };
+        c.options.orientation = crate::scenes::Orientation::Landscape;
+        c.stride = 5;
+        c.max_frames = Some(2);
+        let synth = Synthesizer::new(c).expect("valid");
+        let frame = synth.render(1).expect("renders");
+        assert!(frame.truth.subframes > 1 && frame.truth.incisor_speed_mm_s > 100.0, "{:?}", frame.truth.subframes);
+        let img = image::GrayImage::from_raw(frame.width, frame.height, frame.luma).expect("size");
+        let mut read = 0;
+        for t in frame.truth.tags.iter().filter(|t| t.should_be_detected()) {
+            let reading = jawtrack_test_support::read_tag(&img, &t.corners).expect("inside");
+            let bm = jawtrack_apriltag::Tag36h11::bitmap(t.id).expect("id");
+            let wrong = jawtrack_apriltag::Tag36h11::bit_cells()
+                .iter()
+                .filter(|&&(x, y)| bm.is_white(x.into(), y.into()) != reading.is_white(x.into(), y.into()))
+                .count();
+            assert_eq!(wrong, 0, "tag {} misread at the truth's corners", t.id);
+            read += 1;
+        }
+        assert!(read >= 4, "{read} tags read");
+    }
+
+    /// What the chew scene's framing promises ([`crate::scenes`]): in either orientation at
+    /// least two tags of each marker are detectable in every frame, through 25 mm openings.
+    #[test]
+    fn chew_keeps_two_tags_of_each_marker_in_view() {
+        for orientation in [crate::scenes::Orientation::Upright, crate::scenes::Orientation::Landscape] {
+            for seed in 1..=3 {
+                let mut c = SynthConfig::new(SceneKind::Chew);
+                c.seed = seed;
+                c.realism = Realism::clean();
+                c.options = SceneOptions { orientation, cycles: 4, ..SceneOptions::default() };
+                let synth = Synthesizer::new(c).expect("valid");
+                for spec in &synth.frames {
+                    let (ch, cx, cm) = synth.poses_at(spec, spec.t);
+                    let tags = synth.tag_truth(spec, &synth.scene_at(&ch, cx, cm, &[]), &[]);
+                    for body in ["maxilla", "mandible"] {
+                        let n = tags.iter().filter(|t| t.body == body && t.should_be_detected()).count();
+                        assert!(n >= 2, "{orientation:?}, seed {seed}, t = {:.3}: {n} {body} tags", spec.t);
+                    }
+                }
+            }
+        }
     }
 }

@@ -22,7 +22,7 @@ pub struct GroundTruth {
     pub image_size: [u32; 2],
     /// Camera intrinsics.
     pub intrinsics: CameraIntrinsics,
-    /// Realism settings used.
+    /// Realism settings used (exposure and rolling-shutter readout among them).
     pub realism: Realism,
     /// Each tag's print error: how the printed tag really sits relative to the nominal file.
     pub print_errors: Vec<PrintErrorTruth>,
@@ -53,18 +53,24 @@ pub struct FrameTruth {
     pub index: usize,
     /// Image file name.
     pub file: String,
-    /// Time at mid-exposure (s).
+    /// Time at mid-exposure (s); with a rolling shutter, of the centre row (row y is exposed
+    /// centred at [`Realism::row_time`]). Every pose below is at this time.
     pub t: f64,
-    /// Maxilla marker in the camera frame at mid-exposure.
+    /// Maxilla marker in the camera frame at `t`.
     pub camera_from_maxilla: Pose,
-    /// Mandible marker in the camera frame at mid-exposure.
+    /// Mandible marker in the camera frame at `t`.
     pub camera_from_mandible: Pose,
     /// Mandible marker in the maxilla marker's frame: what the tracker must report.
     pub maxilla_from_mandible: Pose,
     /// The head in the camera frame (see `scenes` for the head frame).
     pub camera_from_head: Pose,
-    /// Sub-frames averaged for motion blur.
+    /// Sub-frames averaged for motion blur; with a rolling shutter, the most instants a row
+    /// averaged.
     pub subframes: u32,
+    /// Speed of the lower incisal point relative to the maxilla at `t` (mm/s; absent in older
+    /// files: 0).
+    #[serde(default)]
+    pub incisor_speed_mm_s: f64,
     /// Focus distance used for defocus (mm), if any.
     pub focus_mm: Option<f64>,
     /// Glare patches added.
@@ -84,9 +90,10 @@ pub struct TagTruth {
     pub id: u32,
     /// Body name.
     pub body: String,
-    /// Corners (px) in detection order: bottom-left, bottom-right, top-right, top-left.
+    /// Corners (px) in detection order: bottom-left, bottom-right, top-right, top-left. Each is
+    /// where it is seen: with a rolling shutter, projected at its own row's mid-exposure time.
     pub corners: [[f64; 2]; 4],
-    /// Centre (px).
+    /// Centre (px), seen as the corners are.
     pub center: [f64; 2],
     /// Angle between the line of sight and the face normal (degrees).
     pub view_angle_deg: f64,

@@ -192,7 +192,7 @@ impl Options {
             SceneKind::Hinge => (1, self.hinge_cycles, self.fps, self.max_frames),
             _ => (1, self.excursion_cycles, self.fps, self.max_frames),
         };
-        Request { scene, seed: self.seed, frames_per_view, cycles, fps, max_frames }
+        Request { max_frames, ..Request::new(scene, self.seed, frames_per_view, cycles, fps) }
     }
 }
 
@@ -636,8 +636,14 @@ mod tests {
     fn tiny_run() -> Run {
         let rig = jawtrack_synth::scenes::Rig::default();
         let rest = rig.mounting.maxilla_from_mandible_rest();
-        let view =
-            View { distance_mm: 100.0, azimuth_deg: 30.0, elevation_deg: 0.0, target: [0.0; 3], hand_seed: None };
+        let view = View {
+            distance_mm: 100.0,
+            azimuth_deg: 30.0,
+            elevation_deg: 0.0,
+            target: [0.0; 3],
+            hand_seed: None,
+            orientation: Default::default(),
+        };
         // 0.04 mm along maxilla +Y is 0.04 mm along head +Y (the half turn is about Y).
         let off = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 0.04, 0.0));
         let flip =
