@@ -5,10 +5,11 @@
 use anyhow::{Context, Result};
 use jawtrack_marker::Marker;
 use jawtrack_synth::scenes::{FrameSpec, scene_frames};
-use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use jawtrack_synth::{GroundTruth, Orientation, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
 use std::path::{Path, PathBuf};
 
-/// What to render: one scene at 1080p, default realism, the nominal marker.
+/// What to render: one scene at 1080p, default realism (but for the exposure and shutter
+/// asked for), the nominal marker.
 #[derive(Debug, Clone, Copy)]
 pub struct Request {
     /// The scene.
@@ -23,15 +24,61 @@ pub struct Request {
     pub fps: f64,
     /// Keep at most this many frames.
     pub max_frames: Option<usize>,
+    /// The exposure (s); `None` keeps the default realism's.
+    pub exposure_s: Option<f64>,
+    /// The rolling shutter's readout (s); 0 = a global shutter, as by default.
+    pub readout_s: f64,
+    /// How the phone is held (the chew scene's choice).
+    pub orientation: Orientation,
 }
 
 impl Request {
+    /// A scene with the default realism, global shutter, phone upright.
+    pub fn new(scene: SceneKind, seed: u64, frames_per_view: usize, cycles: usize, fps: f64) -> Self {
+        Request {
+            scene,
+            seed,
+            frames_per_view,
+            cycles,
+            fps,
+            max_frames: None,
+            exposure_s: None,
+            readout_s: 0.0,
+            orientation: Orientation::Upright,
+        }
+    }
+
+    /// The cache folder's name: the scene and seed, and what departs from the defaults.
+    fn folder(&self) -> String {
+        let mut name = format!("{}-{}", self.scene.name(), self.seed);
+        if let Some(e) = self.exposure_s {
+            name += &format!("-exposure{}ms", e * 1000.0);
+        }
+        if self.readout_s > 0.0 {
+            name += &format!("-readout{}ms", self.readout_s * 1000.0);
+        }
+        if self.orientation == Orientation::Landscape {
+            name += "-landscape";
+        }
+        name
+    }
+
     fn config(&self) -> SynthConfig {
+        let realism = Realism::default();
         SynthConfig {
             seed: self.seed,
             resolution: Resolution::P1080,
-            realism: Realism::default(),
-            options: SceneOptions { frames_per_view: self.frames_per_view, cycles: self.cycles, fps: self.fps },
+            realism: Realism {
+                exposure_s: self.exposure_s.unwrap_or(realism.exposure_s),
+                readout_s: self.readout_s,
+                ..realism
+            },
+            options: SceneOptions {
+                frames_per_view: self.frames_per_view,
+                cycles: self.cycles,
+                fps: self.fps,
+                orientation: self.orientation,
+            },
             marker: Marker::default(),
             max_frames: self.max_frames,
             ..SynthConfig::new(self.scene)
@@ -84,7 +131,7 @@ fn cached(dir: &Path, req: &Request) -> Option<GroundTruth> {
 /// `progress(done, total)` is called as frames are rendered (not at all when cached).
 pub fn scene(cache_root: &Path, req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene> {
     let name = req.scene.name();
-    let dir = cache_root.join(format!("{name}-{}", req.seed));
+    let dir = cache_root.join(req.folder());
     if let Some(truth) = cached(&dir, req) {
         return Ok(Scene { dir, truth, rendered: false });
     }

@@ -12,6 +12,7 @@
 //! body's PnP, ours against OpenCV's on the same correspondences. OpenCV runs in Python
 //! (`python/solve_pnp.py`); without it the reference columns are skipped, and said so.
 
+mod chew;
 mod report;
 
 use anyhow::{Context, Result, bail};
@@ -20,7 +21,7 @@ use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_apriltag_reference::{ReferenceDetection, ReferenceDetector, ReferenceParams};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
-use jawtrack_synth::SceneKind;
+use jawtrack_synth::{Orientation, SceneKind};
 use jawtrack_tracker::{Flag, Tracker, TrackerConfig};
 use jawtrack_tracker_bench::opencv::{self, BodyCase, OpenCv};
 use jawtrack_tracker_bench::{frames, reference::correspondences};
@@ -75,6 +76,18 @@ struct Args {
     /// Also write every frame's errors, flags and C tag counts to this file (JSON lines).
     #[arg(long)]
     per_frame: Option<PathBuf>,
+    /// Exposures (ms, comma-separated) to render the chew scene with, each a scene of its own;
+    /// default: the default realism's.
+    #[arg(long, value_delimiter = ',', value_name = "MS")]
+    chew_exposures_ms: Vec<f64>,
+    /// Rolling-shutter readouts (ms, comma-separated) to render the chew scene with, each
+    /// with every exposure; ours is told the readout, and measured with it ignored too.
+    #[arg(long, value_delimiter = ',', value_name = "MS", default_values = ["0"])]
+    chew_readouts_ms: Vec<f64>,
+    /// Hold the phone in landscape for the chew scene (rows across the face, the upper marker
+    /// read before the lower) instead of upright.
+    #[arg(long)]
+    landscape: bool,
 }
 
 /// The two marker files: nominal, as printed.
@@ -200,9 +213,14 @@ fn run_scene(
     let markers: Markers = [Marker::default(), printed];
     let config = TrackerConfig {
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
+        readout_s: truth.realism.readout_s,
         ..TrackerConfig::default()
     };
     let mut trackers = [Tracker::new(markers[0].clone(), config)?, Tracker::new(markers[1].clone(), config)?];
+    // Under a rolling shutter, the printed marker's tracker once more, told nothing of it.
+    let mut ignoring = (config.readout_s > 0.0)
+        .then(|| Tracker::new(markers[1].clone(), TrackerConfig { readout_s: 0.0, ..config }))
+        .transpose()?;
     let mut c = ReferenceDetector::new(&ReferenceParams::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let camera = &truth.intrinsics;
     let mut out = SceneOutcome { scene: req.scene, frames: Vec::new() };
@@ -218,6 +236,14 @@ fn run_scene(
             error[m][0] = r.maxilla_from_mandible.map(|p| pose_error(&p, &f.maxilla_from_mandible));
             our_flags[m] = r.flags.iter().map(Flag::name).collect();
         }
+        let ignored = match &mut ignoring {
+            Some(t) => t
+                .track(&view, camera, f.t)
+                .with_context(|| format!("tracking {}", path.display()))?
+                .maxilla_from_mandible
+                .map(|p| pose_error(&p, &f.maxilla_from_mandible)),
+            None => None,
+        };
         let detections: Vec<ReferenceDetection> = c
             .detect(img.as_raw(), w, h, w)
             .map_err(|e| anyhow::anyhow!("C library on {}: {e}", path.display()))?
@@ -232,7 +258,16 @@ fn run_scene(
             error[m][1] = e;
             reference_note[m] = note;
         }
-        out.frames.push(FrameOutcome { index: f.index, view: f.spec.view, error, our_flags, c_tags, reference_note });
+        out.frames.push(FrameOutcome {
+            index: f.index,
+            view: f.spec.view,
+            error,
+            our_flags,
+            c_tags,
+            reference_note,
+            ignored,
+            speed_mm_s: f.incisor_speed_mm_s,
+        });
     }
     let summary = |m: usize, s: usize| {
         let e: Vec<&PoseError> = out.frames.iter().filter_map(|f| f.error[m][s].as_ref()).collect();
@@ -294,20 +329,50 @@ fn main() -> Result<()> {
         args.fps,
         max_frames.map_or(String::new(), |n| format!(", at most {n} frames per scene")),
     );
+    for (flag, values) in
+        [("--chew-exposures-ms", &args.chew_exposures_ms), ("--chew-readouts-ms", &args.chew_readouts_ms)]
+    {
+        if let Some(bad) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0 && **v < 1000.0)) {
+            bail!("{flag} takes milliseconds from 0 to under 1000, got {bad}");
+        }
+    }
+    if args.chew_exposures_ms.contains(&0.0) {
+        bail!("--chew-exposures-ms must be positive (an exposure of 0 ms is not a frame)");
+    }
+    let orientation = if args.landscape { Orientation::Landscape } else { Orientation::Upright };
     let mut outcomes = Vec::new();
     let mut timings = Vec::new();
     for &scene in &args.scenes {
-        let req = frames::Request {
-            scene,
-            seed: args.seed,
-            frames_per_view: args.frames_per_view,
-            cycles: args.cycles,
-            fps: args.fps,
+        let base = frames::Request {
             max_frames,
+            ..frames::Request::new(scene, args.seed, args.frames_per_view, args.cycles, args.fps)
         };
-        outcomes.push(run_scene(&req, &cache, cv.as_mut(), &mut timings)?);
+        if scene != SceneKind::Chew {
+            outcomes.push((run_scene(&base, &cache, cv.as_mut(), &mut timings)?, None));
+            continue;
+        }
+        let exposures: Vec<Option<f64>> = if args.chew_exposures_ms.is_empty() {
+            vec![None]
+        } else {
+            args.chew_exposures_ms.iter().map(|e| Some(e / 1000.0)).collect()
+        };
+        for exposure_s in exposures {
+            for &readout_ms in &args.chew_readouts_ms {
+                let req = frames::Request { exposure_s, readout_s: readout_ms / 1000.0, orientation, ..base };
+                let shutter = chew::Shutter {
+                    exposure_s: exposure_s.unwrap_or(realism.exposure_s),
+                    readout_s: req.readout_s,
+                    orientation: if args.landscape { "landscape" } else { "upright" },
+                };
+                outcomes.push((run_scene(&req, &cache, cv.as_mut(), &mut timings)?, Some(shutter)));
+            }
+        }
     }
-    let md = report::markdown(&RunInfo { frames, reference }, &outcomes, &timings);
+    let with_reference = reference.is_ok();
+    let scenes: Vec<SceneOutcome> = outcomes.iter().map(|(o, _)| o.clone()).collect();
+    let mut md = report::markdown(&RunInfo { frames, reference }, &scenes, &timings);
+    md.push_str(&chew::markdown(&outcomes, with_reference));
+    let outcomes = scenes;
     print!("{md}");
     if let Some(path) = &args.out {
         std::fs::write(path, &md).with_context(|| format!("writing {}", path.display()))?;

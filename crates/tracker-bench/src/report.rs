@@ -47,6 +47,10 @@ pub struct FrameOutcome {
     pub c_tags: [usize; 2],
     /// Per marker file, why the reference has no pose (a body without tags, OpenCV's error).
     pub reference_note: [Option<String>; 2],
+    /// Under a rolling shutter, ours with the marker as printed and the readout ignored.
+    pub ignored: Option<PoseError>,
+    /// The lower incisor's speed relative to the upper jaw (mm/s), from the truth.
+    pub speed_mm_s: f64,
 }
 
 /// One scene, measured.
