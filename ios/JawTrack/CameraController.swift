@@ -1,7 +1,7 @@
 // Adapts AVCaptureSession and AVCaptureDevice to JawTrackKit's CameraControl: applies the
 // CapturePlan as given (the format CameraPlanner picks, pixel layout, frame duration, zoom,
-// focus, automatic exposure and white balance, locked when the controller asks, HDR and
-// stabilisation off, the intrinsic matrix per frame). Every session call runs on its own serial
+// focus, automatic exposure and white balance, locked when the controller asks, the exposure
+// cap, HDR and stabilisation off, the intrinsic matrix per frame). Every session call runs on its own serial
 // queue: they block.
 import AVFoundation
 import JawTrackCore
@@ -42,8 +42,33 @@ final class CameraController: CameraControl {
         }
     }
 
+    func limitExposure(to seconds: Double?) {
+        queue.async { [self] in
+            // Once locked, the exposure stays as it was (the cap applies to automatic exposure only).
+            guard let device = input?.device, device.exposureMode == .continuousAutoExposure,
+                  (try? device.lockForConfiguration()) != nil
+            else { return }
+            Self.applyExposureCap(seconds, to: device)
+            device.unlockForConfiguration()
+        }
+    }
+
     func stop() {
         queue.async { [self] in session.stopRunning() }
+    }
+
+    /// Within the active format's range (outside it AVFoundation raises an exception); nil or
+    /// `.invalid` gives automatic exposure its default limit back. Call with the device locked.
+    private static func applyExposureCap(_ seconds: Double?, to device: AVCaptureDevice) {
+        guard let seconds, seconds > 0 else {
+            device.activeMaxExposureDuration = .invalid
+            return
+        }
+        let format = device.activeFormat
+        let wanted = CMTime(seconds: seconds, preferredTimescale: 1_000_000)
+        device.activeMaxExposureDuration = CMTimeMaximum(
+            format.minExposureDuration, CMTimeMinimum(wanted, format.maxExposureDuration)
+        )
     }
 
     private func apply(
@@ -99,6 +124,8 @@ final class CameraController: CameraControl {
         case .locked: throw PlatformText.noManualFocus(camera)
         }
         if device.isExposureModeSupported(.continuousAutoExposure) { device.exposureMode = .continuousAutoExposure }
+        // After the format: setting the format resets the cap.
+        Self.applyExposureCap(plan.maxExposure, to: device)
         if device.isWhiteBalanceModeSupported(.continuousAutoWhiteBalance) { device.whiteBalanceMode = .continuousAutoWhiteBalance }
         // Automatic HDR off first: setting the flag itself while automatic raises an exception.
         device.automaticallyAdjustsVideoHDREnabled = plan.videoHDR
@@ -125,7 +152,8 @@ final class CameraController: CameraControl {
             height: Int(size.height),
             frameRates: format.videoSupportedFrameRateRanges.map { $0.minFrameRate...$0.maxFrameRate },
             fullRange420: CMFormatDescriptionGetMediaSubType(format.formatDescription) == PixelLayout.luma.pixelFormat,
-            fieldOfViewDegrees: format.videoFieldOfView
+            fieldOfViewDegrees: format.videoFieldOfView,
+            maxISO: format.maxISO
         )
     }
 

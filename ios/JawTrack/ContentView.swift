@@ -38,7 +38,7 @@ struct ContentView: View {
         }
         .onChange(of: state.finishedRecording) { _ in name = state.recordingName }
         .sheet(isPresented: $showingSettings, onDismiss: { controller.settingsClosed() }) {
-            SettingsView(settings: controller.settings.settings) { controller.save($0) }
+            SettingsView(settings: controller.settings.settings, readoutInUse: state.readout?.source) { controller.save($0) }
         }
         .alert(state.message?.title ?? "", isPresented: messageShown, presenting: state.message) { _ in
             Button("OK", role: .cancel) {}

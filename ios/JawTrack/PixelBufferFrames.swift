@@ -1,6 +1,7 @@
 // Adapts AVCaptureVideoDataOutput's CMSampleBuffers to JawTrackKit's CameraFrame: the pixels in
 // place while the CVPixelBuffer is locked (plane 0 of 420f as luma, or BGRA), the presentation
-// time, the EXIF exposure time, the intrinsic matrix attachment and the sample buffer itself.
+// time, the EXIF exposure time and ISO, the intrinsic matrix attachment and the sample buffer
+// itself.
 import AVFoundation
 import ImageIO
 import JawTrackKit
@@ -29,6 +30,7 @@ final class PixelBufferFrames: NSObject, AVCaptureVideoDataOutputSampleBufferDel
             ),
             time: CMSampleBufferGetPresentationTimeStamp(sampleBuffer).seconds,
             exposure: exif?[kCGImagePropertyExifExposureTime as String] as? Double,
+            iso: (exif?[kCGImagePropertyExifISOSpeedRatings as String] as? [NSNumber])?.first?.doubleValue,
             cameraMatrix: CameraPlanner.cameraMatrix(fromAttachment: CMGetAttachment(
                 sampleBuffer, key: kCMSampleBufferAttachmentKey_CameraIntrinsicMatrix, attachmentModeOut: nil
             ) as? Data),

@@ -11,10 +11,13 @@ struct SettingsView: View {
     @State private var form: SettingsForm
     @State private var scanning = false
     @State private var saveError: String?
+    private let readoutInUse: String?
     private let onSave: (AppSettings) -> String?
 
-    init(settings: AppSettings, onSave: @escaping (AppSettings) -> String?) {
+    /// `readoutInUse`: where the tracker's readout comes from now (`ScreenState.readout`).
+    init(settings: AppSettings, readoutInUse: String?, onSave: @escaping (AppSettings) -> String?) {
         _form = State(initialValue: SettingsForm(settings))
+        self.readoutInUse = readoutInUse
         self.onSave = onSave
     }
 
@@ -30,6 +33,18 @@ struct SettingsView: View {
                     if form.showsLensPosition { slider("Lens", $form.draft.lensPosition, SettingsForm.lensPosition) }
                     Toggle("Lock exposure and white balance", isOn: $form.draft.exposureLocked)
                     Toggle("BGRA frames (converted, slower)", isOn: $form.draft.bgra)
+                }
+                Section {
+                    picker("Exposure limit", $form.draft.maxExposureS, SettingsForm.exposureLimits)
+                    TextField("Calibrated readout (ms)", text: $form.readoutText).keyboardType(.decimalPad)
+                } header: {
+                    Text("Motion")
+                } footer: {
+                    VStack(alignment: .leading, spacing: 4) {
+                        Text(SettingsForm.exposureLimitNote)
+                        Text(SettingsForm.readoutNote)
+                        if let readoutInUse { Text("In use: \(readoutInUse)") }
+                    }
                 }
                 Section("Detector") {
                     picker("Decimation", $form.draft.tracker.decimate, SettingsForm.decimations)

@@ -85,6 +85,7 @@ fn main() {
                     *w,
                     &k,
                     i as f64 / 30.0,
+                    0.002,
                     std::ptr::null_mut(),
                 )
             };

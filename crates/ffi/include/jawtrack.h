@@ -40,6 +40,8 @@ typedef struct JtSettings {
   bool region_search;
   // Smooth the jaw pose.
   bool smooth;
+  // The camera's rolling-shutter readout, first row to last (s; 0: global shutter).
+  double readout_s;
 } JtSettings;
 
 // Camera intrinsics in pixels of the frame (pixel centres at integer coordinates).
@@ -111,7 +113,8 @@ enum JtStatus jt_tracker_free(uint64_t handle);
 
 // Tracks a frame from its luma (Y) plane, read in place: `height` rows of `width` bytes,
 // `bytes_per_row` apart, in a buffer of `buffer_len` bytes (e.g. plane 0 of a 420f
-// `CVPixelBuffer`, inside `CVPixelBufferLockBaseAddress`). `t` is the frame's time (s).
+// `CVPixelBuffer`, inside `CVPixelBufferLockBaseAddress`). `t` is the frame's time (s) and
+// `exposure_s` its exposure (s; 0 when the camera did not say), recorded with the frame.
 // `summary_out` may be null.
 //
 // # Safety
@@ -126,6 +129,7 @@ enum JtStatus jt_track_luma(uint64_t handle,
                             uint32_t bytes_per_row,
                             const struct JtIntrinsics *intrinsics,
                             double t,
+                            double exposure_s,
                             struct JtFrameSummary *summary_out);
 
 // Tracks a BGRA frame (`kCVPixelFormatType_32BGRA`): the luma is computed into the
@@ -141,6 +145,7 @@ enum JtStatus jt_track_bgra(uint64_t handle,
                             uint32_t bytes_per_row,
                             const struct JtIntrinsics *intrinsics,
                             double t,
+                            double exposure_s,
                             struct JtFrameSummary *summary_out);
 
 // Copies the message of the calling thread's last failure (empty after a success) into

@@ -73,6 +73,8 @@ pub struct JtSettings {
     pub region_search: bool,
     /// Smooth the jaw pose.
     pub smooth: bool,
+    /// The camera's rolling-shutter readout, first row to last (s; 0: global shutter).
+    pub readout_s: f64,
 }
 
 /// One body's pose in a [`JtFrameSummary`].
@@ -188,6 +190,7 @@ pub extern "C" fn jt_settings_default() -> JtSettings {
         linear_edges: s.linear_edges,
         region_search: s.region_search,
         smooth: s.smooth,
+        readout_s: s.readout_s,
     }
 }
 
@@ -219,6 +222,7 @@ pub unsafe extern "C" fn jt_tracker_new(
             linear_edges: s.linear_edges,
             region_search: s.region_search,
             smooth: s.smooth,
+            readout_s: s.readout_s,
         };
         let marker = if marker_json.is_null() {
             Marker::default()
@@ -304,7 +308,8 @@ unsafe fn track_with(
     intrinsics: *const JtIntrinsics,
     summary_out: *mut JtFrameSummary,
     t: f64,
-    run: impl FnOnce(&mut Engine, &Intrinsics) -> Result<crate::FrameResult, (JtStatus, String)>,
+    exposure_s: f64,
+    run: impl FnOnce(&mut Engine, &Intrinsics, Option<f64>) -> Result<crate::FrameResult, (JtStatus, String)>,
 ) -> JtStatus {
     guarded(|| {
         let tracked = (|| {
@@ -317,8 +322,10 @@ unsafe fn track_with(
             if !t.is_finite() {
                 return Err(invalid(format!("t = {t} is not a time")));
             }
+            // 0 says the camera did not tell; anything else must be an exposure.
+            let exposure = (exposure_s != 0.0).then_some(exposure_s);
             let engine = engine(handle)?;
-            let result = run(&mut lock(&engine), &intrinsics)?;
+            let result = run(&mut lock(&engine), &intrinsics, exposure)?;
             Ok(result)
         })();
         let result = match tracked {
@@ -342,7 +349,8 @@ unsafe fn track_with(
 
 /// Tracks a frame from its luma (Y) plane, read in place: `height` rows of `width` bytes,
 /// `bytes_per_row` apart, in a buffer of `buffer_len` bytes (e.g. plane 0 of a 420f
-/// `CVPixelBuffer`, inside `CVPixelBufferLockBaseAddress`). `t` is the frame's time (s).
+/// `CVPixelBuffer`, inside `CVPixelBufferLockBaseAddress`). `t` is the frame's time (s) and
+/// `exposure_s` its exposure (s; 0 when the camera did not say), recorded with the frame.
 /// `summary_out` may be null.
 ///
 /// # Safety
@@ -359,11 +367,12 @@ pub unsafe extern "C" fn jt_track_luma(
     bytes_per_row: u32,
     intrinsics: *const JtIntrinsics,
     t: f64,
+    exposure_s: f64,
     summary_out: *mut JtFrameSummary,
 ) -> JtStatus {
     // SAFETY: the caller's promises are forwarded.
     unsafe {
-        track_with(handle, intrinsics, summary_out, t, |engine, intrinsics| {
+        track_with(handle, intrinsics, summary_out, t, exposure_s, |engine, intrinsics, exposure| {
             if luma.is_null() {
                 return Err((JtStatus::NullPointer, "luma is null".into()));
             }
@@ -372,7 +381,7 @@ pub unsafe extern "C" fn jt_track_luma(
             let data = std::slice::from_raw_parts(luma, buffer_len);
             let view = ImageView::new(data, width as usize, height as usize, bytes_per_row as usize)
                 .map_err(JawTrackError::from)?;
-            Ok(engine.track(&view, intrinsics, t)?)
+            Ok(engine.track(&view, intrinsics, t, exposure)?)
         })
     }
 }
@@ -392,11 +401,12 @@ pub unsafe extern "C" fn jt_track_bgra(
     bytes_per_row: u32,
     intrinsics: *const JtIntrinsics,
     t: f64,
+    exposure_s: f64,
     summary_out: *mut JtFrameSummary,
 ) -> JtStatus {
     // SAFETY: the caller's promises are forwarded.
     unsafe {
-        track_with(handle, intrinsics, summary_out, t, |engine, intrinsics| {
+        track_with(handle, intrinsics, summary_out, t, exposure_s, |engine, intrinsics, exposure| {
             if bgra.is_null() {
                 return Err((JtStatus::NullPointer, "bgra is null".into()));
             }
@@ -408,7 +418,7 @@ pub unsafe extern "C" fn jt_track_bgra(
             let result = luma_from_bgra_into(data, w, h, stride, &mut luma)
                 .and_then(|()| ImageView::new(&luma, w, h, w))
                 .map_err(JawTrackError::from)
-                .and_then(|view| engine.track(&view, intrinsics, t))
+                .and_then(|view| engine.track(&view, intrinsics, t, exposure))
                 .map_err(Into::into);
             engine.luma = luma;
             result

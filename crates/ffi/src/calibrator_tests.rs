@@ -312,7 +312,7 @@ fn a_trackers_frames_feed_the_calibrator() {
     for (i, p) in paths.iter().enumerate() {
         let img = image::open(p).expect("frame").to_luma8();
         let (w, h) = img.dimensions();
-        tracker.track_luma(img.into_raw(), w, h, w, intrinsics, i as f64 / 30.0).expect("tracked");
+        tracker.track_luma(img.into_raw(), w, h, w, intrinsics, i as f64 / 30.0, None).expect("tracked");
         let progress = cal.add_view(&tracker);
         counts.push((progress.bodies[0].views, progress.bodies[1].views));
     }
@@ -322,6 +322,6 @@ fn a_trackers_frames_feed_the_calibrator() {
     assert!(counts.windows(2).all(|w| w[1].1 >= w[0].1), "{counts:?}");
     assert!(counts[4].1 >= 3, "{counts:?}");
     // A frame that fails leaves nothing to add twice.
-    assert!(tracker.track_luma(vec![0; 10], 4, 4, 4, intrinsics, 1.0).is_err());
+    assert!(tracker.track_luma(vec![0; 10], 4, 4, 4, intrinsics, 1.0, None).is_err());
     assert!(cal.add_view(&tracker).note.contains("no frame to add"));
 }

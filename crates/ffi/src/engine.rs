@@ -75,6 +75,8 @@ pub struct FrameResult {
     pub frame: u64,
     /// The frame's time (s), as given.
     pub t: f64,
+    /// How long the sensor exposed the frame (s), when the camera said; recorded with it.
+    pub exposure_s: Option<f64>,
     /// The upper jaw's marker, if solved.
     pub maxilla: Option<BodyPose>,
     /// The lower jaw's marker, if solved.
@@ -198,11 +200,17 @@ impl Engine {
         view: &ImageView<'_>,
         intrinsics: &Intrinsics,
         t: f64,
+        exposure_s: Option<f64>,
     ) -> Result<FrameResult, JawTrackError> {
         // A frame that fails leaves no view: a calibration must not take the one before twice.
         self.view = None;
         if !t.is_finite() {
             return Err(JawTrackError::frame(format!("frame time {t} is not a number")));
+        }
+        if let Some(e) = exposure_s.filter(|e| !(e.is_finite() && *e > 0.0 && *e < 1.0)) {
+            return Err(JawTrackError::frame(format!(
+                "exposure {e} s is not an exposure time: give the frame's exposure in seconds (0–1 s), or none"
+            )));
         }
         let camera = intrinsics.camera()?;
         let r = self.tracker.track(view, &camera, t)?;
@@ -252,6 +260,7 @@ impl Engine {
         let result = FrameResult {
             frame: self.frame,
             t,
+            exposure_s,
             maxilla: r.maxilla.as_ref().map(body),
             mandible: r.mandible.as_ref().map(body),
             maxilla_from_mandible: r.maxilla_from_mandible.map(|p| p.to_row_major().to_vec()),
@@ -313,7 +322,7 @@ pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
         session: None,
         path: None,
         t: r.t,
-        exposure_s: None,
+        exposure_s: r.exposure_s,
         maxilla: body(&r.maxilla, "camera_from_maxilla")?,
         mandible: body(&r.mandible, "camera_from_mandible")?,
         maxilla_from_mandible: r

@@ -21,6 +21,7 @@
 
 pub mod c_api;
 mod calibrator;
+mod capture;
 mod engine;
 mod error;
 mod settings;
@@ -29,6 +30,7 @@ pub use calibrator::{
     BodyCalibrationResult, BodyViews, CalibrationProgress, Calibrator, MarkerCalibrationResult, TagCalibrationResult,
     TagViews, ViewOutcome,
 };
+pub use capture::{ReadoutChoice, next_exposure_cap, readout_for};
 pub use engine::{
     AxisOverlay, BodyPose, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
 };
@@ -124,7 +126,9 @@ impl Tracker {
     }
 
     /// Tracks a luma frame passed by value. It copies the frame (uniffi does): the app uses
-    /// the C entry points instead; this is for tests and tools.
+    /// the C entry points instead; this is for tests and tools. `exposure_s`, the frame's
+    /// exposure when known, is recorded with it.
+    #[allow(clippy::too_many_arguments)]
     pub fn track_luma(
         &self,
         luma: Vec<u8>,
@@ -133,10 +137,11 @@ impl Tracker {
         bytes_per_row: u32,
         intrinsics: Intrinsics,
         t: f64,
+        exposure_s: Option<f64>,
     ) -> Result<FrameResult, JawTrackError> {
         let mut engine = lock(&self.engine);
         match ImageView::new(&luma, width as usize, height as usize, bytes_per_row as usize) {
-            Ok(view) => engine.track(&view, &intrinsics, t),
+            Ok(view) => engine.track(&view, &intrinsics, t, exposure_s),
             Err(e) => {
                 // A frame refused leaves no view for a calibration to take.
                 engine.view = None;
@@ -181,6 +186,9 @@ pub struct RecordingInfo {
     pub settings_json: Option<String>,
     /// The pairing key's id when streaming (never the key).
     pub key_id: Option<String>,
+    /// The camera's rolling-shutter readout the tracker was told (s), so that `jawtrack track`
+    /// re-tracks the session's video the same way.
+    pub readout_s: Option<f64>,
 }
 
 /// Writes a session as JSON Lines in the schema of `jawtrack track`: a header line, then one
@@ -211,6 +219,10 @@ impl Recorder {
             None => serde_json::Value::Null,
         };
         header.key_id = info.key_id;
+        if let Some(r) = info.readout_s {
+            capture::check_readout(r, "readout_s")?;
+        }
+        header.readout_s = info.readout_s;
         let writer = RecordingWriter::create(std::path::Path::new(&path), header, Overwrite::Refuse)?;
         Ok(Arc::new(Recorder { writer: Mutex::new(Some(writer)), frames: Mutex::new(0), path }))
     }

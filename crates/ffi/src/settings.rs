@@ -3,6 +3,7 @@
 //! what is valid is decided here.
 
 use crate::JawTrackError;
+use crate::capture::check_readout;
 use jawtrack_apriltag::DetectorConfig;
 use jawtrack_tracker::{SearchConfig, SmootherConfig, TrackerConfig};
 
@@ -26,6 +27,10 @@ pub struct Settings {
     pub region_search: bool,
     /// Smooth the jaw pose (One-Euro filter).
     pub smooth: bool,
+    /// The camera's rolling-shutter readout, first row to last (s; 0: solve each frame as one
+    /// instant): both jaws are then solved at the time of the frame's centre row. The app takes
+    /// it from [`crate::readout_for`].
+    pub readout_s: f64,
 }
 
 /// The tracker's defaults: those of `jawtrack track`.
@@ -40,6 +45,7 @@ pub fn default_settings() -> Settings {
         linear_edges: true,
         region_search: true,
         smooth: false,
+        readout_s: 0.0,
     }
 }
 
@@ -67,7 +73,7 @@ impl Settings {
         if !(1..=8).contains(&self.threads) {
             return Err(JawTrackError::setting("threads", format!("threads must be within 1–8, got {}", self.threads)));
         }
-        Ok(())
+        check_readout(self.readout_s, "readout_s")
     }
 
     pub(crate) fn tracker_config(&self) -> Result<TrackerConfig, JawTrackError> {
@@ -83,6 +89,7 @@ impl Settings {
             },
             search: SearchConfig { roi: self.region_search, ..SearchConfig::default() },
             smoother: self.smooth.then(SmootherConfig::default),
+            readout_s: self.readout_s,
             ..TrackerConfig::default()
         })
     }
@@ -134,6 +141,13 @@ pub struct AppSettings {
     pub lens_position: f32,
     /// Lock the exposure once set.
     pub exposure_locked: bool,
+    /// The longest exposure automatic exposure may choose (s; 0: no limit), lifted up to 4×
+    /// only when the room is too dark ([`crate::next_exposure_cap`]): 2 ms by default, so a
+    /// chewing jaw does not smear.
+    pub max_exposure_s: f64,
+    /// The readout measured with `jawtrack calibrate-camera` (s), used instead of the device
+    /// table's figure.
+    pub calibrated_readout_s: Option<f64>,
     /// Capture BGRA instead of passing the luma plane (costs a conversion per frame).
     pub bgra: bool,
     /// The tracker.
@@ -158,6 +172,8 @@ pub fn default_app_settings() -> AppSettings {
         focus: FocusMode::Auto,
         lens_position: 0.5,
         exposure_locked: false,
+        max_exposure_s: 0.002,
+        calibrated_readout_s: None,
         bgra: false,
         tracker: default_settings(),
         receiver_host: String::new(),
@@ -180,6 +196,15 @@ pub fn validate_app_settings(settings: AppSettings, streaming: bool) -> Result<(
             "lens_position",
             format!("lens position must be within 0–1, got {}", s.lens_position),
         ));
+    }
+    if !(s.max_exposure_s == 0.0 || (0.0005..=0.0334).contains(&s.max_exposure_s)) {
+        return Err(JawTrackError::setting(
+            "max_exposure_s",
+            format!("exposure limit must be 0 (none) or within 0.5–33.4 ms, got {} ms", s.max_exposure_s * 1e3),
+        ));
+    }
+    if let Some(r) = s.calibrated_readout_s {
+        check_readout(r, "calibrated_readout_s")?;
     }
     s.tracker.validate()?;
     if streaming {
@@ -228,6 +253,11 @@ mod tests {
         bad(&|s| s.tracker.quad_sigma = 0.9, false, "quad sigma");
         bad(&|s| s.tracker.max_hamming = 3, false, "max hamming");
         bad(&|s| s.tracker.threads = 0, false, "threads");
+        bad(&|s| s.tracker.readout_s = 0.2, false, "readout must be within 0–100 ms");
+        bad(&|s| s.tracker.readout_s = f64::NAN, false, "readout must be");
+        bad(&|s| s.calibrated_readout_s = Some(-0.001), false, "calibrated readout must be");
+        bad(&|s| s.max_exposure_s = 0.0001, false, "exposure limit");
+        bad(&|s| s.max_exposure_s = f64::INFINITY, false, "exposure limit");
         bad(&|_| {}, true, "receiver host");
         bad(&|s| s.receiver_host = "10.0.0.2".into(), true, "pairing key");
         let mut ok = default_app_settings();

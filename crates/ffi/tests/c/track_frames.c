@@ -71,7 +71,7 @@ int main(int argc, char **argv) {
       return 2;
     }
     JtFrameSummary s;
-    JtStatus st = jt_track_luma(tracker, frame, (size_t)stride * h, w, h, stride, &k, (i - 5) / 30.0, &s);
+    JtStatus st = jt_track_luma(tracker, frame, (size_t)stride * h, w, h, stride, &k, (i - 5) / 30.0, 0.002, &s);
     CHECK(st == JT_STATUS_OK, "frame %d: status %d", i - 5, (int)st);
     printf("{\"frame\": %llu, \"maxilla_from_mandible\": ", (unsigned long long)s.frame);
     if (s.has_maxilla_from_mandible) {
@@ -86,25 +86,29 @@ int main(int argc, char **argv) {
 
   /* Misuse: every call returns an error code and a message. */
   size_t len = (size_t)stride * h;
-  expect_error(jt_track_luma(tracker, NULL, len, w, h, stride, &k, 0.0, NULL), JT_STATUS_NULL_POINTER, "null frame", "luma");
-  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, NULL, 0.0, NULL), JT_STATUS_NULL_POINTER, "null intrinsics", "intrinsics");
-  expect_error(jt_track_luma(tracker, frame, len, w, h, w - 1, &k, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "stride < width", "bytes_per_row");
-  expect_error(jt_track_luma(tracker, frame, len / 2, w, h, stride, &k, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "short buffer", "needs");
-  expect_error(jt_track_luma(tracker, frame, len, 0, h, stride, &k, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "zero width", "empty");
+  expect_error(jt_track_luma(tracker, NULL, len, w, h, stride, &k, 0.0, 0.0, NULL), JT_STATUS_NULL_POINTER, "null frame", "luma");
+  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, NULL, 0.0, 0.0, NULL), JT_STATUS_NULL_POINTER, "null intrinsics", "intrinsics");
+  expect_error(jt_track_luma(tracker, frame, len, w, h, w - 1, &k, 0.0, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "stride < width", "bytes_per_row");
+  expect_error(jt_track_luma(tracker, frame, len / 2, w, h, stride, &k, 0.0, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "short buffer", "needs");
+  expect_error(jt_track_luma(tracker, frame, len, 0, h, stride, &k, 0.0, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "zero width", "empty");
   JtIntrinsics bad = k;
   bad.fx = -1.0;
-  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, &bad, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "negative focal length", "intrinsics");
-  expect_error(jt_track_bgra(tracker, frame, len, w, h, stride, &k, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "BGRA rows too short", "bytes_per_row");
+  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, &bad, 0.0, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "negative focal length", "intrinsics");
+  expect_error(jt_track_bgra(tracker, frame, len, w, h, stride, &k, 0.0, 0.0, NULL), JT_STATUS_INVALID_ARGUMENT, "BGRA rows too short", "bytes_per_row");
+  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, &k, 0.0, -0.002, NULL), JT_STATUS_INVALID_ARGUMENT, "negative exposure", "exposure");
   JtSettings wrong = settings;
   wrong.decimate = 2.5f;
   uint64_t other = 0;
   expect_error(jt_tracker_new(&wrong, NULL, &other), JT_STATUS_INVALID_ARGUMENT, "bad decimation", "decimation");
+  JtSettings slow = settings;
+  slow.readout_s = 0.5;
+  expect_error(jt_tracker_new(&slow, NULL, &other), JT_STATUS_INVALID_ARGUMENT, "readout of half a second", "readout");
   expect_error(jt_tracker_new(NULL, "{\"version\": 9}", &other), JT_STATUS_INVALID_ARGUMENT, "bad marker file", "marker");
   expect_error(jt_tracker_new(NULL, NULL, NULL), JT_STATUS_NULL_POINTER, "null handle_out", "handle_out");
   CHECK(jt_tracker_free(tracker) == JT_STATUS_OK, "free");
-  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, &k, 0.0, NULL), JT_STATUS_NO_SUCH_TRACKER, "freed handle", "no tracker");
+  expect_error(jt_track_luma(tracker, frame, len, w, h, stride, &k, 0.0, 0.0, NULL), JT_STATUS_NO_SUCH_TRACKER, "freed handle", "no tracker");
   expect_error(jt_tracker_free(tracker), JT_STATUS_NO_SUCH_TRACKER, "double free", "no tracker");
-  expect_error(jt_track_luma(987654321, frame, len, w, h, stride, &k, 0.0, NULL), JT_STATUS_NO_SUCH_TRACKER, "made-up handle", "no tracker");
+  expect_error(jt_track_luma(987654321, frame, len, w, h, stride, &k, 0.0, 0.0, NULL), JT_STATUS_NO_SUCH_TRACKER, "made-up handle", "no tracker");
   char tiny[8];
   size_t full = jt_last_error(tiny, sizeof tiny);
   CHECK(full > sizeof tiny && strlen(tiny) == sizeof tiny - 1, "jt_last_error cuts to fit (%zu, '%s')", full, tiny);

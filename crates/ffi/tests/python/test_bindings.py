@@ -35,7 +35,7 @@ class Bindings(unittest.TestCase):
     def track_all(self, tracker):
         results = []
         for i, (w, h, pixels) in enumerate(frames()):
-            results.append(tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0))
+            results.append(tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0, 0.002))
         return results
 
     def test_tracker_gives_the_rust_poses_and_the_overlay(self):
@@ -66,14 +66,14 @@ class Bindings(unittest.TestCase):
         w, h, pixels = frames()[0]
         # A tenth of a second is not a held bite.
         for i in range(8):
-            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 60.0)
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 60.0, None)
         with self.assertRaises(jawtrack.JawTrackError.NotEnoughFrames) as e:
             tracker.calibrate_intercuspation()
         self.assertIn("hold the bite a moment longer", e.exception.message)
         tracker.reset()
         # A jaw opening (the hinge frames one after another) is refused, naming the spread.
         for i, (w, h, px) in enumerate(frames()[:4] * 3):
-            tracker.track_luma(px, w, h, w, INTRINSICS, i / 30.0)
+            tracker.track_luma(px, w, h, w, INTRINSICS, i / 30.0, None)
         with self.assertRaises(jawtrack.JawTrackError.JawMoving) as e:
             tracker.calibrate_intercuspation()
         self.assertGreater(e.exception.spread_mm, 0.3)
@@ -81,12 +81,12 @@ class Bindings(unittest.TestCase):
         tracker.reset()
         # Held still for 0.4 s.
         for i in range(13):
-            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0)
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0, None)
         cal = tracker.calibrate_intercuspation()
         self.assertEqual(cal.frames, 13)
         self.assertAlmostEqual(cal.span_s, 0.4, places=9)
         self.assertLess(cal.spread_mm, 0.05, "the same frame thirteen times")
-        after = tracker.track_luma(pixels, w, h, w, INTRINSICS, 13 / 30.0)
+        after = tracker.track_luma(pixels, w, h, w, INTRINSICS, 13 / 30.0, None)
         scan = after.maxilla_scan_from_mandible_scan
         self.assertIsNotNone(scan, "the step sets the registration")
         # The bite just calibrated reads as the scanned intercuspal position (identity).
@@ -94,7 +94,7 @@ class Bindings(unittest.TestCase):
         # The rest goes into the recording.
         path = OUT / "bite.jsonl"
         info = jawtrack.RecordingInfo(device="test", intrinsics=INTRINSICS, marker_json=None, settings_json=None,
-                                      key_id=None)
+                                      key_id=None, readout_s=None)
         rec = jawtrack.Recorder.open(str(path), info)
         rec.append(after)
         rec.append_bite(cal)
@@ -119,7 +119,7 @@ class Bindings(unittest.TestCase):
         self.assertIn("no frame to add", cal.add_view(tracker).note)
         progress = []
         for i, (w, h, pixels) in enumerate(frames()):
-            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0)
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0, None)
             progress.append(cal.add_view(tracker))
         first, last = progress[0], progress[-1]
         self.assertTrue(first.added)
@@ -181,7 +181,7 @@ class Bindings(unittest.TestCase):
         # The file tracks.
         calibrated = jawtrack.Tracker(jawtrack.default_settings(), path.read_text())
         w, h, pixels = frames()[0]
-        self.assertIsNotNone(calibrated.track_luma(pixels, w, h, w, INTRINSICS, 0.0).maxilla_from_mandible)
+        self.assertIsNotNone(calibrated.track_luma(pixels, w, h, w, INTRINSICS, 0.0, None).maxilla_from_mandible)
         # Never replaced without being asked.
         before = path.read_text()
         with self.assertRaises(jawtrack.JawTrackError.Io) as e:
@@ -219,14 +219,20 @@ class Bindings(unittest.TestCase):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
         w, h, pixels = frames()[0]
         with self.assertRaises(jawtrack.JawTrackError.InvalidFrame) as e:
-            tracker.track_luma(pixels[: len(pixels) // 2], w, h, w, INTRINSICS, 0.0)
+            tracker.track_luma(pixels[: len(pixels) // 2], w, h, w, INTRINSICS, 0.0, None)
         self.assertIn("needs", e.exception.message)
         with self.assertRaises(jawtrack.JawTrackError.InvalidFrame):
-            tracker.track_luma(pixels, w, h, w - 1, INTRINSICS, 0.0)
+            tracker.track_luma(pixels, w, h, w - 1, INTRINSICS, 0.0, None)
         broken = jawtrack.Intrinsics(fx=-1.0, fy=1500.0, cx=959.5, cy=539.5, k1=0.0, k2=0.0)
         with self.assertRaises(jawtrack.JawTrackError.InvalidIntrinsics) as e:
-            tracker.track_luma(pixels, w, h, w, broken, 0.0)
+            tracker.track_luma(pixels, w, h, w, broken, 0.0, None)
         self.assertEqual(e.exception.message.count("intrinsics"), 1, "said once")
+        with self.assertRaises(jawtrack.JawTrackError.InvalidFrame) as e:
+            tracker.track_luma(pixels, w, h, w, INTRINSICS, 0.0, -0.002)
+        self.assertIn("exposure", e.exception.message)
+        choice = jawtrack.readout_for("iPhone16,2", jawtrack.Camera.BACK_WIDE, None)
+        self.assertTrue(choice.known)
+        self.assertAlmostEqual(choice.readout_s, 0.0051)
         with self.assertRaises(jawtrack.JawTrackError.InvalidSetting):
             tracker.update_settings(bad)
         settings = jawtrack.default_app_settings()
@@ -253,7 +259,7 @@ class Bindings(unittest.TestCase):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
         path = OUT / "session.jsonl"
         info = jawtrack.RecordingInfo(device="test", intrinsics=INTRINSICS, marker_json=tracker.marker_json(),
-                                      settings_json='{"fps": 30}', key_id=None)
+                                      settings_json='{"fps": 30}', key_id=None, readout_s=0.0051)
         rec = jawtrack.Recorder.open(str(path), info)
         results = self.track_all(tracker)
         for r in results:
@@ -266,8 +272,10 @@ class Bindings(unittest.TestCase):
         lines = [json.loads(l) for l in path.read_text().splitlines()]
         self.assertEqual(lines[0]["recording"]["source"], "JawTrack iOS")
         self.assertEqual(lines[0]["recording"]["settings"], {"fps": 30})
+        self.assertEqual(lines[0]["recording"]["readout_s"], 0.0051)
         for line, r in zip(lines[1:], results):
             self.assertEqual(line["frame"], r.frame)
+            self.assertEqual(line["exposure_s"], 0.002)
             got = line["maxilla_from_mandible"]
             self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in zip(got, r.maxilla_from_mandible)))
             self.assertEqual(len(line["maxilla"]["cov"]), 36)

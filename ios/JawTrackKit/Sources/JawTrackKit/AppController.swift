@@ -15,6 +15,9 @@ public protocol CameraControl: FrameSource {
     func start()
     /// Locks exposure and white balance where they are now; `onProblem` gets what could not be done.
     func lockExposureAndWhiteBalance(onProblem: @escaping (String) -> Void)
+    /// Caps the exposure automatic exposure may choose (s; nil: the camera's own limit), within
+    /// what the format allows.
+    func limitExposure(to seconds: Double?)
     func stop()
 }
 
@@ -42,6 +45,9 @@ public struct ScreenState {
     public var finishedRecording: RecordingFiles?
     /// The name field's starting text.
     public var recordingName = ""
+    /// The rolling-shutter readout the tracker is told and where it comes from (nil until the
+    /// camera is configured).
+    public var readout: ReadoutChoice?
 
     /// The status bar at `now`.
     public func statusBar(now: Double) -> StatusBar {
@@ -81,6 +87,8 @@ public final class AppController {
     /// earlier session must not fire in a later one (whose settings may not want it).
     private var cameraGeneration = 0
     private var tracker: Tracker?
+    /// The camera as last configured: its model and lens key the readout table.
+    private var configuration: CaptureConfiguration?
     private var linkKeyId: String?
     private var started = false
     private var cameraReady = false
@@ -176,7 +184,7 @@ public final class AppController {
     private func startCamera() {
         if tracker == nil {
             do {
-                let newTracker = try Tracker(settings: settings.settings.tracker, markerJson: try markerJSON())
+                let newTracker = try Tracker(settings: trackerSettings(settings.settings), markerJson: try markerJSON())
                 tracker = newTracker
                 pipeline.use(tracker: newTracker)
             } catch {
@@ -194,6 +202,8 @@ public final class AppController {
     private func cameraConfigured(_ result: Result<(CaptureConfiguration, VideoSinkFactory?), Error>) {
         switch result {
         case .success(let (configuration, makeVideo)):
+            self.configuration = configuration
+            updateTrackerSettings(settings.settings)
             pipeline.use(camera: configuration, makeVideo: makeVideo)
             cameraReady = true
             state.configurationID += 1
@@ -228,9 +238,42 @@ public final class AppController {
     /// tracking uses it from the next frame. The bite registration belongs to the old marker
     /// and goes with it.
     private func reloadMarker() throws {
-        let newTracker = try Tracker(settings: settings.settings.tracker, markerJson: try markerJSON())
+        let newTracker = try Tracker(settings: trackerSettings(settings.settings), markerJson: try markerJSON())
         tracker = newTracker
         pipeline.use(tracker: newTracker)
+    }
+
+    /// The tracker's settings with the readout of the camera as configured (a calibrated value
+    /// in the settings, else the device table's, else none; the library decides), and the
+    /// choice shown. Before the camera is configured there is no model yet: readout 0.
+    private func trackerSettings(_ app: AppSettings) -> Settings {
+        var tracker = app.tracker
+        tracker.readoutS = 0
+        guard let configuration else {
+            return tracker
+        }
+        do {
+            let choice = try readoutFor(
+                model: configuration.model, camera: configuration.camera, calibratedReadoutS: app.calibratedReadoutS
+            )
+            tracker.readoutS = choice.readoutS
+            state.readout = choice
+        } catch {
+            state.readout = nil
+            state.message = UserMessage(title: "Settings", text: userText(error))
+        }
+        return tracker
+    }
+
+    /// Hands the tracker `app`'s settings with the camera's readout.
+    private func updateTrackerSettings(_ app: AppSettings) {
+        pipeline.update(trackerSettings: trackerSettings(app)) { [weak self] error in
+            guard let error else {
+                return
+            }
+            let text = userText(error)
+            self?.deliver { self?.state.message = UserMessage(title: "Tracker", text: text) }
+        }
     }
 
     /// A calibrated marker file in Documents as `marker.json`: saved by the marker calibration,
@@ -274,6 +317,9 @@ public final class AppController {
         if let progress = report.calibration {
             markerCalibration.show(progress)
         }
+        if let cap = report.exposureCap {
+            camera.limitExposure(to: cap)
+        }
     }
 
     // MARK: Settings
@@ -285,13 +331,7 @@ public final class AppController {
         } catch {
             return userText(error)
         }
-        pipeline.update(trackerSettings: new.tracker) { [weak self] error in
-            guard let error else {
-                return
-            }
-            let text = userText(error)
-            self?.deliver { self?.state.message = UserMessage(title: "Tracker", text: text) }
-        }
+        updateTrackerSettings(new)
         if state.isTransmitting {
             setTransmitting(false)
             setTransmitting(true)

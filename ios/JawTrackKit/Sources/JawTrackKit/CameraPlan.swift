@@ -13,13 +13,19 @@ public struct CameraFormatInfo: Equatable {
     public let fullRange420: Bool
     /// Horizontal field of view (°).
     public let fieldOfViewDegrees: Float
+    /// The highest sensor gain (ISO) the format reaches; 0 when not known.
+    public let maxISO: Float
 
-    public init(width: Int, height: Int, frameRates: [ClosedRange<Double>], fullRange420: Bool, fieldOfViewDegrees: Float) {
+    public init(
+        width: Int, height: Int, frameRates: [ClosedRange<Double>], fullRange420: Bool, fieldOfViewDegrees: Float,
+        maxISO: Float = 0
+    ) {
         self.width = width
         self.height = height
         self.frameRates = frameRates
         self.fullRange420 = fullRange420
         self.fieldOfViewDegrees = fieldOfViewDegrees
+        self.maxISO = maxISO
     }
 }
 
@@ -41,6 +47,9 @@ public struct CapturePlan: Equatable {
     /// Lock exposure and white balance this many seconds after the session starts (time for
     /// auto-exposure to settle); nil: both stay automatic.
     public let lockExposureAfter: Double?
+    /// The longest exposure automatic exposure may choose at first (s; nil: the camera's own
+    /// limit). The pipeline lifts it while the room is too dark (`nextExposureCap`).
+    public let maxExposure: Double?
     /// Video HDR and its automatic adjustment: always off (tone mapping varies frame to frame).
     public let videoHDR = false
     /// Video stabilisation: always off (it crops and warps, so the intrinsics would not hold).
@@ -61,6 +70,7 @@ public struct CapturePlan: Equatable {
         case .manual: focus = .locked(lensPosition: min(max(settings.lensPosition, 0), 1))
         }
         lockExposureAfter = settings.exposureLocked ? 1 : nil
+        maxExposure = settings.maxExposureS > 0 ? settings.maxExposureS : nil
     }
 }
 
@@ -76,8 +86,18 @@ public struct CaptureConfiguration: Equatable {
     public let deviceDescription: String
     /// Seconds between frames at the configured rate.
     public let frameDuration: Double
+    /// The hardware model (e.g. "iPhone16,2") and the camera: what the readout table is keyed by.
+    public let model: String
+    public let camera: Camera
+    /// The format's highest sensor gain (0: not known) and the exposure cap asked for (nil: none).
+    public let maxISO: Double
+    public let maxExposure: Double?
 
     public init(format: CameraFormatInfo, plan: CapturePlan, model: String, camera: Camera) {
+        self.model = model
+        self.camera = camera
+        maxISO = Double(format.maxISO)
+        maxExposure = plan.maxExposure
         referenceWidth = UInt32(clamping: format.width)
         referenceHeight = UInt32(clamping: format.height)
         estimatedMatrix = CameraPlanner.pinholeMatrix(

@@ -47,6 +47,8 @@ public struct CameraFrame {
     public let time: Double
     /// How long the sensor exposed it (s), when the camera says.
     public let exposure: Double?
+    /// The sensor's gain (ISO) for it, when the camera says.
+    public let iso: Double?
     /// The camera's intrinsic matrix for this frame (nine numbers, column-major, in pixels of
     /// the active format), when delivered.
     public let cameraMatrix: [Float]?
@@ -54,10 +56,13 @@ public struct CameraFrame {
     /// writer; nil in tests.
     public let native: AnyObject?
 
-    public init(buffer: FrameBuffer, time: Double, exposure: Double?, cameraMatrix: [Float]?, native: AnyObject? = nil) {
+    public init(
+        buffer: FrameBuffer, time: Double, exposure: Double?, iso: Double? = nil, cameraMatrix: [Float]?, native: AnyObject? = nil
+    ) {
         self.buffer = buffer
         self.time = time
         self.exposure = exposure
+        self.iso = iso
         self.cameraMatrix = cameraMatrix
         self.native = native
     }
@@ -73,8 +78,11 @@ public protocol FrameSource: AnyObject {
 /// in place, so no frame is copied on its way to the detector (the uniffi `Tracker.trackLuma`
 /// copies, which is why it is not used here). The full result is then `Tracker.lastResult()`.
 public enum FrameDoor {
-    /// Tracks `buffer` with the tracker reached by `handle`; throws the library's message.
-    public static func track(_ buffer: FrameBuffer, handle: UInt64, intrinsics: Intrinsics, time: Double) throws {
+    /// Tracks `buffer` with the tracker reached by `handle`; `exposure` (s), when the camera
+    /// said, is recorded with the frame. Throws the library's message.
+    public static func track(
+        _ buffer: FrameBuffer, handle: UInt64, intrinsics: Intrinsics, time: Double, exposure: Double?
+    ) throws {
         var camera = JtIntrinsics(
             fx: intrinsics.fx, fy: intrinsics.fy, cx: intrinsics.cx, cy: intrinsics.cy,
             k1: intrinsics.k1, k2: intrinsics.k2
@@ -83,12 +91,14 @@ public enum FrameDoor {
         let width = UInt32(clamping: buffer.width)
         let height = UInt32(clamping: buffer.height)
         let stride = UInt32(clamping: buffer.bytesPerRow)
+        // The library reads 0 as "not known".
+        let exposureSeconds = exposure ?? 0
         let status: JtStatus
         switch buffer.layout {
         case .luma:
-            status = jt_track_luma(handle, pixels, buffer.byteCount, width, height, stride, &camera, time, nil)
+            status = jt_track_luma(handle, pixels, buffer.byteCount, width, height, stride, &camera, time, exposureSeconds, nil)
         case .bgra:
-            status = jt_track_bgra(handle, pixels, buffer.byteCount, width, height, stride, &camera, time, nil)
+            status = jt_track_bgra(handle, pixels, buffer.byteCount, width, height, stride, &camera, time, exposureSeconds, nil)
         }
         guard status == JT_STATUS_OK else {
             throw AppError(message: lastError())

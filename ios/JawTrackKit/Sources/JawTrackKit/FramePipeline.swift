@@ -19,7 +19,13 @@ public struct FrameReport {
     public var recordingProblem: String?
     /// Where the marker calibration stands after this frame, while one collects views.
     public var calibration: CalibrationProgress?
+    /// A new exposure cap for the camera (s), when this frame's gain called for one.
+    public var exposureCap: Double?
 }
+
+/// Seconds the exposure cap is left alone after a change, for automatic exposure to settle at
+/// it before the gain is read again.
+let exposureCapSettle = 0.5
 
 /// The per-frame work, on one serial queue that owns the tracker, the recorder and the link:
 /// each frame is tracked in place (`FrameDoor`, no copy) with its own intrinsics, then its
@@ -50,6 +56,9 @@ public final class FramePipeline {
     private var lateRecordingProblem: String?
     private var lastTime: Double?
     private var dropped: UInt64 = 0
+    /// The exposure cap in force (s; nil: none) and when it last changed.
+    private var exposureCap: Double?
+    private var exposureCapChanged: Double?
 
     public init(queue: DispatchQueue = DispatchQueue(label: "org.jawtrack.frames", qos: .userInitiated)) {
         self.queue = queue
@@ -78,6 +87,8 @@ public final class FramePipeline {
             self.camera = camera
             self.makeVideo = makeVideo
             self.lastTime = nil
+            self.exposureCap = camera?.maxExposure
+            self.exposureCapChanged = nil
         }
     }
 
@@ -186,6 +197,7 @@ public final class FramePipeline {
         var report = FrameReport()
         report.exposure = frame.exposure
         report.droppedFrames = dropped
+        report.exposureCap = adjustExposureCap(frame, camera: camera)
         var intrinsics: Intrinsics?
         do {
             let resolved = try CameraPlanner.intrinsics(
@@ -194,7 +206,10 @@ public final class FramePipeline {
             )
             report.intrinsicsEstimated = resolved.estimated
             intrinsics = resolved.intrinsics
-            try FrameDoor.track(frame.buffer, handle: tracker.frameHandle(), intrinsics: resolved.intrinsics, time: frame.time)
+            try FrameDoor.track(
+                frame.buffer, handle: tracker.frameHandle(), intrinsics: resolved.intrinsics, time: frame.time,
+                exposure: frame.exposure
+            )
             report.result = tracker.lastResult()
             report.calibration = calibrator?.addView(tracker: tracker)
         } catch {
@@ -209,6 +224,24 @@ public final class FramePipeline {
             }
         }
         onReport?(report)
+    }
+
+    /// The new exposure cap when the frame's gain calls for one (the library's rule, at most one
+    /// change per `exposureCapSettle`), or nil.
+    private func adjustExposureCap(_ frame: CameraFrame, camera: CaptureConfiguration) -> Double? {
+        guard let requested = camera.maxExposure, let current = exposureCap, let iso = frame.iso else {
+            return nil
+        }
+        if let changed = exposureCapChanged, frame.time - changed < exposureCapSettle {
+            return nil
+        }
+        let next = nextExposureCap(requestedS: requested, currentS: current, iso: iso, maxIso: camera.maxISO)
+        guard next != current, next > 0 else {
+            return nil
+        }
+        exposureCap = next
+        exposureCapChanged = frame.time
+        return next
     }
 
     /// Opens a pending recording, then appends the frame (video) and its result (poses).
@@ -232,7 +265,8 @@ public final class FramePipeline {
                 intrinsics: intrinsics,
                 markerJson: tracker.markerJson(),
                 settingsJson: request.settingsJSON,
-                keyId: request.keyId
+                keyId: request.keyId,
+                readoutS: tracker.settings().readoutS
             )
             do {
                 recording = .active(try RecordingSession(request: request, info: info, makeVideo: makeVideo))

@@ -111,6 +111,9 @@ public struct StoredSettings: Codable, Equatable {
     public var focus: String
     public var lensPosition: Float
     public var exposureLocked: Bool
+    /// Optional so that settings stored before they existed still load (with the defaults).
+    public var maxExposureS: Double?
+    public var calibratedReadoutS: Double?
     public var bgra: Bool
     public var decimate: Float
     public var quadSigma: Float
@@ -130,6 +133,8 @@ public struct StoredSettings: Codable, Equatable {
         focus = settings.focus == .manual ? "manual" : "auto"
         lensPosition = settings.lensPosition
         exposureLocked = settings.exposureLocked
+        maxExposureS = settings.maxExposureS
+        calibratedReadoutS = settings.calibratedReadoutS
         bgra = settings.bgra
         decimate = settings.tracker.decimate
         quadSigma = settings.tracker.quadSigma
@@ -143,7 +148,8 @@ public struct StoredSettings: Codable, Equatable {
         recordVideo = settings.recordVideo
     }
 
-    /// These values over `base` (whose pairing key is kept); an unknown name is refused.
+    /// These values over `base` (whose pairing key is kept); an unknown name is refused. The
+    /// tracker's readout is not kept: it comes from the camera each time it is configured.
     public func applied(to base: AppSettings) throws -> AppSettings {
         guard let camera = Self.cameraNames.first(where: { $0.value == camera })?.key else {
             throw AppError(message: "unknown camera \"\(camera)\"")
@@ -156,11 +162,12 @@ public struct StoredSettings: Codable, Equatable {
         }
         let tracker = JawTrackCore.Settings(
             decimate: decimate, quadSigma: quadSigma, maxHamming: maxHamming, threads: threads,
-            linearEdges: linearEdges, regionSearch: regionSearch, smooth: smooth
+            linearEdges: linearEdges, regionSearch: regionSearch, smooth: smooth, readoutS: 0
         )
         return AppSettings(
             camera: camera, resolution: resolution, fps: fps, focus: focus, lensPosition: lensPosition,
-            exposureLocked: exposureLocked, bgra: bgra, tracker: tracker, receiverHost: receiverHost,
+            exposureLocked: exposureLocked, maxExposureS: maxExposureS ?? defaultAppSettings().maxExposureS,
+            calibratedReadoutS: calibratedReadoutS, bgra: bgra, tracker: tracker, receiverHost: receiverHost,
             receiverPort: receiverPort, pairingKey: base.pairingKey, recordVideo: recordVideo
         )
     }

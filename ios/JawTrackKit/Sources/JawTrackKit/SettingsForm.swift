@@ -44,6 +44,18 @@ public struct SettingsForm {
     public static let quadSigma = NumberRange(range: 0...0.8, step: 0.1, format: "%.1f")
     public static let maxHamming = NumberRange(range: 0...2, step: 1, format: "Max Hamming distance: %.0f")
     public static let threads = NumberRange(range: 1...8, step: 1, format: "Threads: %.0f")
+    /// Exposure caps (s): short keeps a chewing jaw sharp, long keeps a dim room's noise down.
+    public static let exposureLimits = [
+        Choice(value: 0.001, label: "1 ms"),
+        Choice(value: 0.002, label: "2 ms (sharp while chewing)"),
+        Choice(value: 0.004, label: "4 ms"),
+        Choice(value: 0.008, label: "8 ms"),
+        Choice(value: 0.0, label: "None (the camera's own)"),
+    ]
+    public static let exposureLimitNote =
+        "Automatic exposure stays at or below the limit while the room is bright enough, and may go up to 4× it in a dim room. Longer exposures smear moving tags; shorter ones are noisier."
+    public static let readoutNote =
+        "Rows are read one after another; the tracker needs how long that takes to solve both jaws at one instant. Leave empty to use the phone's published figure; enter the readout `jawtrack calibrate-camera` measured to use it instead."
 
     /// Whether the lens position control is shown.
     public var showsLensPosition: Bool { draft.focus == .manual }
@@ -68,6 +80,16 @@ public struct SettingsForm {
     public var portText: String {
         get { draft.receiverPort == 0 ? "" : String(draft.receiverPort) }
         set { draft.receiverPort = UInt32(String(newValue.filter { ("0"..."9").contains($0) }.prefix(9))) ?? 0 }
+    }
+
+    /// The calibrated readout as typed, in ms; "" for none (the phone's published figure). What
+    /// is not a number is kept as not-a-number so that the library names the problem.
+    public var readoutText: String {
+        get { draft.calibratedReadoutS.map { String(format: "%g", $0 * 1e3) } ?? "" }
+        set {
+            let typed = newValue.trimmingCharacters(in: .whitespaces).replacingOccurrences(of: ",", with: ".")
+            draft.calibratedReadoutS = typed.isEmpty ? nil : (Double(typed).map { $0 / 1e3 } ?? .nan)
+        }
     }
 
     /// A scanned QR code: the key, and the host and port when it names them.

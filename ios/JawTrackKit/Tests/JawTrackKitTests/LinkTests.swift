@@ -25,7 +25,7 @@ final class LinkTests: XCTestCase {
     private func goldenResult() -> FrameResult {
         let covariance = [Double](repeating: 0, count: 36)
         return FrameResult(
-            frame: 375, t: 12.5,
+            frame: 375, t: 12.5, exposureS: nil,
             maxilla: BodyPose(
                 cameraFromBody: pose(axisAngle: (0, 0.5, 0), translation: (-20, 10, 100)),
                 covariance: covariance, tags: [0, 1, 2], rejectedTags: [], rmsPx: 0.25

@@ -10,7 +10,7 @@ final class ScreenTests: XCTestCase {
     private var controller: AppController!
     private var documents: URL!
     private var transports: [MemoryTransport] = []
-    /// Fulfilled when the link makes its transport (on the link's queue).
+    /// Fulfilled when the link has made and started its transport (on the link's queue).
     private var transportMade: XCTestExpectation?
     private var now = 1_795_600_000.0
     /// Work the controller scheduled (delay, work), run by the test.
@@ -32,7 +32,7 @@ final class ScreenTests: XCTestCase {
             makeTransport: { [unowned self] _, _ in
                 let transport = MemoryTransport()
                 transports.append(transport)
-                transportMade?.fulfill()
+                transport.onStart = { [unowned self] in transportMade?.fulfill() }
                 return transport
             },
             clock: { [unowned self] in now },

@@ -152,6 +152,7 @@ class MemoryFrameSource: FrameSource {
         layout: PixelLayout = .luma,
         time: Double,
         exposure: Double? = 0.002,
+        iso: Double? = nil,
         cameraMatrix: [Float]?,
         truncateTo byteCount: Int? = nil,
         native: AnyObject? = nil
@@ -167,7 +168,9 @@ class MemoryFrameSource: FrameSource {
                     base: raw.baseAddress!, byteCount: byteCount ?? raw.count, width: image.width, height: image.height,
                     bytesPerRow: bytesPerRow, layout: layout
                 )
-                handler(CameraFrame(buffer: buffer, time: time, exposure: exposure, cameraMatrix: cameraMatrix, native: native))
+                handler(CameraFrame(
+                    buffer: buffer, time: time, exposure: exposure, iso: iso, cameraMatrix: cameraMatrix, native: native
+                ))
             }
         }
     }
@@ -208,6 +211,12 @@ final class FakeCamera: MemoryFrameSource, CameraControl {
         }
     }
 
+    var exposureCaps: [Double?] = []
+
+    func limitExposure(to seconds: Double?) {
+        exposureCaps.append(seconds)
+    }
+
     func stop() {
         stops += 1
     }
@@ -246,6 +255,9 @@ final class MemoryTransport: DatagramTransport {
     private(set) var queue: DispatchQueue?
     private var stateHandler: ((TransportState) -> Void)?
     private var receivedHandler: ((Result<Data, AppError>) -> Void)?
+    /// Called once the link has started the transport (its queue known): only then can a test
+    /// change the connection's state.
+    var onStart: (() -> Void)?
 
     func start(
         on queue: DispatchQueue,
@@ -255,6 +267,7 @@ final class MemoryTransport: DatagramTransport {
         self.queue = queue
         stateHandler = state
         receivedHandler = received
+        onStart?()
     }
 
     func send(_ datagram: Data, completion: @escaping (String?) -> Void) {
