@@ -25,6 +25,7 @@ fn stdout_failed(e: &std::io::Error) -> ! {
 
 mod bench;
 mod calibrate;
+mod calibrate_camera;
 mod contacts;
 mod demo;
 mod detect;
@@ -81,6 +82,10 @@ enum Command {
     /// Calibrate the marker from frames of it turned in front of the camera: finds tags glued
     /// turned or on the wrong face, refines every tag's place, writes a marker file.
     CalibrateMarker(calibrate::CalibrateArgs),
+    /// Calibrate the camera from a video of the markers waved in front of it: focal lengths,
+    /// principal point, radial distortion and the rolling shutter's readout, each with its
+    /// uncertainty; prints the flags `track` takes.
+    CalibrateCamera(calibrate_camera::CalibrateCameraArgs),
     /// Register a marker to the scan of its printed harness (ICP of the dodecahedron from an
     /// initial guess), writing its entry of the registration file `track` reads.
     Register(register::RegisterArgs),
@@ -122,6 +127,7 @@ fn main() {
         Command::Track(a) => track::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::CalibrateMarker(a) => calibrate::run(&a),
+        Command::CalibrateCamera(a) => calibrate_camera::run(&a),
         Command::Register(a) => register::run(&a),
         Command::Keygen => {
             link::keygen();

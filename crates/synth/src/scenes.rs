@@ -45,12 +45,22 @@ pub enum SceneKind {
     /// reach (azimuth −75…75°, elevation −45…45°, 110 mm), so each tag is seen from several
     /// angles.
     Calibration,
+    /// A camera-calibration recording: the head (jaw at rest) waved in front of a tripod
+    /// camera, the markers swept over the whole image at 90–200 mm, tilted ±25°, at about 100
+    /// mm/s (peaks near 180) so that a rolling shutter shears them ([`Wave`]); `cycles` × 2 s.
+    Wave,
 }
 
 impl SceneKind {
     /// All scenes.
-    pub const ALL: [SceneKind; 5] =
-        [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion, SceneKind::Chew, SceneKind::Calibration];
+    pub const ALL: [SceneKind; 6] = [
+        SceneKind::Static,
+        SceneKind::Hinge,
+        SceneKind::Excursion,
+        SceneKind::Chew,
+        SceneKind::Calibration,
+        SceneKind::Wave,
+    ];
 
     /// The scene's name on the command line.
     pub fn name(self) -> &'static str {
@@ -60,6 +70,7 @@ impl SceneKind {
             SceneKind::Excursion => "excursion",
             SceneKind::Chew => "chew",
             SceneKind::Calibration => "calibration",
+            SceneKind::Wave => "wave",
         }
     }
 }
@@ -70,7 +81,7 @@ impl std::str::FromStr for SceneKind {
         SceneKind::ALL
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| format!("unknown scene '{s}' (choose static, hinge, excursion, chew or calibration)"))
+            .ok_or_else(|| format!("unknown scene '{s}' (choose static, hinge, excursion, chew, calibration or wave)"))
     }
 }
 
@@ -310,15 +321,78 @@ fn tremor(seed: u64, t: f64) -> Pose {
     Pose::from_axis_angle(Vector3::new(v[3], v[4], v[5]), Vector3::new(v[0], v[1], v[2]))
 }
 
+/// The head waved in front of a still camera: the markers' midpoint swept across the image and
+/// in depth by sinusoids, the head tilted about it (camera frame, upright phone).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Wave {
+    /// Depth of the markers' midpoint (mm): the middle and the swing either side.
+    pub depth_mm: [f64; 2],
+    /// How far across the image the midpoint swings: its x/z and y/z at the extremes.
+    pub reach: [f64; 2],
+    /// Peak tilts (degrees) about the camera's x, y and z.
+    pub tilt_deg: [f64; 3],
+    /// Frequencies (Hz) of x, y, depth and the three tilts.
+    pub hz: [f64; 6],
+    /// Their phases (rad).
+    pub phase: [f64; 6],
+}
+
+/// Where the wave scene's head is held from: the markers' midpoint (head frame, mm).
+const WAVE_TARGET: [f64; 3] = [0.0, 0.0, -38.0];
+/// Seconds of waving per `cycles`.
+const WAVE_S: f64 = 2.0;
+
+impl Wave {
+    /// A wave with phases drawn from `rng`: midpoint at 97–193 mm, up to 0.38 × its depth
+    /// across and 0.22 × down from the optical axis (the outer marker reaches the image's
+    /// edges), tilted ±25° (±15° about the optical axis).
+    fn draw(rng: &mut ChaCha8Rng) -> Self {
+        Wave {
+            depth_mm: [145.0, 48.0],
+            reach: [0.38, 0.22],
+            tilt_deg: [25.0, 25.0, 15.0],
+            hz: [0.33, 0.45, 0.2, 0.3, 0.35, 0.25],
+            phase: std::array::from_fn(|_| rng.random_range(0.0..TAU)),
+        }
+    }
+
+    /// `camera_from_head` at time `t`.
+    pub fn camera_from_head(&self, t: f64) -> Pose {
+        let s = |i: usize| (TAU * self.hz[i] * t + self.phase[i]).sin();
+        let z = self.depth_mm[0] + self.depth_mm[1] * s(2);
+        let at = Vector3::new(z * self.reach[0] * s(0), z * self.reach[1] * s(1), z);
+        let tilt = Vector3::new(self.tilt_deg[0] * s(3), self.tilt_deg[1] * s(4), self.tilt_deg[2] * s(5));
+        // Facing the camera as the upright front view does (image x = head down, image y = the
+        // patient's right), turned about the midpoint.
+        let front = Matrix3::new(0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        let front = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(front));
+        let turn = UnitQuaternion::from_scaled_axis(tilt.map(f64::to_radians)) * front;
+        Pose::from_parts(turn, at - turn * Vector3::from(WAVE_TARGET))
+    }
+}
+
 /// One frame to render: when, from where, and how the jaw moves around that time.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct FrameSpec {
     /// Capture time of the middle of the exposure (s).
     pub t: f64,
-    /// The camera.
+    /// The camera (in the wave scene, where the head is held on average).
     pub view: View,
     /// The jaw.
     pub motion: JawMotion,
+    /// The wave scene's motion of the head, which replaces the view's (absent elsewhere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wave: Option<Wave>,
+}
+
+impl FrameSpec {
+    /// `camera_from_head` at time `t`: the wave's, or else the view's.
+    pub fn camera_from_head(&self, t: f64) -> Pose {
+        match &self.wave {
+            Some(wave) => wave.camera_from_head(t),
+            None => self.view.camera_from_head(t),
+        }
+    }
 }
 
 /// Options that shape a scene's frame list.
@@ -343,7 +417,7 @@ impl Default for SceneOptions {
 /// The frames of one movement cycle of `period` seconds from `start`, `dt` apart.
 fn one_cycle(start: f64, period: f64, dt: f64, view: View, motion: JawMotion) -> impl Iterator<Item = FrameSpec> {
     let n = (period / dt).round() as usize;
-    (0..n).map(move |i| FrameSpec { t: start + i as f64 * dt, view, motion })
+    (0..n).map(move |i| FrameSpec { t: start + i as f64 * dt, view, motion, wave: None })
 }
 
 /// Where the chew scene's camera looks (head frame, mm): the markers' depth, 14 mm below the
@@ -373,7 +447,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                             orientation: Orientation::Upright,
                         };
                         for _ in 0..opts.frames_per_view {
-                            frames.push(FrameSpec { t, view, motion: JawMotion::Rest });
+                            frames.push(FrameSpec { t, view, motion: JawMotion::Rest, wave: None });
                             t += dt;
                         }
                         // A second between views, as when the tripod is moved.
@@ -455,7 +529,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                     .copied()
                     .rfind(|m| matches!(m, JawMotion::Chew { start_s, .. } if *start_s <= t))
                     .unwrap_or(JawMotion::Rest);
-                FrameSpec { t, view, motion }
+                FrameSpec { t, view, motion, wave: None }
             }));
         }
         SceneKind::Calibration => {
@@ -471,12 +545,30 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                         orientation: Orientation::Upright,
                     };
                     for _ in 0..opts.frames_per_view {
-                        frames.push(FrameSpec { t, view, motion: JawMotion::Rest });
+                        frames.push(FrameSpec { t, view, motion: JawMotion::Rest, wave: None });
                         t += dt;
                     }
                     t += 1.0;
                 }
             }
+        }
+        SceneKind::Wave => {
+            let wave = Wave::draw(&mut rng);
+            let view = View {
+                distance_mm: wave.depth_mm[0],
+                azimuth_deg: 0.0,
+                elevation_deg: 0.0,
+                target: WAVE_TARGET,
+                hand_seed: None,
+                orientation: Orientation::Upright,
+            };
+            let n = (opts.cycles as f64 * WAVE_S / dt).round() as usize;
+            frames.extend((0..n).map(|k| FrameSpec {
+                t: k as f64 * dt,
+                view,
+                motion: JawMotion::Rest,
+                wave: Some(wave),
+            }));
         }
     }
     frames
@@ -547,6 +639,7 @@ mod tests {
         assert_eq!(scene_frames(SceneKind::Hinge, &o, 1).len(), 4 * 2 * 60);
         assert_eq!(scene_frames(SceneKind::Excursion, &o, 1).len(), 3 * 2 * 60);
         assert_eq!(scene_frames(SceneKind::Calibration, &o, 1).len(), 3 * 6 * 2);
+        assert_eq!(scene_frames(SceneKind::Wave, &o, 1).len(), 2 * 60);
     }
 
     /// The chew cycles' motions, in order.
@@ -637,6 +730,45 @@ mod tests {
         eprintln!("landscape: centre rows {maxilla:.1} and {mandible:.1}; mandible {range:.1?} while chewing");
         assert!((maxilla - 89.5).abs() < 1e-6 && (mandible - 639.5).abs() < 1e-6);
         assert!(range.0 > 639.0 && range.1 < 1000.0, "{range:?}");
+    }
+
+    /// The wave sweeps the markers over the image at 90–200 mm and 50–150 mm/s or so.
+    #[test]
+    fn wave_sweeps_the_markers_across_the_image() {
+        let k = crate::Resolution::P1080.default_intrinsics();
+        let rig = Rig::default();
+        let opts = SceneOptions { cycles: 2, ..SceneOptions::default() };
+        let frames = scene_frames(SceneKind::Wave, &opts, 1);
+        assert_eq!(frames.len(), 120);
+        let (maxilla, mandible) = rig.markers(&JawMotion::Rest, 0.0);
+        let centres = |f: &FrameSpec, t: f64| {
+            let c = f.camera_from_head(t);
+            [maxilla, mandible].map(|m| (c * m).translation())
+        };
+        let (mut x, mut y, mut z) = ((f64::MAX, f64::MIN), (f64::MAX, f64::MIN), (f64::MAX, f64::MIN));
+        let mut speeds = Vec::new();
+        for f in &frames {
+            for (p, q) in centres(f, f.t).iter().zip(centres(f, f.t + 1e-4)) {
+                let px = k.project(&Point3::from(*p)).expect("in front");
+                x = (x.0.min(px.x), x.1.max(px.x));
+                y = (y.0.min(px.y), y.1.max(px.y));
+                z = (z.0.min(p.z), z.1.max(p.z));
+                speeds.push((q - p).norm() / 1e-4);
+            }
+        }
+        speeds.sort_by(f64::total_cmp);
+        let (median, top) = (speeds[speeds.len() / 2], speeds[speeds.len() - 1]);
+        assert!(x.0 < 150.0 && x.1 > 1770.0 && y.0 < 200.0 && y.1 > 880.0, "{x:?} {y:?}");
+        assert!(z.0 > 80.0 && z.0 < 100.0 && z.1 > 180.0 && z.1 < 210.0, "{z:?}");
+        assert!((50.0..150.0).contains(&median) && top < 200.0, "speed median {median} mm/s, top {top}");
+        let flat = Wave { tilt_deg: [0.0; 3], ..frames[0].wave.expect("a wave") };
+        assert!(
+            flat.camera_from_head(0.7).rotation().angle_to(&frames[0].view.camera_from_head(0.0).rotation()) < 1e-12
+        );
+        // The other scenes' frames say nothing of a wave.
+        let still = scene_frames(SceneKind::Static, &opts, 1);
+        assert!(!serde_json::to_string(&still[0]).expect("json").contains("wave"));
+        assert_eq!(still[0].camera_from_head(0.3), still[0].view.camera_from_head(0.3));
     }
 
     #[test]

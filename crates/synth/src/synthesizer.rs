@@ -223,7 +223,7 @@ impl Synthesizer {
     }
 
     fn poses_at(&self, spec: &FrameSpec, t: f64) -> (Pose, Pose, Pose) {
-        let camera_from_head = spec.view.camera_from_head(t);
+        let camera_from_head = spec.camera_from_head(t);
         let (head_from_maxilla, head_from_mandible) = self.rig.markers(&spec.motion, t);
         (camera_from_head, camera_from_head * head_from_maxilla, camera_from_head * head_from_mandible)
     }

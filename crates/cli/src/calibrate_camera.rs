@@ -1,0 +1,191 @@
+//! `jawtrack calibrate-camera`: the camera's intrinsics and rolling-shutter readout from a
+//! short video of the markers waved in front of it (`jawtrack_camera_calibration`), each with
+//! its uncertainty, written as JSON and printed as the flags `jawtrack track` takes.
+
+use crate::frames::open_frames;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_apriltag::{Detector, DetectorConfig};
+use jawtrack_camera_calibration::{
+    CameraCalibration, CameraCalibrationOptions, CameraFrame, SeenTag, calibrate_camera,
+};
+use jawtrack_marker::Marker;
+use jawtrack_pose::CameraIntrinsics;
+use std::path::PathBuf;
+
+/// Arguments of `jawtrack calibrate-camera`.
+#[derive(Args)]
+pub(crate) struct CalibrateCameraArgs {
+    /// A video of the markers waved in front of the camera, filmed as the sessions will be
+    /// (same phone, lens, resolution and orientation; no zoom or stabilisation). Needs ffmpeg
+    /// and ffprobe on the PATH; each frame keeps its own presentation time.
+    #[arg(long, conflicts_with = "frames")]
+    video: Option<PathBuf>,
+    /// Frames instead of a video: image files (PNG, JPEG) or folders of them, consecutive
+    /// frames of one recording in name order, timed by --fps.
+    #[arg(required_unless_present = "video")]
+    frames: Vec<PathBuf>,
+    /// Frame rate (frames/s), timing image frame i at i / fps s: required with image frames,
+    /// since the readout is measured against the motion between frames; with --video it
+    /// replaces the stored times.
+    #[arg(long, allow_hyphen_values = true)]
+    fps: Option<f64>,
+    /// A first guess of the intrinsics, fx,fy,cx,cy[,k1,k2] (px), e.g. another resolution's
+    /// scaled. Default: from the image size; the focal length is scanned over a factor of 3
+    /// either way, so the guess need not be close.
+    #[arg(long, allow_hyphen_values = true)]
+    intrinsics: Option<CameraIntrinsics>,
+    /// The marker file (default: the nominal 12.7 mm pair). A calibrated marker
+    /// (`calibrate-marker`) removes its print errors from the camera's.
+    #[arg(long)]
+    marker: Option<PathBuf>,
+    /// Where to write the result (JSON: the intrinsics, the readout, each 1σ, the residual).
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    force: crate::output::ForceArgs,
+    /// Frames (showing a marker in a run of neighbouring frames) needed at least.
+    #[arg(long, default_value_t = 20)]
+    min_frames: usize,
+    /// Refuse a fit whose RMS corner residual exceeds this (px).
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    max_rms_px: f64,
+    /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    linear_edges: bool,
+}
+
+pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
+    a.force.check_file(&a.out)?;
+    if let Some(fps) = a.fps
+        && !(fps.is_finite() && fps > 0.0)
+    {
+        bail!("--fps must be a positive number of frames per second, got {fps}");
+    }
+    if a.video.is_none() && a.fps.is_none() {
+        bail!("--fps is required with image frames: the readout is measured against the time between frames");
+    }
+    if let Some(k) = &a.intrinsics {
+        k.validate().context("--intrinsics")?;
+    }
+    if a.min_frames < 3 {
+        bail!("--min-frames must be at least 3, got {}", a.min_frames);
+    }
+    if !(a.max_rms_px.is_finite() && a.max_rms_px > 0.0) {
+        bail!("--max-rms-px must be a positive number of pixels, got {}", a.max_rms_px);
+    }
+    let marker = match &a.marker {
+        Some(p) => Marker::load(p)?,
+        None => Marker::default(),
+    };
+    let (frames, width, height) = detect(a, &marker)?;
+    say!(
+        "detected the marker in {} of {} frames ({width}×{height})",
+        frames.iter().filter(|f| !f.tags.is_empty()).count(),
+        frames.len()
+    );
+    let options = CameraCalibrationOptions {
+        initial: a.intrinsics,
+        min_frames: a.min_frames,
+        max_rms_px: a.max_rms_px,
+        ..CameraCalibrationOptions::default()
+    };
+    let started = std::time::Instant::now();
+    let c = calibrate_camera(&frames, width, height, &marker, &options)?;
+    print_result(&c, started.elapsed().as_secs_f64());
+    let json = serde_json::json!({
+        "version": 1,
+        "calibration": c,
+        "track_flags": track_flags(&c),
+    });
+    let text = serde_json::to_string_pretty(&json).context("the result as JSON")?;
+    std::fs::write(&a.out, text + "\n").with_context(|| format!("writing {}", a.out.display()))?;
+    say!("wrote {}", a.out.display());
+    say!("track with: jawtrack track {} …", track_flags(&c));
+    Ok(())
+}
+
+/// Detects the marker's tags in every frame, with a progress bar; the frames and their size.
+fn detect(a: &CalibrateCameraArgs, marker: &Marker) -> Result<(Vec<CameraFrame>, u32, u32)> {
+    let mut source = open_frames(a.video.as_deref(), &a.frames, a.fps)?;
+    let detector = Detector::new(DetectorConfig { linear_edges: a.linear_edges, ..DetectorConfig::default() })?;
+    let bar = crate::progress::bar("detecting", source.len().map(|n| n as u64), "frames");
+    let mut frames = Vec::new();
+    let mut size: Option<(usize, usize)> = None;
+    let mut unreadable = 0;
+    while let Some(frame) = source.next_frame()? {
+        bar.inc(1);
+        let image = match frame.image {
+            Ok(image) => image,
+            Err(why) => {
+                unreadable += 1;
+                bar.suspend(|| eprintln!("warning: {}: {why}; skipped", frame.name));
+                continue;
+            }
+        };
+        match size {
+            None => size = Some((image.width, image.height)),
+            Some(s) if s != (image.width, image.height) => bail!(
+                "{} is {}×{}, the frames before it {}×{}: one calibration is of one camera at one resolution",
+                frame.name,
+                image.width,
+                image.height,
+                s.0,
+                s.1
+            ),
+            Some(_) => {}
+        }
+        let tags = detector
+            .detect(&image.view().with_context(|| frame.name.clone())?)?
+            .into_iter()
+            .filter(|d| marker.find_tag(d.id).is_some())
+            .map(|d| SeenTag { id: d.id, corners: d.corners })
+            .collect();
+        frames.push(CameraFrame { t: frame.t, tags });
+    }
+    bar.finish_and_clear();
+    if unreadable > 0 {
+        eprintln!("warning: {unreadable} frames could not be read and were left out");
+    }
+    let Some((w, h)) = size else { bail!("none of the frames could be read: nothing to calibrate from") };
+    let (Ok(w), Ok(h)) = (u32::try_from(w), u32::try_from(h)) else { bail!("frames of {w}×{h} px are too large") };
+    Ok((frames, w, h))
+}
+
+/// The flags that give `jawtrack track` this camera.
+fn track_flags(c: &CameraCalibration) -> String {
+    let k = &c.intrinsics;
+    // A readout estimated just below 0 (a global shutter, within its noise) is 0.
+    format!(
+        "--intrinsics {:.3},{:.3},{:.3},{:.3},{:.6},{:.6} --readout-ms {:.3}",
+        k.fx,
+        k.fy,
+        k.cx,
+        k.cy,
+        k.k1,
+        k.k2,
+        (c.readout_s * 1e3).max(0.0)
+    )
+}
+
+fn print_result(c: &CameraCalibration, seconds: f64) {
+    let (k, s) = (&c.intrinsics, &c.sigma);
+    say!(
+        "calibrated from {} frames ({} marker views, {} corners; {} tag sightings left out as misfits) in {seconds:.1} s; \
+         corners seen in {:.0} % of the image",
+        c.frames_used,
+        c.views_used,
+        c.corners_used,
+        c.sightings_dropped,
+        100.0 * c.coverage
+    );
+    say!("  fx       {:10.2} ± {:.2} px ({:.3} %)", k.fx, s.fx, 100.0 * s.fx / k.fx);
+    say!("  fy       {:10.2} ± {:.2} px ({:.3} %)", k.fy, s.fy, 100.0 * s.fy / k.fy);
+    say!("  cx       {:10.2} ± {:.2} px", k.cx, s.cx);
+    say!("  cy       {:10.2} ± {:.2} px", k.cy, s.cy);
+    say!("  k1       {:10.5} ± {:.5}", k.k1, s.k1);
+    say!("  k2       {:10.5} ± {:.5}", k.k2, s.k2);
+    say!("  (distortion at the image corners known to ± {:.2} px)", s.corner_distortion_px);
+    say!("  readout  {:10.3} ± {:.3} ms (first row to last)", c.readout_s * 1e3, s.readout_s * 1e3);
+    say!("  RMS corner residual {:.3} px", c.rms_px);
+}
