@@ -60,6 +60,8 @@ pub struct AccuracyArgs {
     /// The Python that runs OpenCV for the reference stack (skipped, and said so, without it).
     #[arg(long, default_value = "python3")]
     python: String,
+    #[command(flatten)]
+    chew: benchtop::chew::ChewArgs,
 }
 
 /// Runs the benchtop experiments and writes the report, tables, plots and calibrated marker
@@ -77,6 +79,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         python: vec![a.python.clone()],
     };
     options.validate()?;
+    let chew = a.chew.options();
+    if let Some(c) = &chew {
+        c.validate()?;
+    }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let started = std::time::Instant::now();
     let bar = indicatif::ProgressBar::new(0);
@@ -86,7 +92,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
             .progress_chars("=> "),
     );
     let mut stage = String::new();
-    let run = benchtop::run(&options, &mut |what, done, total| {
+    let mut progress = |what: &str, done: usize, total: usize| {
         if total == 0 {
             bar.println(what);
             return;
@@ -100,7 +106,12 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
             bar.set_length(total as u64);
         }
         bar.set_position(done as u64);
-    })?;
+    };
+    let run = benchtop::run(&options, &mut progress)?;
+    let chews = match &chew {
+        Some(c) => benchtop::chew::run(&options, c, &mut progress)?,
+        None => Vec::new(),
+    };
     bar.finish_and_clear();
 
     let marker = a.out.join("calibrated_marker.json");
@@ -116,10 +127,17 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     }
     let mut files = write_csv(&run, &a.out)?;
     files.extend(write_plots(&run, &a.out)?);
-    let report = report(&run, &options, &files, &a.out);
+    files.extend(crate::chew::plots(&chews, &a.out)?);
+    let mut report = report(&run, &options, &files, &a.out);
+    // The chewing section goes with the other results, before the list of plots.
+    let at = report.find("\n## Plots and tables").unwrap_or(report.len());
+    report.insert_str(at, &crate::chew::markdown(&chews, run.reference.is_ok()));
     let path = a.out.join("report.md");
     std::fs::write(&path, &report).with_context(|| format!("writing {}", path.display()))?;
     crate::say(format_args!("{}", summary(&run)));
+    for line in crate::chew::summary(&chews) {
+        crate::say(format_args!("{line}"));
+    }
     crate::say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
     Ok(())
 }

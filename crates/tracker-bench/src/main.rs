@@ -12,7 +12,6 @@
 //! body's PnP, ours against OpenCV's on the same correspondences. OpenCV runs in Python
 //! (`python/solve_pnp.py`); without it the reference columns are skipped, and said so.
 
-mod chew;
 mod report;
 
 use anyhow::{Context, Result, bail};
@@ -23,6 +22,7 @@ use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
 use jawtrack_synth::{Orientation, SceneKind};
 use jawtrack_tracker::{Flag, Tracker, TrackerConfig};
+use jawtrack_tracker_bench::chew::{self, ChewFrame, ChewScene};
 use jawtrack_tracker_bench::opencv::{self, BodyCase, OpenCv};
 use jawtrack_tracker_bench::{frames, reference::correspondences};
 use nalgebra::{Point2, Point3};
@@ -95,8 +95,7 @@ type Markers = [Marker; 2];
 
 /// Error of an estimate of `maxilla_from_mandible` against the truth.
 fn pose_error(estimate: &Pose, truth: &Pose) -> PoseError {
-    let (angle, distance) = estimate.distance_to(truth);
-    PoseError { mm: distance, deg: angle.to_degrees() }
+    PoseError::of(estimate, truth)
 }
 
 /// Median time (µs) of our `solve_pnp` on a body's correspondences, cold (no prior), and
@@ -371,7 +370,27 @@ fn main() -> Result<()> {
     let with_reference = reference.is_ok();
     let scenes: Vec<SceneOutcome> = outcomes.iter().map(|(o, _)| o.clone()).collect();
     let mut md = report::markdown(&RunInfo { frames, reference }, &scenes, &timings);
-    md.push_str(&chew::markdown(&outcomes, with_reference));
+    // The chew table reads the marker as printed (the targets are for a calibrated or
+    // exact marker): index 1 of each frame's errors.
+    let chews: Vec<ChewScene> = outcomes
+        .iter()
+        .filter_map(|(o, shutter)| {
+            Some(ChewScene {
+                shutter: (*shutter)?,
+                frames: o
+                    .frames
+                    .iter()
+                    .map(|f| ChewFrame {
+                        speed_mm_s: f.speed_mm_s,
+                        ours: f.error[1][0],
+                        ignored: f.ignored,
+                        reference: f.error[1][1],
+                    })
+                    .collect(),
+            })
+        })
+        .collect();
+    md.push_str(&chew::markdown(&chews, with_reference));
     let outcomes = scenes;
     print!("{md}");
     if let Some(path) = &args.out {

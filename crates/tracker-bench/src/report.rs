@@ -23,14 +23,7 @@ pub const MARKER_FILES: [&str; 2] = ["nominal", "as printed"];
 /// The scenes the accuracy target names (chew is measured as an extra).
 pub const TARGET_SCENES: [SceneKind; 3] = [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion];
 
-/// A mandible-in-maxilla pose against the truth.
-#[derive(Debug, Clone, Copy)]
-pub struct PoseError {
-    /// Distance between the translations (mm).
-    pub mm: f64,
-    /// Rotation angle between the orientations (degrees).
-    pub deg: f64,
-}
+pub use jawtrack_tracker_bench::chew::PoseError;
 
 /// One frame, measured.
 #[derive(Debug, Clone)]
