@@ -88,12 +88,8 @@ pub struct DetectorConfig {
     /// tags the window otherwise takes in the next edge out (white border to a brighter
     /// background) and pulls the side outward by 1–2 px; the window is split so only on sides
     /// whose gradient profile, summed along the side, shows two edges (one sample's profile on
-    /// a dim, blurred grazing tag dips by noise alone); (5) with the window widened, up to a
-    /// cell, over the whole ramp of an edge wider than it (motion blur smears an edge into a
-    /// ramp as wide as the motion during the exposure, whose centre is the edge at
-    /// mid-exposure; a window inside the ramp finds wherever it sits), there taking the
-    /// gradient above half the ramp's height only, on sides where the edge runs past the
-    /// window. `false` reproduces the C library exactly.
+    /// a dim, blurred grazing tag dips by noise alone). `false` reproduces the C library
+    /// exactly.
     pub linear_edges: bool,
     /// Sharpening of the decoded bit samples: helps small, blurred tags decode.
     pub decode_sharpening: f64,
