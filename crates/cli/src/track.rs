@@ -43,9 +43,10 @@ pub(crate) struct TrackArgs {
     /// in the header.
     #[arg(long, value_name = "MS", default_value_t = 0.0, allow_hyphen_values = true)]
     readout_ms: f64,
-    /// The exposure the frames were taken with (ms), recorded in the header; tracking does not
-    /// use it yet. Keep exposures short while the jaw moves: at 8 ms a chewing jaw smears the
-    /// tags beyond what the edge fit recovers.
+    /// The exposure the frames were taken with (ms; default 8.3, a phone's indoor 1/120 s),
+    /// recorded in the header: with the markers' tracked velocity it predicts how far their
+    /// tags smear, and frames smeared 3 px or more have their edges fitted as motion ramps.
+    /// Keep exposures short while the jaw moves: 2 ms leaves a chewing jaw nearly sharp.
     #[arg(long, value_name = "MS", allow_hyphen_values = true)]
     exposure_ms: Option<f64>,
     /// Decimation for quad finding: 1, 1.5, 2, 3 or 4.
@@ -95,9 +96,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         bail!("--readout-ms must be at least 0 and under 1000 ms, got {}", a.readout_ms);
     }
     if let Some(e) = a.exposure_ms
-        && !(e.is_finite() && e > 0.0)
+        && !(e.is_finite() && e > 0.0 && e < 1000.0)
     {
-        bail!("--exposure-ms must be a positive number of milliseconds, got {e}");
+        bail!("--exposure-ms must be a number of milliseconds above 0 and under 1000, got {e}");
     }
     a.intrinsics.validate().context("--intrinsics")?;
     let marker = match &a.marker {
@@ -129,6 +130,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         search: SearchConfig { roi: a.roi, ..SearchConfig::default() },
         smoother: a.smooth.then(SmootherConfig::default),
         readout_s: a.readout_ms / 1000.0,
+        exposure_s: a.exposure_ms.map_or(TrackerConfig::default().exposure_s, |e| e / 1000.0),
         ..TrackerConfig::default()
     };
     if a.out.as_os_str() != "-" {

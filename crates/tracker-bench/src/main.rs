@@ -213,6 +213,7 @@ fn run_scene(
     let config = TrackerConfig {
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
         readout_s: truth.realism.readout_s,
+        exposure_s: truth.realism.exposure_s,
         ..TrackerConfig::default()
     };
     let mut trackers = [Tracker::new(markers[0].clone(), config)?, Tracker::new(markers[1].clone(), config)?];

@@ -90,6 +90,10 @@ pub struct TrackerConfig {
     /// centre row's) at the velocity its recent poses give, so both bodies are solved at the
     /// same instant ([`jawtrack_pose::motion`]).
     pub readout_s: f64,
+    /// The frames' exposure (s), with the bodies' velocity predicting how far their tags
+    /// smear; where that is 3 px or more the edges are fitted as motion ramps
+    /// (`DetectorConfig::smeared_edges`). Default 1/120 s, a phone's indoor exposure.
+    pub exposure_s: f64,
 }
 
 impl Default for TrackerConfig {
@@ -104,6 +108,7 @@ impl Default for TrackerConfig {
             smoother: None,
             bite: BiteRule::default(),
             readout_s: 0.0,
+            exposure_s: 1.0 / 120.0,
         }
     }
 }
@@ -389,7 +394,12 @@ impl Tracker {
         let start = Instant::now();
         let expected = self.expected_region(frame, camera, t);
         let mut searched = expected;
-        let mut detections = self.detect(frame, expected)?;
+        let smeared = BodyKind::ALL.iter().any(|&k| {
+            let (b, reach) = (&self.bodies[slot(k)], self.corners[slot(k)].iter().map(|p| p.coords.norm()));
+            b.last().is_some_and(|l| self.recent(l.0, t))
+                && b.smear_px(camera, self.config.exposure_s, reach.fold(0.0, f64::max)) >= roi::SMEAR_PX
+        });
+        let mut detections = self.detect(frame, expected, smeared)?;
         // A body missing from its expected region, or a tag at the region's edge (the
         // prediction was off, and the edge fit there lacks its pixels): search everywhere.
         let missing = BodyKind::ALL.iter().any(|&k| !detections.iter().any(|d| self.body_of(d.id) == Some(k)));
@@ -397,7 +407,7 @@ impl Tracker {
             detections.iter().any(|d| near_inner_edge(&d.corners, &r, frame, self.config.search.min_margin_px / 2.0))
         });
         if expected.is_some() && (missing || at_edge) {
-            detections = self.detect(frame, None)?;
+            detections = self.detect(frame, None, smeared)?;
             searched = None;
         }
         self.since_full = if searched.is_none() { 0 } else { self.since_full + 1 };
@@ -408,8 +418,8 @@ impl Tracker {
         Ok(result)
     }
 
-    fn detect(&self, frame: &ImageView<'_>, roi: Option<Roi>) -> Result<Vec<Detection>, TrackError> {
-        let mut d = self.detector.detect_in(frame, roi)?;
+    fn detect(&self, frame: &ImageView<'_>, roi: Option<Roi>, smeared: bool) -> Result<Vec<Detection>, TrackError> {
+        let mut d = self.detector.detect_in_with(frame, roi, smeared || self.config.detector.smeared_edges)?;
         d.retain(|d| self.marker.find_tag(d.id).is_some());
         Ok(d)
     }
@@ -696,6 +706,9 @@ fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
         }
     }
     RollingShutter::new(c.readout_s, 2).map_err(|e| TrackError::BadConfig(e.to_string()))?;
+    if !(c.exposure_s.is_finite() && c.exposure_s > 0.0 && c.exposure_s < 1.0) {
+        return Err(TrackError::BadConfig(format!("exposure_s must be within 0–1 s, got {}", c.exposure_s)));
+    }
     let s = &c.search;
     if !(s.margin.is_finite() && s.margin >= 0.0 && s.min_margin_px.is_finite() && s.min_margin_px >= 0.0) {
         return Err(TrackError::BadConfig(format!(

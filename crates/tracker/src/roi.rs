@@ -2,11 +2,15 @@
 //! the coming frame at constant velocity, and the image region its tags will cover.
 
 use jawtrack_apriltag::Roi;
-use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_pose::{CameraIntrinsics, Pose, Velocity};
 use nalgebra::{Point3, UnitQuaternion};
 
 /// A pose seen at a time (s).
 pub type Timed = (f64, Pose);
+
+/// Predicted smear (px) from which a frame's edges are fitted as motion ramps
+/// (`DetectorConfig::smeared_edges`): below it an edge stays within the fit's usual window.
+pub(crate) const SMEAR_PX: f64 = 3.0;
 
 /// `last` moved on to time `t` with the velocity it had since `previous`: the body's origin
 /// at constant linear velocity, its orientation at constant angular velocity. `last` itself
@@ -58,6 +62,19 @@ impl BodyState {
         self.tags = tags.to_vec();
     }
 
+    /// How far (px) its tags should move across the image during `exposure_s` at the velocity
+    /// of its last two poses (0 without two): its origin's motion off the line of sight plus
+    /// its turn at `reach_mm`, how far its tags lie from the origin.
+    pub(crate) fn smear_px(&self, camera: &CameraIntrinsics, exposure_s: f64, reach_mm: f64) -> f64 {
+        let (Some(&(_, pose)), Some(v)) = (self.last(), Velocity::at_newest(&self.history)) else { return 0.0 };
+        let z = pose.translation().z;
+        if !(v.is_finite() && z > 0.0) {
+            return 0.0;
+        }
+        let across = v.linear.xy().norm() + v.angular.norm() * reach_mm;
+        camera.fx.max(camera.fy) * across / z * exposure_s
+    }
+
     /// The pose expected at `t`.
     pub(crate) fn predict(&self, t: f64) -> Option<Pose> {
         let last = self.last()?;
@@ -103,6 +120,29 @@ pub fn region(
 mod tests {
     use super::*;
     use nalgebra::Vector3;
+
+    #[test]
+    fn the_smear_is_the_motion_across_the_image_during_the_exposure() {
+        let camera = CameraIntrinsics::pinhole(1500.0, 1500.0, 959.5, 539.5);
+        let at =
+            |x: f64, z: f64, turn: f64| Pose::from_axis_angle(Vector3::new(turn, 0.0, 0.0), Vector3::new(x, 0.0, z));
+        let mut body = BodyState::default();
+        body.remember(0.0, at(0.0, 120.0, 0.0), None, &[]);
+        assert_eq!(body.smear_px(&camera, 1.0 / 120.0, 18.0), 0.0, "one pose: no velocity");
+        body.remember(1.0 / 60.0, at(0.0, 120.0, 0.0), None, &[]);
+        assert_eq!(body.smear_px(&camera, 1.0 / 120.0, 18.0), 0.0, "still");
+        // 120 mm/s across, now at 119 mm: 1500 × 120 / 119 px/s; the 60 mm/s toward the
+        // camera adds nothing.
+        body.remember(2.0 / 60.0, at(2.0, 119.0, 0.0), None, &[]);
+        let px_s = 1500.0 * 120.0 / 119.0;
+        assert!((body.smear_px(&camera, 1.0 / 120.0, 18.0) - px_s / 120.0).abs() < 1e-6);
+        assert!((body.smear_px(&camera, 0.002, 18.0) - px_s * 0.002).abs() < 1e-6);
+        // Turning at 1 rad/s moves tags 18 mm out at 18 mm/s: 225 px/s.
+        let mut turning = BodyState::default();
+        turning.remember(0.0, at(0.0, 120.0, 0.0), None, &[]);
+        turning.remember(0.1, at(0.0, 120.0, 0.1), None, &[]);
+        assert!((turning.smear_px(&camera, 0.01, 18.0) - 2.25).abs() < 1e-6);
+    }
 
     #[test]
     fn constant_velocity_is_continued() {

@@ -1,23 +1,41 @@
 //! Edge refinement at full resolution: each side of a quad found on the decimated image is
 //! re-fitted to the strongest gradient along its normal, C's way or in linear light with one
-//! edge per window (see [`DetectorConfig::linear_edges`](crate::DetectorConfig::linear_edges)).
+//! edge per window, widened to take in the whole ramp of a motion-blurred edge (see
+//! [`DetectorConfig::linear_edges`](crate::DetectorConfig::linear_edges)).
 
 use crate::image::ImageView;
 use crate::quads::{Quad, intersect_lines};
 
+/// How far a window widened for a ramp reaches beyond the ramp's half-height points (px): the
+/// gradient over 2 px adds 1, the lens blur's tails about 1 more.
+const RAMP_MARGIN: f64 = 2.0;
+
+/// One sample's fit along a side: its offset, whether it took one edge of several, whether the
+/// edge ran on past its window (see `refine_edges`).
+type Fit<'a> = dyn FnMut(i64, bool, Option<&mut [f64]>, f64) -> Option<(f64, bool, bool)> + 'a;
+
 /// C's `refine_edges`: each edge is re-fitted at full resolution to the points of strongest
 /// gradient found along its normal, and the corners re-intersected. `lut` maps pixel values
 /// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges);
-/// `recentre` re-centres the search window on the edge (C does not).
-pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f32, lut: &[f64; 256], recentre: bool) {
+/// `recentre` re-centres the search window on the edge (C does not); `ramps` widens it over
+/// the ramp of an edge smeared by motion ([`crate::DetectorConfig::smeared_edges`]).
+pub(super) fn refine_edges(
+    im: &ImageView<'_>,
+    quad: &mut Quad,
+    quad_decimate: f32,
+    lut: &[f64; 256],
+    recentre: bool,
+    ramps: bool,
+) {
     let (w, h) = (im.width() as i64, im.height() as i64);
     let px = |x: i64, y: i64| lut[usize::from(im.get(x as usize, y as usize).unwrap_or(0))];
     let mut lines = [[0.0f64; 4]; 4];
     let range = (f64::from(quad_decimate) + 1.0) as i64;
+    // Our windows reach at least 3 px: undecimated 4K frames blur edges wider than C's ±2 px.
+    let base = if recentre { range.max(3) } else { range };
     let mut points: Vec<(i64, [f64; 2], f64, bool)> = Vec::new();
-    // A side's summed gradient profile over the farthest any window looks, ±(range + reach)
-    // px, per quarter pixel (only every other step is filled).
-    let mut profile = vec![0.0; (8 * (range + range.max(3)) + 1) as usize];
+    // A side's summed gradient profile, per quarter pixel (only every other step is filled).
+    let mut profile = Vec::new();
     for (edge, line) in lines.iter_mut().enumerate() {
         let (a, b) = (edge, (edge + 1) & 3);
         let (pa, pb) = (quad.p[a].map(f64::from), quad.p[b].map(f64::from));
@@ -27,24 +45,37 @@ pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f
         nx /= mag;
         ny /= mag;
         let nsamples = 16.max((mag / 8.0) as i64);
+        // Cells are the black square's width over 8, here measured to the opposite side.
+        let (qa, qb) = (quad.p[(edge + 2) & 3].map(f64::from), quad.p[(edge + 3) & 3].map(f64::from));
+        let (ux, uy) = (qb[0] - qa[0], qb[1] - qa[1]);
+        let across = |x0: f64, y0: f64| ((ux * (y0 - qa[1]) - uy * (x0 - qa[0])) / ux.hypot(uy)).abs();
+        let widest_cell = across(pa[0], pa[1]).max(across(pb[0], pb[1])) / 8.0;
         let mut cache: Vec<Option<Option<f64>>> = Vec::new();
         let (mut grads, mut vals): (Vec<f64>, Vec<Option<f64>>) = (Vec::new(), Vec::new());
-        // Sample `s`'s offset of the edge along the normal, and whether it took one edge of
-        // several in its window (only with `split`); with `sum`, adds its gradient profile to it
-        // instead.
-        let mut fit = |s: i64, split: bool, sum: Option<&mut [f64]>| -> Option<(f64, bool)> {
+        // Sample `s`'s fit: the offset of the edge along the normal, whether it took one edge of
+        // several in its window (only with `split`), and whether the edge's gradient ran on past
+        // its window (a ramp wider than it); with `sum`, adds its gradient profile to it
+        // instead. `ramp` > 0 is the half-width of a wide ramp the side's windows must take in.
+        let mut fit = |s: i64, split: bool, sum: Option<&mut [f64]>, ramp: f64| -> Option<(f64, bool, bool)> {
             let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
             let x0 = alpha * pa[0] + (1.0 - alpha) * pb[0];
             let y0 = alpha * pa[1] + (1.0 - alpha) * pb[1];
-            // The image along the normal, sampled once per quarter pixel from −(range + reach + 1)
-            // to range + reach + 1 px (windows of ±reach centred within ±range), as each window
+            // The window stays within half a cell of the edge: on a small or steeply tilted
+            // tag, a wider one takes in the next edge out. A wide ramp's window stays within a
+            // cell: the next edge of the same sign lies a cell out at the nearest (beyond the
+            // white border), as blurred as this one.
+            let across = across(x0, y0);
+            let mut reach = (base as f64).min((across / 16.0).max(1.0));
+            if ramp > 0.0 {
+                reach = reach.max((ramp + RAMP_MARGIN).min(across / 8.0));
+            }
+            // The image along the normal, sampled once per quarter pixel from −(range + far + 1)
+            // to range + far + 1 px (windows of ±reach centred within ±range), as each window
             // needs it (`cache` holds them: None = not yet).
-            // Our windows reach at least 3 px: undecimated 4K frames blur edges wider than C's
-            // ±2 px.
-            let reach = if recentre { range.max(3) } else { range };
-            let lowest = -((range + reach) as f64) - 1.0;
+            let far = base.max(reach.ceil() as i64);
+            let lowest = -((range + far) as f64) - 1.0;
             cache.clear();
-            cache.resize((4 * (2 * (range + reach) + 2) + 1) as usize, None);
+            cache.resize((4 * (2 * (range + far) + 2) + 1) as usize, None);
             let mut sample = |pos: f64| -> Option<f64> {
                 // pos is on the quarter-pixel grid above `lowest`: round to its index.
                 let j = ((pos - lowest) * 4.0 + 0.5) as usize;
@@ -65,17 +96,22 @@ pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f
                     )
                 })
             };
-            // The gradient-weighted mean offset along the normal over the window [c − reach,
-            // c + reach], from quarter-pixel steps. C's window is at c = 0 and takes every step
-            // in it whole; ours may sit anywhere, and each step counts by how much of its
-            // quarter pixel lies inside, so the mean moves smoothly with `c`.
-            // The window also stays within half a cell of the edge (cells are the black
-            // square's width over 8, here measured to the opposite side): on a small or
-            // steeply tilted tag, a wider one takes in the next edge out.
-            let (qa, qb) = (quad.p[(edge + 2) & 3].map(f64::from), quad.p[(edge + 3) & 3].map(f64::from));
-            let (ux, uy) = (qb[0] - qa[0], qb[1] - qa[1]);
-            let across = ((ux * (y0 - qa[1]) - uy * (x0 - qa[0])) / ux.hypot(uy)).abs();
-            let reach = (reach as f64).min((across / 16.0).max(1.0));
+            if !recentre {
+                // C's window: at the quad's edge, every step in it whole.
+                let (mut mn, mut mcount) = (0.0, 0.0);
+                for k in -4 * range..=4 * range {
+                    let nn = 0.25 * k as f64;
+                    let Some(g1) = sample(nn + 1.0) else { continue };
+                    let Some(g2) = sample(nn - 1.0) else { continue };
+                    if g1 < g2 {
+                        continue; // the gradient runs backwards here
+                    }
+                    let weight = (g2 - g1) * (g2 - g1);
+                    mn += weight * nn;
+                    mcount += weight;
+                }
+                return (mcount > 0.0).then(|| (mn / mcount, false, false));
+            }
             // Cells wider than the farthest the window looks (its centre moves up to ±range,
             // gradients and blur reach ~3 px beyond it, the quad is off by ~1 px): one edge.
             let lone = across / 8.0 > range as f64 + reach + 4.0;
@@ -96,22 +132,11 @@ pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f
                 }
                 return None;
             }
-            let mut centroid = |c: f64, split: bool| -> Option<(f64, bool)> {
+            // The gradient-weighted mean offset along the normal over the window [c − reach,
+            // c + reach], from quarter-pixel steps; each step counts by how much of its quarter
+            // pixel lies inside, so the mean moves smoothly with `c`.
+            let mut centroid = |c: f64, split: bool| -> Option<(f64, bool, bool)> {
                 let (mut mn, mut mcount) = (0.0, 0.0);
-                if !recentre {
-                    for k in -4 * range..=4 * range {
-                        let nn = 0.25 * k as f64;
-                        let Some(g1) = sample(nn + 1.0) else { continue };
-                        let Some(g2) = sample(nn - 1.0) else { continue };
-                        if g1 < g2 {
-                            continue; // the gradient runs backwards here
-                        }
-                        let weight = (g2 - g1) * (g2 - g1);
-                        mn += weight * nn;
-                        mcount += weight;
-                    }
-                    return (mcount > 0.0).then(|| (mn / mcount, false));
-                }
                 let (first, last) = (((c - reach) * 4.0).round() as i64, ((c + reach) * 4.0).round() as i64);
                 // The image at every quarter pixel the window's gradients need, read once.
                 vals.clear();
@@ -140,7 +165,20 @@ pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f
                     one_edge(&grads, ((c * 4.0).round() as i64 - first) as usize)
                 };
                 let cut = lo > 0 || hi < (last - first) as usize;
-                for k in first + lo as i64..=first + hi as i64 {
+                let steps = first + lo as i64..=first + hi as i64;
+                // Across a wide ramp only the gradient above half the ramp's height counts (its
+                // height: the largest gradient within its half-width of the window's centre).
+                // The top half of a symmetric ramp is centred on it whatever its width; the
+                // shoulder of a neighbouring edge merged into its foot at a grazing view, and
+                // noise on the flats either side, would pull the mean toward them.
+                let floor = if ramp > 0.0 {
+                    let near = steps.clone().filter(|&k| (0.25 * k as f64 - c).abs() <= ramp);
+                    0.5 * near.map(|k| grad(k, 4)).fold(0.0, f64::max)
+                } else {
+                    0.0
+                };
+                let mut peak = 0.0f64;
+                for k in steps {
                     let nn = 0.25 * k as f64;
                     // Each step counts by how much of its quarter pixel lies inside.
                     let inside = if k == first || k == last {
@@ -153,63 +191,104 @@ pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f
                     // C squares the gradient, which pulls the mean toward pixel centres by up
                     // to 0.1 px on edges along the pixel grid; the plain gradient's mean is the
                     // edge at which the areas balance, exact for a linearly interpolated edge.
-                    let weight = inside * grad(k, 4);
+                    let g = grad(k, 4);
+                    peak = peak.max(g);
+                    let weight = inside * (g - floor).max(0.0);
                     mn += weight * nn;
                     mcount += weight;
                 }
-                (mcount > 0.0).then(|| (mn / mcount, cut))
+                // A blurred step's gradient at the ends of a window centred on it is a small
+                // part of its peak; a ramp wider than the window keeps half of it at one end at
+                // least (the window may sit off the ramp's centre).
+                let flat = !cut && peak > 0.0 && grad(first, 4).max(grad(last, 4)) >= 0.5 * peak;
+                (mcount > 0.0).then(|| (mn / mcount, cut, flat))
             };
-            let mut measure = |split: bool| -> Option<(f64, bool)> {
-                let (mut n0, mut cut) = centroid(0.0, split)?;
-                if recentre {
-                    // A window off-centre on the edge cuts one tail of the gradient and pulls the
-                    // mean toward its centre (up to 0.1 px, with the edge's sub-pixel phase):
-                    // centre it (within ±range of the quad's edge) on the edge found and measure
-                    // again.
-                    for _ in 0..3 {
-                        let c = n0.clamp(-(range as f64), range as f64);
-                        let Some((next, next_cut)) = centroid(c, split) else { break };
-                        let moved = (next - n0).abs();
-                        (n0, cut) = (next, next_cut);
-                        if moved < 1e-3 {
-                            break;
-                        }
-                    }
+            // A window off-centre on the edge cuts one tail of the gradient and pulls the mean
+            // toward its centre (up to 0.1 px, with the edge's sub-pixel phase): centre it
+            // (within ±range of the quad's edge) on the edge found and measure again.
+            let mut found = centroid(0.0, split)?;
+            for _ in 0..3 {
+                let c = found.0.clamp(-(range as f64), range as f64);
+                let Some(next) = centroid(c, split) else { break };
+                let moved = (next.0 - found.0).abs();
+                found = next;
+                if moved < 1e-3 {
+                    break;
                 }
-                Some((n0, cut))
-            };
-            measure(split)
+            }
+            Some(found)
         };
         // Each sample's point (its index, where it looks from, the offset found, and whether
-        // it took one edge of several).
-        points.clear();
-        for s in 0..nsamples {
-            let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
-            let at = [alpha * pa[0] + (1.0 - alpha) * pb[0], alpha * pa[1] + (1.0 - alpha) * pb[1]];
-            if let Some((n0, cut)) = fit(s, true, None) {
-                points.push((s, at, n0, cut));
+        // it took one edge of several); returns how many found the edge running past their
+        // window. A wide ramp is one edge: its windows are not split.
+        let fit_all = |fit: &mut Fit<'_>, points: &mut Vec<(i64, [f64; 2], f64, bool)>, ramp: f64| -> usize {
+            points.clear();
+            let mut flat = 0;
+            for s in 0..nsamples {
+                let alpha = (1.0 + s as f64) / (nsamples as f64 + 1.0);
+                let at = [alpha * pa[0] + (1.0 - alpha) * pb[0], alpha * pa[1] + (1.0 - alpha) * pb[1]];
+                if let Some((n0, cut, f)) = fit(s, ramp <= 0.0, None, ramp) {
+                    points.push((s, at, n0, cut));
+                    flat += usize::from(f);
+                }
+            }
+            flat
+        };
+        // The side's summed profile over 1 px, as far as its windows look, summed over every
+        // `step`-th sample.
+        let summed = |fit: &mut Fit<'_>, profile: &mut Vec<f64>, ramp: f64, step: usize| {
+            let far = if ramp > 0.0 { base.max((ramp + RAMP_MARGIN).ceil() as i64) } else { base };
+            profile.clear();
+            profile.resize((8 * (range + far)) as usize + 1, 0.0);
+            for s in (0..nsamples).step_by(step) {
+                fit(s, false, Some(&mut profile[..]), ramp);
+            }
+        };
+        let mut ramp = 0.0;
+        let flat = fit_all(&mut fit, &mut points, ramp);
+        // Motion blur smears an edge into a ramp as wide as the motion during the exposure (in
+        // linear light the ramp is straight and its centre the edge at mid-exposure), and the
+        // lens blurs a near or far tag's edges wider than the window too. A window inside the
+        // ramp sees a flat gradient whose mean is wherever the window sits. Where the edge ran
+        // past half the samples' windows, the ramp's width at half its height is read from the
+        // side's summed profile (out to a cell), and the side fitted again with windows that
+        // take it in whole. (A cell narrower than the usual window holds no ramp to widen for.)
+        if ramps && recentre && !points.is_empty() && flat * 2 >= points.len() && widest_cell > base as f64 + 0.5 {
+            // Out to a cell (as far as windows for a ramp a cell wide look), over every fourth
+            // sample: a ramp's width at half its height stands well above the noise.
+            summed(&mut fit, &mut profile, widest_cell, 4);
+            let mut offsets: Vec<f64> = points.iter().map(|p| p.2).collect();
+            offsets.sort_by(f64::total_cmp);
+            let at = (profile.len() / 2) as i64 + (4.0 * offsets[offsets.len() / 2]).round() as i64;
+            if let Some((lo, hi)) = ramp_extent(&profile, at, base) {
+                let half_width = 0.125 * (hi - lo) as f64;
+                // A ramp the usual window nearly takes in is left to it; one that does not fit
+                // in a cell is no lone edge (on a small tag, the next edges merge into it).
+                let need = half_width + RAMP_MARGIN;
+                if need > base as f64 + 0.5 && need <= widest_cell {
+                    ramp = half_width;
+                    fit_all(&mut fit, &mut points, ramp);
+                }
             }
         }
         // One sample's profile is too noisy to tell a second edge from noise: on a dim, blurred
         // grazing tag (gradients of a few levels, wiggles of a level or two over a blur several
         // pixels wide) it dips by a tenth here and there, and taking one of the bumps moved the
         // side by 1–2 px. So the window stays split only where the side's summed profile shows
-        // two edges (summed over every other sample: half the work, and the noise still falls
-        // by a factor of 3 or so); elsewhere every sample takes its whole window, fitted anew.
+        // two edges; elsewhere every sample takes its whole window, fitted anew.
         let cuts = points.iter().filter(|p| p.3).count();
         if recentre && cuts > 0 {
             // (Fewer than a quarter of the samples split: noise, without summing.)
             let two = cuts * 4 >= points.len() && {
-                profile.fill(0.0);
-                for s in (0..nsamples).step_by(2) {
-                    fit(s, false, Some(&mut profile[..]));
-                }
+                // (Every other sample: half the work, and the noise still falls by a factor
+                // of 3 or so.)
+                summed(&mut fit, &mut profile, ramp, 2);
                 let half: Vec<f64> = profile.iter().copied().step_by(2).collect();
                 lobes(&half).len() > 1
             };
             if !two {
                 for p in points.iter_mut().filter(|p| p.3) {
-                    if let Some((whole, _)) = fit(p.0, false, None) {
+                    if let Some((whole, _, _)) = fit(p.0, false, None, ramp) {
                         p.2 = whole;
                     }
                 }
@@ -239,6 +318,33 @@ pub(super) fn refine_edges(im: &ImageView<'_>, quad: &mut Quad, quad_decimate: f
             quad.p[(i + 1) & 3] = corner;
         }
     }
+}
+
+/// The extent (first and last quarter-pixel step) of the edge around step `at` of a summed
+/// gradient profile filled on even steps: from the step nearest `at` at half the edge's height
+/// or more (its height: the largest value within `near` px of `at`), walking out on either side
+/// while the profile stays there. `None` when there is no gradient there.
+pub(super) fn ramp_extent(profile: &[f64], at: i64, near: i64) -> Option<(i64, i64)> {
+    let n = profile.len() as i64;
+    let at = at.clamp(0, n - 1) & !1;
+    let peak = (at - 4 * near..=at + 4 * near)
+        .step_by(2)
+        .filter(|k| (0..n).contains(k))
+        .map(|k| profile[k as usize])
+        .fold(0.0, f64::max);
+    if peak <= 0.0 {
+        return None;
+    }
+    let above = |k: i64| (0..n).contains(&k) && profile[k as usize] >= 0.5 * peak;
+    let start = (0..=4 * near).step_by(2).flat_map(|d| [at - d, at + d]).find(|&k| above(k))?;
+    let (mut lo, mut hi) = (start, start);
+    while above(lo - 2) {
+        lo -= 2;
+    }
+    while above(hi + 2) {
+        hi += 2;
+    }
+    Some((lo, hi))
 }
 
 /// The edges in a gradient profile (non-negative, one per quarter pixel), as (first step, last

@@ -99,6 +99,17 @@ impl Detector {
     /// Detects tags inside `roi` (the whole frame for `None`), whatever the settings say: a
     /// tracker moves its region with the markers from frame to frame.
     pub fn detect_in(&self, frame: &ImageView<'_>, roi: Option<Roi>) -> Result<Vec<Detection>, DetectError> {
+        self.detect_in_with(frame, roi, self.config.smeared_edges)
+    }
+
+    /// As [`Detector::detect_in`], with the smeared-edge fit on or off for this frame
+    /// ([`DetectorConfig::smeared_edges`]): a tracker knows which frames move.
+    pub fn detect_in_with(
+        &self,
+        frame: &ImageView<'_>,
+        roi: Option<Roi>,
+        smeared: bool,
+    ) -> Result<Vec<Detection>, DetectError> {
         let (view, ox, oy) = match roi {
             None => (*frame, 0.0, 0.0),
             Some(r) => {
@@ -116,7 +127,7 @@ impl Detector {
                 (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
             }
         };
-        let mut dets = self.detect_view(&view);
+        let mut dets = self.detect_view(&view, smeared);
         for d in &mut dets {
             d.center[0] += ox;
             d.center[1] += oy;
@@ -141,7 +152,7 @@ impl Detector {
         Ok(dets)
     }
 
-    fn detect_view(&self, im: &ImageView<'_>) -> Vec<Detection> {
+    fn detect_view(&self, im: &ImageView<'_>, smeared: bool) -> Vec<Detection> {
         let c = &self.config;
         // Another thread detecting with this detector has the buffers: use fresh ones.
         let (mut guard, mut own);
@@ -200,7 +211,7 @@ impl Detector {
         let dets = self.workers.filter_map(&quads, |q0| {
             let mut q = *q0;
             if c.refine_edges {
-                refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges);
+                refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges, c.linear_edges && smeared);
             }
             decode(&q).or_else(|| {
                 // Our fit can be pulled off by a bright edge near a small tag (linear light
@@ -210,7 +221,7 @@ impl Detector {
                     return None;
                 }
                 let mut q = *q0;
-                refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false);
+                refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false, false);
                 decode(&q)
             })
         });

@@ -1,6 +1,7 @@
-//! The detector's unit tests on drawn tags: empty and odd frames, the four turns, a mirrored tag, a region of interest.
+//! The detector's unit tests on drawn tags: empty and odd frames, the four turns, a mirrored tag, a region of interest,
+//! a motion-blurred tag.
 
-use super::edges::one_edge;
+use super::edges::{one_edge, ramp_extent};
 use super::*;
 use crate::config::Roi;
 
@@ -152,4 +153,105 @@ fn the_refit_takes_one_edge_of_two() {
     let g: Vec<f64> = (0..33).map(|k| bump(k as f64, 16.0, 1.0) + 0.04 * ((k % 3) as f64)).collect();
     assert_eq!(one_edge(&g, 16), (0, 32));
     assert_eq!(one_edge(&[0.0; 5], 2), (0, 4));
+}
+
+/// sRGB encoding of linear light in [0, 1].
+fn srgb(v: f64) -> u8 {
+    let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    (255.0 * e).round().clamp(0.0, 255.0) as u8
+}
+
+/// A tag (black square `8 · cell` px wide, turned `deg`) on a `size`² grey frame, smeared by
+/// `smear` px as if it moved at constant speed during the exposure: linear light averaged over
+/// the exposure (steps of 1/16 px along the motion, 4 points per pixel across it), sRGB-encoded.
+/// Returns the image and the black square's corners at mid-exposure.
+fn smeared_tag(id: u32, size: usize, cell: f64, deg: f64, smear: [f64; 2]) -> (Vec<u8>, [[f64; 2]; 4]) {
+    let bm = Tag36h11::bitmap(id).expect("id");
+    let centre = (size as f64 - 1.0) / 2.0;
+    let (s, c) = deg.to_radians().sin_cos();
+    let reflectance = |x: f64, y: f64| -> f64 {
+        let (dx, dy) = ((x - centre) / cell, (y - centre) / cell);
+        let (u, v) = (c * dx + s * dy + 5.0, -s * dx + c * dy + 5.0);
+        if !(0.0..10.0).contains(&u) || !(0.0..10.0).contains(&v) {
+            return 0.3;
+        }
+        let (i, j) = (u as usize, v as usize);
+        let white = i == 0 || j == 0 || i == 9 || j == 9 || bm.is_white(i - 1, j - 1);
+        if white { 0.8 } else { 0.04 }
+    };
+    let length = smear[0].hypot(smear[1]);
+    let steps = (length * 16.0).ceil().max(1.0) as usize;
+    let mut img = vec![0u8; size * size];
+    for (i, p) in img.iter_mut().enumerate() {
+        let (x, y) = ((i % size) as f64, (i / size) as f64);
+        let mut sum = 0.0;
+        for k in 0..steps {
+            let t = (k as f64 + 0.5) / steps as f64 - 0.5;
+            for (ox, oy) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
+                sum += reflectance(x + ox - t * smear[0], y + oy - t * smear[1]);
+            }
+        }
+        *p = srgb(sum / (4 * steps) as f64);
+    }
+    let corner = |u: f64, v: f64| [centre + cell * (c * u - s * v), centre + cell * (s * u + c * v)];
+    (img, [corner(-4.0, 4.0), corner(4.0, 4.0), corner(4.0, -4.0), corner(-4.0, -4.0)])
+}
+
+/// The farthest a detected corner lies from the nearest truth corner.
+fn worst_corner(found: &[[f64; 2]; 4], truth: &[[f64; 2]; 4]) -> f64 {
+    found
+        .iter()
+        .map(|p| truth.iter().map(|q| (p[0] - q[0]).hypot(p[1] - q[1])).fold(f64::INFINITY, f64::min))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_motion_blurred_tag_is_found_where_it_was_at_mid_exposure() {
+    // Smeared 8 and 12 px across cells of 10–15 px: ramps wider than the ±3 px window, whose
+    // corners the fit used to leave 0.35–2.55 px off (wherever the quad put the window); now
+    // within 0.02 px.
+    let d = Detector::new(DetectorConfig { smeared_edges: true, ..DetectorConfig::default() }).expect("valid");
+    let plain = detector();
+    let cases = [
+        (12.0, 0.0, 8.0, 0.0),
+        (12.0, 17.0, 8.0, 30.0),
+        (12.0, 40.0, 8.0, 75.0),
+        (10.0, 17.0, 8.0, 0.0),
+        (12.0, 17.0, 12.0, 50.0),
+        (15.0, 40.0, 12.0, 50.0),
+    ];
+    let mut worst: f64 = 0.0;
+    for (cell, deg, length, dir) in cases {
+        let a = f64::to_radians(dir);
+        let (img, truth) = smeared_tag(5, 180, cell, deg, [length * a.cos(), length * a.sin()]);
+        let dets = d.detect(&ImageView::new(&img, 180, 180, 180).expect("view")).expect("runs");
+        assert_eq!(dets.len(), 1, "cell {cell}, {deg}°, smear {length} px at {dir}°");
+        let e = worst_corner(&dets[0].corners, &truth);
+        assert!(e < 0.05, "cell {cell}, {deg}°, smear {length} px at {dir}°: {e:.3} px");
+        // Without the smeared-edge fit, the window stays where the quad put it.
+        let old = plain.detect(&ImageView::new(&img, 180, 180, 180).expect("view")).expect("runs");
+        if let Some(o) = old.first() {
+            worst = worst.max(worst_corner(&o.corners, &truth));
+        }
+    }
+    assert!(
+        worst > 0.3,
+        "the plain fit was expected to miss a smeared corner by tenths of a pixel, worst {worst:.3} px"
+    );
+}
+
+#[test]
+fn a_ramp_is_read_at_half_its_height() {
+    // A plateau on even steps 10..=30 with a shoulder below half its height out to 40.
+    let mut p = vec![0.0; 49];
+    for k in (10..=30).step_by(2) {
+        p[k] = 10.0;
+    }
+    for k in (32..=40).step_by(2) {
+        p[k] = 4.0;
+    }
+    assert_eq!(ramp_extent(&p, 20, 3), Some((10, 30)));
+    // From beside it, within reach.
+    assert_eq!(ramp_extent(&p, 35, 3), Some((10, 30)));
+    assert_eq!(ramp_extent(&[0.0; 9], 4, 3), None);
 }

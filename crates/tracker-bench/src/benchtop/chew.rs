@@ -72,6 +72,7 @@ pub fn run(
             let config = TrackerConfig {
                 detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
                 readout_s,
+                exposure_s,
                 ..TrackerConfig::default()
             };
             let mut ours = Tracker::new(printed.clone(), config)?;

@@ -571,6 +571,7 @@ impl ReferenceStack {
 fn tracker_config(truth: &jawtrack_synth::GroundTruth) -> TrackerConfig {
     TrackerConfig {
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
+        exposure_s: truth.realism.exposure_s,
         ..TrackerConfig::default()
     }
 }
