@@ -10,7 +10,7 @@ use jawtrack_calibration::SeenTag;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use jawtrack_recording::{BiteRecord, BodyRecord, FrameRecord, TimingsRecord};
-use jawtrack_tracker::{BodyResult, Flag, Tracker};
+use jawtrack_tracker::{BodyResult, Flag, Tracker, TrackerConfig};
 use nalgebra::{Point3, Vector3};
 use std::collections::VecDeque;
 
@@ -213,6 +213,12 @@ impl Engine {
             )));
         }
         let camera = intrinsics.camera()?;
+        // The frame's exposure, with the tracked velocity, says whether its tags are smeared.
+        if let Some(e) = exposure_s
+            && e != self.tracker.config().exposure_s
+        {
+            self.tracker.set_config(TrackerConfig { exposure_s: e, ..*self.tracker.config() })?;
+        }
         let r = self.tracker.track(view, &camera, t)?;
         self.times.push_back(t);
         while self.times.len() > 2 && self.times.front().is_some_and(|&first| t - first > 1.0) {
@@ -443,5 +449,21 @@ mod tests {
         assert!(!kept.contains(&ambiguous), "{kept:?}");
         let changed = Settings { decimate: 1.0, threads: 2, region_search: false, smooth: true, ..default_settings() };
         assert_eq!(lone_frame(lone, Some(changed)), kept, "the settings change lost the motion");
+    }
+
+    #[test]
+    fn each_frames_exposure_is_told_to_the_tracker_and_recorded() {
+        let mut engine = Engine::new(Marker::default(), default_settings()).expect("engine");
+        let blank = vec![128u8; 64 * 48];
+        let view = ImageView::new(&blank, 64, 48, 64).expect("view");
+        let intrinsics = Intrinsics { fx: 60.0, fy: 60.0, cx: 31.5, cy: 23.5, k1: 0.0, k2: 0.0 };
+        let default_exposure = engine.tracker.config().exposure_s;
+        let r = engine.track(&view, &intrinsics, 0.0, None).expect("tracked");
+        assert_eq!((r.exposure_s, engine.tracker.config().exposure_s), (None, default_exposure));
+        let r = engine.track(&view, &intrinsics, 0.1, Some(0.002)).expect("tracked");
+        assert_eq!((r.exposure_s, engine.tracker.config().exposure_s), (Some(0.002), 0.002));
+        assert_eq!(record_of(&r).expect("a record").exposure_s, Some(0.002));
+        let e = engine.track(&view, &intrinsics, 0.2, Some(-1.0)).expect_err("refused").to_string();
+        assert!(e.contains("exposure"), "{e}");
     }
 }
