@@ -16,17 +16,67 @@ use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_f
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// What `--like` takes from a recording: its header's camera, timing and marker.
+#[derive(Default)]
+struct Like {
+    intrinsics: Option<CameraIntrinsics>,
+    readout_s: Option<f64>,
+    exposure_s: Option<f64>,
+    marker: Option<Marker>,
+}
+
+impl Like {
+    fn read(path: Option<&Path>) -> Result<Like> {
+        let Some(path) = path else { return Ok(Like::default()) };
+        let recording = jawtrack_recording::open(path)?;
+        let Some(h) = recording.header else {
+            bail!("--like {}: the recording has no header line to take the camera from", path.display())
+        };
+        // The app records each frame's exposure; the header's is a session-wide one.
+        let mut exposures: Vec<f64> = recording.frames.iter().filter_map(|f| f.exposure_s).collect();
+        exposures.sort_by(f64::total_cmp);
+        let marker = match &h.marker {
+            Some(m) => Some(
+                Marker::from_json(&m.to_string()).with_context(|| format!("--like {}: its marker", path.display()))?,
+            ),
+            None => None,
+        };
+        let like = Like {
+            intrinsics: h.intrinsics,
+            readout_s: h.readout_s,
+            exposure_s: h.exposure_s.or_else(|| exposures.get(exposures.len() / 2).copied()),
+            marker,
+        };
+        eprintln!(
+            "note: like {}: intrinsics {}, readout {}, exposure {}, marker {} (each unless given)",
+            path.display(),
+            if like.intrinsics.is_some() { "taken" } else { "not in it" },
+            like.readout_s.map_or("not in it".into(), |r| format!("{:.2} ms", r * 1e3)),
+            like.exposure_s.map_or("not in it".into(), |e| format!("{:.2} ms", e * 1e3)),
+            if like.marker.is_some() { "taken" } else { "not in it" },
+        );
+        Ok(like)
+    }
+}
 
 /// Arguments of `jawtrack track`.
 #[derive(Args)]
 pub(crate) struct TrackArgs {
-    /// The marker file (nominal or calibrated); default: the nominal 12.7 mm marker.
+    /// The marker file (nominal or calibrated); default: the --like recording's marker, else
+    /// the nominal 12.7 mm marker.
     #[arg(long)]
     marker: Option<PathBuf>,
-    /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2] (pixel centres at integer coordinates).
-    #[arg(long, allow_hyphen_values = true)]
-    intrinsics: CameraIntrinsics,
+    /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2] (pixel centres at integer coordinates);
+    /// default: the --like recording's.
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "like")]
+    intrinsics: Option<CameraIntrinsics>,
+    /// Track as a recording was made: its header's intrinsics, readout, exposure (else its
+    /// frames' median exposure) and marker, each unless given here. For re-tracking the video
+    /// the iPhone app recorded beside its poses (`--video session.mov --like session.jsonl`).
+    #[arg(long, value_name = "RECORDING")]
+    like: Option<PathBuf>,
     /// Registration of the markers to the tooth scans (JSON); adds
     /// `maxilla_scan_from_mandible_scan` to every line.
     #[arg(long)]
@@ -40,9 +90,9 @@ pub(crate) struct TrackArgs {
     /// solved at the same instant. iPhone main cameras read in about 2.4 ms (16 Pro Max) to
     /// 9 ms (14 Pro); on rendered chewing, ignoring a 5 ms readout made the error 13× larger.
     /// Frames are taken as the camera stored them (rows as read), as with --video. Recorded
-    /// in the header.
-    #[arg(long, value_name = "MS", default_value_t = 0.0, allow_hyphen_values = true)]
-    readout_ms: f64,
+    /// in the header. Default: the --like recording's, else 0.
+    #[arg(long, value_name = "MS", allow_hyphen_values = true)]
+    readout_ms: Option<f64>,
     /// The exposure the frames were taken with (ms; default 8.3, a phone's indoor 1/120 s),
     /// recorded in the header: with the markers' tracked velocity it predicts how far their
     /// tags smear, and frames smeared 3 px or more have their edges fitted as motion ramps.
@@ -92,22 +142,33 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     {
         bail!("--fps must be a positive number, got {fps}");
     }
-    if !(a.readout_ms.is_finite() && (0.0..1000.0).contains(&a.readout_ms)) {
-        bail!("--readout-ms must be at least 0 and under 1000 ms, got {}", a.readout_ms);
+    if let Some(r) = a.readout_ms
+        && !(r.is_finite() && (0.0..1000.0).contains(&r))
+    {
+        bail!("--readout-ms must be at least 0 and under 1000 ms, got {r}");
     }
     if let Some(e) = a.exposure_ms
         && !(e.is_finite() && e > 0.0 && e < 1000.0)
     {
         bail!("--exposure-ms must be a number of milliseconds above 0 and under 1000, got {e}");
     }
-    a.intrinsics.validate().context("--intrinsics")?;
-    let marker = match &a.marker {
-        Some(p) => {
+    let like = Like::read(a.like.as_deref())?;
+    let intrinsics = match (a.intrinsics, like.intrinsics) {
+        (Some(k), _) => k,
+        (None, Some(k)) => k,
+        (None, None) => bail!("--like's header names no intrinsics: give --intrinsics fx,fy,cx,cy[,k1,k2]"),
+    };
+    intrinsics.validate().context(if a.intrinsics.is_some() { "--intrinsics" } else { "--like's intrinsics" })?;
+    let readout_s = a.readout_ms.map(|r| r / 1000.0).or(like.readout_s).unwrap_or(0.0);
+    let exposure_s = a.exposure_ms.map(|e| e / 1000.0).or(like.exposure_s);
+    let marker = match (&a.marker, like.marker) {
+        (Some(p), _) => {
             let m = Marker::load(p)?;
             crate::marker::require_both_bodies(&m, p)?;
             m
         }
-        None => {
+        (None, Some(m)) => m,
+        (None, None) => {
             eprintln!("note: no --marker given; using the nominal 12.7 mm marker (calibrate yours for sub-0.1 mm)");
             Marker::default()
         }
@@ -129,8 +190,8 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         },
         search: SearchConfig { roi: a.roi, ..SearchConfig::default() },
         smoother: a.smooth.then(SmootherConfig::default),
-        readout_s: a.readout_ms / 1000.0,
-        exposure_s: a.exposure_ms.map_or(TrackerConfig::default().exposure_s, |e| e / 1000.0),
+        readout_s,
+        exposure_s: exposure_s.unwrap_or(TrackerConfig::default().exposure_s),
         ..TrackerConfig::default()
     };
     if a.out.as_os_str() != "-" {
@@ -149,7 +210,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             let mut kept = Vec::new();
             let bar = crate::progress::bar("tracking (1 of 2)", source.len().map(|n| n as u64), "frames");
             while let Some(frame) = source.next_frame()? {
-                let tracked = track_frame(&mut tracker, &frame, &a.intrinsics);
+                let tracked = track_frame(&mut tracker, &frame, &intrinsics);
                 let rows = frame.image.as_ref().map_or(0, |i| i.height);
                 kept.push(Kept { name: frame.name, t: frame.t, tracked: tracked.map(|r| Detected::of(r, rows)) });
                 bar.inc(1);
@@ -160,7 +221,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
                 None => a.frames.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
             };
             let refined =
-                refine_marker(tracker.marker(), &kept, &a.intrinsics, path, &recording, a.out.as_os_str() == "-")?;
+                refine_marker(tracker.marker(), &kept, &intrinsics, path, &recording, a.out.as_os_str() == "-")?;
             let mut again = Tracker::new(refined, config)?;
             again.set_registration(tracker.registration().cloned());
             (again, Some(kept))
@@ -172,9 +233,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         Box::new(create_file(&a.out, a.force.overwrite()).map_err(|e| a.force.explain(e))?)
     };
     let mut header = RecordingHeader::new("jawtrack track");
-    header.intrinsics = Some(a.intrinsics);
-    header.readout_s = Some(a.readout_ms / 1000.0);
-    header.exposure_s = a.exposure_ms.map(|e| e / 1000.0);
+    header.intrinsics = Some(intrinsics);
+    header.readout_s = Some(readout_s);
+    header.exposure_s = exposure_s;
     header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
     header.settings = serde_json::json!({
         "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
@@ -190,7 +251,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             let record = match tracked {
                 Ok(r) => {
                     summary.add(&r, tracker.uncalibrated_tags());
-                    views.add(&r, &a.intrinsics);
+                    views.add(&r, &intrinsics);
                     r.to_record(index, Some(name))
                 }
                 Err(why) => {
@@ -205,7 +266,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         Some(kept) => {
             let bar = crate::progress::bar("tracking (2 of 2)", Some(kept.len() as u64), "frames");
             for k in kept {
-                let tracked = k.tracked.map(|d| d.solve(&mut tracker, &a.intrinsics, k.t));
+                let tracked = k.tracked.map(|d| d.solve(&mut tracker, &intrinsics, k.t));
                 write(&bar, &mut tracker, &k.name, k.t, tracked)?;
                 bar.inc(1);
             }
@@ -215,7 +276,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
             while let Some(frame) = source.next_frame()? {
                 // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
-                let tracked = track_frame(&mut tracker, &frame, &a.intrinsics);
+                let tracked = track_frame(&mut tracker, &frame, &intrinsics);
                 write(&bar, &mut tracker, &frame.name, frame.t, tracked)?;
                 bar.inc(1);
             }
