@@ -307,6 +307,27 @@ impl Marker {
         self.tags().any(|(_, t)| t.provenance.is_some_and(|p| p.is_calibrated()))
     }
 
+    /// The ids of the tags whose place was measured rather than assumed, ascending: placed by a
+    /// calibration, or anywhere but where the ideal solid of this edge puts a tag of its size
+    /// on its face (a calibrated file of version 1, or a print's true geometry). A tag of the
+    /// nominal model is not.
+    pub fn measured_tags(&self) -> Vec<u32> {
+        let solid = Dodecahedron::new(self.edge);
+        let moved = |t: &Tag| {
+            solid.faces().get(t.face).is_none_or(|face| {
+                let ideal = nominal_tag(face, t.id, t.size);
+                ideal.corners.iter().zip(&t.corners).any(|(a, b)| (a - b).norm() > MEASURED_MM)
+            })
+        };
+        let mut ids: Vec<u32> = self
+            .tags()
+            .filter(|(_, t)| t.provenance.is_some_and(|p| p.is_calibrated()) || moved(t))
+            .map(|(_, t)| t.id)
+            .collect();
+        ids.sort_unstable();
+        ids
+    }
+
     /// The tags of a calibrated marker that no calibration placed (left nominal, or of a body
     /// the calibration never saw), ascending by id; none for a marker that is not calibrated,
     /// whose tags are all nominal alike.
@@ -323,6 +344,10 @@ impl Marker {
         ids
     }
 }
+
+/// A tag this close to its ideal place (mm, each corner) is taken for an unmeasured one: well
+/// under a print's errors, well over a JSON round trip's.
+const MEASURED_MM: f64 = 1e-6;
 
 fn nominal_tag(face: &Face, id: u32, size: f64) -> Tag {
     let h = size / 2.0;
@@ -454,5 +479,22 @@ mod tests {
             assert!(err.contains(word), "{err}");
         }
         assert!(Marker::nominal(12.7, Some(8.0)).is_ok());
+    }
+
+    #[test]
+    fn measured_tags_are_the_moved_and_the_calibrated() {
+        let m = Marker::default();
+        assert!(m.measured_tags().is_empty(), "the ideal solid is assumed, not measured");
+        let again = Marker::from_json(&m.to_json()).expect("round trip");
+        assert!(again.measured_tags().is_empty(), "a nominal file read back is still nominal");
+        let shift = PrintError { shift_x: 0.01, ..PrintError::default() };
+        let mut printed = m.with_print_errors(&[(14, shift), (3, shift)]).expect("ids exist");
+        assert_eq!(printed.measured_tags(), vec![3, 14]);
+        printed.bodies[0].tags[7].provenance =
+            Some(TagProvenance::Calibrated { views: 9, rms_before_px: 1.0, rms_after_px: 0.1 });
+        let id = printed.bodies[0].tags[7].id;
+        assert!(printed.measured_tags().contains(&id), "a tag a calibration placed where the model had it");
+        printed.bodies[0].tags[8].provenance = Some(TagProvenance::Nominal { views: 2 });
+        assert!(!printed.measured_tags().contains(&printed.bodies[0].tags[8].id));
     }
 }

@@ -25,6 +25,7 @@
 //! before the bodies are solved, so both are reported at the same instant.
 
 pub mod bite;
+pub mod oblique;
 pub mod registration;
 pub mod roi;
 pub mod smoothing;
@@ -42,6 +43,7 @@ use jawtrack_pose::{
 };
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use nalgebra::{Matrix6, Point2, Point3};
+use oblique::tag_rms;
 use roi::{BodyState, Timed};
 use std::time::Instant;
 
@@ -243,6 +245,8 @@ pub struct Tracker {
     bite: BiteWindow,
     /// Ids of the tags a calibrated marker left nominal, ascending (empty for a nominal marker).
     uncalibrated: Vec<u32>,
+    /// Ids of the tags whose place was measured ([`Marker::measured_tags`]), ascending.
+    measured: Vec<u32>,
 }
 
 fn slot(kind: BodyKind) -> usize {
@@ -263,6 +267,7 @@ impl Tracker {
                 .unwrap_or_default()
         });
         let uncalibrated = marker.uncalibrated_tags().into_iter().map(|(_, id)| id).collect();
+        let marker_measured = marker.measured_tags();
         Ok(Tracker {
             detector: Detector::new(config.detector)?,
             marker,
@@ -276,6 +281,7 @@ impl Tracker {
             tag_counts: Default::default(),
             bite: BiteWindow::new(config.bite),
             uncalibrated,
+            measured: marker_measured,
         })
     }
 
@@ -394,11 +400,7 @@ impl Tracker {
         let start = Instant::now();
         let expected = self.expected_region(frame, camera, t);
         let mut searched = expected;
-        let smeared = BodyKind::ALL.iter().any(|&k| {
-            let (b, reach) = (&self.bodies[slot(k)], self.corners[slot(k)].iter().map(|p| p.coords.norm()));
-            b.last().is_some_and(|l| self.recent(l.0, t))
-                && b.smear_px(camera, self.config.exposure_s, reach.fold(0.0, f64::max)) >= roi::SMEAR_PX
-        });
+        let smeared = self.predicts_smear(camera, t);
         let mut detections = self.detect(frame, expected, smeared)?;
         // A body missing from its expected region, or a tag at the region's edge (the
         // prediction was off, and the edge fit there lacks its pixels): search everywhere.
@@ -449,6 +451,16 @@ impl Tracker {
         roi::region(&groups, camera, frame.width(), frame.height(), s.margin, s.min_margin_px)
     }
 
+    /// Whether either body's recent motion predicts a smear of [`roi::SMEAR_PX`] or more over
+    /// the exposure of a frame at `t`.
+    fn predicts_smear(&self, camera: &CameraIntrinsics, t: f64) -> bool {
+        BodyKind::ALL.iter().any(|&k| {
+            let (b, reach) = (&self.bodies[slot(k)], self.corners[slot(k)].iter().map(|p| p.coords.norm()));
+            b.last().is_some_and(|l| self.recent(l.0, t))
+                && b.smear_px(camera, self.config.exposure_s, reach.fold(0.0, f64::max)) >= roi::SMEAR_PX
+        })
+    }
+
     /// Solves both bodies from detections already made (e.g. by a detector elsewhere) in a
     /// frame of `rows` rows taken at `t` (s): the time of its centre row.
     pub fn solve(&mut self, detections: Vec<Detection>, camera: &CameraIntrinsics, t: f64, rows: usize) -> FrameResult {
@@ -459,6 +471,7 @@ impl Tracker {
         if detections.is_empty() {
             flags.push(Flag::NoTags);
         }
+        let smeared = self.predicts_smear(camera, t);
         let mut solved: [Option<(BodyPose, Vec<u32>)>; 2] = [None, None];
         let mut seen: [Option<Pose>; 2] = [None, None];
         for kind in BodyKind::ALL {
@@ -469,7 +482,7 @@ impl Tracker {
                 continue;
             };
             seen[slot(kind)] = raw;
-            solved[slot(kind)] = Some(self.drop_flicker(kind, pose, observations, camera, prior.as_ref()));
+            solved[slot(kind)] = Some(self.drop_flicker(kind, pose, observations, camera, prior.as_ref(), smeared));
         }
         let mut bodies: [Option<BodyResult>; 2] = [None, None];
         // Settle each lone tag by the other body first: its pose this frame carries any motion
@@ -614,7 +627,9 @@ impl Tracker {
     }
 
     /// Drops a tag that just appeared beside tags tracked in the frame before and fits far
-    /// worse than they do, and solves again without it. Returns the pose and every tag dropped.
+    /// worse than they do, and in a `smeared` frame an oblique tag that misses the face-on
+    /// ones' pose ([`oblique`]), and solves again without them. Returns the pose and every tag
+    /// dropped.
     fn drop_flicker(
         &self,
         kind: BodyKind,
@@ -622,17 +637,25 @@ impl Tracker {
         mut observations: Vec<Observation>,
         camera: &CameraIntrinsics,
         prior: Option<&Pose>,
+        smeared: bool,
     ) -> (BodyPose, Vec<u32>) {
         let mut rejected = pose.rejected_tags.clone();
         let before = &self.bodies[slot(kind)].tags;
         let (new, kept): (Vec<u32>, Vec<u32>) = pose.tags.iter().partition(|id| !before.contains(id));
-        if new.is_empty() || kept.is_empty() {
-            return (pose, rejected);
-        }
         let error = |ids: &[u32]| tag_rms(&observations, ids, &pose.camera_from_body, camera);
         let settled = error(&kept);
-        let flickers: Vec<u32> =
-            new.into_iter().filter(|&id| error(&[id]) > self.config.flicker_px.max(3.0 * settled)).collect();
+        let mut flickers: Vec<u32> = match kept.is_empty() {
+            true => Vec::new(),
+            false => new.into_iter().filter(|&id| error(&[id]) > self.config.flicker_px.max(3.0 * settled)).collect(),
+        };
+        if smeared {
+            let (pnp, body) = (&self.config.pnp, &pose.camera_from_body);
+            let misfits =
+                oblique::smeared_misfits(&self.marker, &self.measured, &pose.tags, &observations, body, camera, pnp);
+            flickers.extend(misfits);
+            flickers.sort_unstable();
+            flickers.dedup();
+        }
         if flickers.is_empty() {
             return (pose, rejected);
         }
@@ -735,18 +758,6 @@ fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageView<'_>, di
 }
 
 /// The RMS reprojection error (px) of the observations of tags `ids` under `camera_from_body`.
-fn tag_rms(observations: &[Observation], ids: &[u32], camera_from_body: &Pose, camera: &CameraIntrinsics) -> f64 {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for o in observations.iter().filter(|o| ids.contains(&o.tag)) {
-        let e = camera
-            .project(&camera_from_body.transform_point(&o.body))
-            .map_or(f64::INFINITY, |p| (p - o.pixel).norm_squared());
-        sum += e;
-        n += 1;
-    }
-    if n == 0 { 0.0 } else { (sum / n as f64).sqrt() }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
