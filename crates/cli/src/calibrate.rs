@@ -3,12 +3,11 @@
 //! nominal schema, with the assembly errors found, per-tag corrections, and the reprojection
 //! error before and after.
 
-use crate::frames::{FrameSource, open_frames};
+use crate::frames::{FrameSource, detect_marker_tags, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_apriltag::{Detector, DetectorConfig};
 use jawtrack_calibration::{
-    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, Kept, Refinement, SeenTag, SessionOptions,
+    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, Kept, Refinement, SessionOptions,
     TagCorrection, calibrate, refine,
 };
 use jawtrack_marker::Marker;
@@ -84,43 +83,15 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
     Ok(())
 }
 
-/// Detects the marker's tags in every frame, with a progress bar.
+/// Detects the marker's tags in every frame, with a progress bar, as views taken by `camera`.
 pub(crate) fn detect_views(
-    mut source: Box<dyn FrameSource>,
+    source: Box<dyn FrameSource>,
     marker: &Marker,
     camera: &CameraIntrinsics,
     linear_edges: bool,
 ) -> Result<Vec<CalibrationFrame>> {
-    let detector = Detector::new(DetectorConfig { linear_edges, ..DetectorConfig::default() })?;
-    let bar = crate::progress::bar("detecting", source.len().map(|n| n as u64), "frames");
-    let mut frames = Vec::new();
-    let mut unreadable = 0;
-    while let Some(frame) = source.next_frame()? {
-        bar.inc(1);
-        let image = match frame.image {
-            Ok(image) => image,
-            Err(why) => {
-                unreadable += 1;
-                bar.suspend(|| eprintln!("warning: {}: {why}; skipped", frame.name));
-                continue;
-            }
-        };
-        let tags = detector
-            .detect(&image.view().with_context(|| frame.name.clone())?)?
-            .into_iter()
-            .filter(|d| marker.find_tag(d.id).is_some())
-            .map(|d| SeenTag { id: d.id, corners: d.corners })
-            .collect();
-        frames.push(CalibrationFrame { camera: *camera, tags });
-    }
-    if unreadable > 0 {
-        eprintln!("warning: {unreadable} frames could not be read and were left out");
-    }
-    bar.finish_and_clear();
-    if frames.is_empty() {
-        bail!("none of the frames could be read: nothing to calibrate from");
-    }
-    Ok(frames)
+    let frames = detect_marker_tags(source, marker, linear_edges)?;
+    Ok(frames.into_iter().map(|f| CalibrationFrame { camera: *camera, tags: f.tags }).collect())
 }
 
 /// Prints what the calibration found and each tag's correction; warns about tags left nominal.

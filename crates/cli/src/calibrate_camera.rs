@@ -2,13 +2,10 @@
 //! short video of the markers waved in front of it (`jawtrack_camera_calibration`), each with
 //! its uncertainty, written as JSON and printed as the flags `jawtrack track` takes.
 
-use crate::frames::open_frames;
+use crate::frames::{detect_marker_tags, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_apriltag::{Detector, DetectorConfig};
-use jawtrack_camera_calibration::{
-    CameraCalibration, CameraCalibrationOptions, CameraFrame, SeenTag, calibrate_camera,
-};
+use jawtrack_camera_calibration::{CameraCalibration, CameraCalibrationOptions, CameraFrame, calibrate_camera};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use std::path::PathBuf;
@@ -107,49 +104,19 @@ pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
 
 /// Detects the marker's tags in every frame, with a progress bar; the frames and their size.
 fn detect(a: &CalibrateCameraArgs, marker: &Marker) -> Result<(Vec<CameraFrame>, u32, u32)> {
-    let mut source = open_frames(a.video.as_deref(), &a.frames, a.fps)?;
-    let detector = Detector::new(DetectorConfig { linear_edges: a.linear_edges, ..DetectorConfig::default() })?;
-    let bar = crate::progress::bar("detecting", source.len().map(|n| n as u64), "frames");
-    let mut frames = Vec::new();
-    let mut size: Option<(usize, usize)> = None;
-    let mut unreadable = 0;
-    while let Some(frame) = source.next_frame()? {
-        bar.inc(1);
-        let image = match frame.image {
-            Ok(image) => image,
-            Err(why) => {
-                unreadable += 1;
-                bar.suspend(|| eprintln!("warning: {}: {why}; skipped", frame.name));
-                continue;
-            }
-        };
-        match size {
-            None => size = Some((image.width, image.height)),
-            Some(s) if s != (image.width, image.height) => bail!(
-                "{} is {}×{}, the frames before it {}×{}: one calibration is of one camera at one resolution",
-                frame.name,
-                image.width,
-                image.height,
-                s.0,
-                s.1
-            ),
-            Some(_) => {}
-        }
-        let tags = detector
-            .detect(&image.view().with_context(|| frame.name.clone())?)?
-            .into_iter()
-            .filter(|d| marker.find_tag(d.id).is_some())
-            .map(|d| SeenTag { id: d.id, corners: d.corners })
-            .collect();
-        frames.push(CameraFrame { t: frame.t, tags });
+    let frames = detect_marker_tags(open_frames(a.video.as_deref(), &a.frames, a.fps)?, marker, a.linear_edges)?;
+    let (w, h) = frames[0].size;
+    if let Some(f) = frames.iter().find(|f| f.size != (w, h)) {
+        bail!(
+            "{} is {}×{}, {} is {w}×{h}: one calibration is of one camera at one resolution",
+            f.name,
+            f.size.0,
+            f.size.1,
+            frames[0].name
+        );
     }
-    bar.finish_and_clear();
-    if unreadable > 0 {
-        eprintln!("warning: {unreadable} frames could not be read and were left out");
-    }
-    let Some((w, h)) = size else { bail!("none of the frames could be read: nothing to calibrate from") };
     let (Ok(w), Ok(h)) = (u32::try_from(w), u32::try_from(h)) else { bail!("frames of {w}×{h} px are too large") };
-    Ok((frames, w, h))
+    Ok((frames.into_iter().map(|f| CameraFrame { t: f.t, tags: f.tags }).collect(), w, h))
 }
 
 /// The flags that give `jawtrack track` this camera.

@@ -1,8 +1,11 @@
 //! Where recorded frames come from: image files (PNG, JPEG), folders of them in name order, or
-//! a video decoded to luma by ffmpeg. Shared by `jawtrack track` and `jawtrack calibrate-marker`.
+//! a video decoded to luma by ffmpeg. Shared by `jawtrack track`, `calibrate-marker` and
+//! `calibrate-camera`, the last two through [`detect_marker_tags`].
 
 use anyhow::{Context, Result, bail};
-use jawtrack_apriltag::{DetectError, ImageView};
+use jawtrack_apriltag::{DetectError, Detector, DetectorConfig, ImageView};
+use jawtrack_calibration::SeenTag;
+use jawtrack_marker::Marker;
 use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -36,6 +39,54 @@ impl Luma {
     pub(crate) fn view(&self) -> Result<ImageView<'_>, DetectError> {
         ImageView::new(&self.pixels, self.width, self.height, self.width)
     }
+}
+
+/// One readable frame's tags of the marker, as the detector saw them.
+pub(crate) struct TaggedFrame {
+    pub name: String,
+    pub t: f64,
+    /// Width and height (px).
+    pub size: (usize, usize),
+    pub tags: Vec<SeenTag>,
+}
+
+/// Detects `marker`'s tags in every frame of `source`, with a progress bar; a frame that cannot
+/// be read is named in a warning and left out. Refuses a source with no readable frame.
+pub(crate) fn detect_marker_tags(
+    mut source: Box<dyn FrameSource>,
+    marker: &Marker,
+    linear_edges: bool,
+) -> Result<Vec<TaggedFrame>> {
+    let detector = Detector::new(DetectorConfig { linear_edges, ..DetectorConfig::default() })?;
+    let bar = crate::progress::bar("detecting", source.len().map(|n| n as u64), "frames");
+    let mut frames = Vec::new();
+    let mut unreadable = 0;
+    while let Some(frame) = source.next_frame()? {
+        bar.inc(1);
+        let image = match frame.image {
+            Ok(image) => image,
+            Err(why) => {
+                unreadable += 1;
+                bar.suspend(|| eprintln!("warning: {}: {why}; skipped", frame.name));
+                continue;
+            }
+        };
+        let tags = detector
+            .detect(&image.view().with_context(|| frame.name.clone())?)?
+            .into_iter()
+            .filter(|d| marker.find_tag(d.id).is_some())
+            .map(|d| SeenTag { id: d.id, corners: d.corners })
+            .collect();
+        frames.push(TaggedFrame { name: frame.name, t: frame.t, size: (image.width, image.height), tags });
+    }
+    bar.finish_and_clear();
+    if unreadable > 0 {
+        eprintln!("warning: {unreadable} frames could not be read and were left out");
+    }
+    if frames.is_empty() {
+        bail!("none of the frames could be read: nothing to calibrate from");
+    }
+    Ok(frames)
 }
 
 /// Where frames come from.
