@@ -31,6 +31,7 @@ mod demo;
 mod detect;
 mod export;
 mod frames;
+mod hinge_axis;
 mod link;
 mod marker;
 mod metrics;
@@ -108,6 +109,9 @@ enum Command {
     /// excursion, protrusion and retrusion, and the envelope of motion (convex hull area) in
     /// the sagittal and frontal planes; optionally plot the envelopes.
     Metrics(metrics::MetricsArgs),
+    /// The kinematic hinge axis of a recorded opening: a point and direction in the maxilla
+    /// marker's frame (and the upper scan's, given a registration), with its uncertainty.
+    HingeAxis(hinge_axis::HingeAxisArgs),
     /// Occlusal contacts over a recording: places the lower scan by each frame's pose, finds
     /// where the arches penetrate or come within a threshold, groups them into regions
     /// (centroid, area, depth, tooth), and writes contacts.jsonl, contact-frequency and depth
@@ -139,6 +143,7 @@ fn main() {
         Command::Export(a) => export::export(&a),
         Command::Plot(a) => export::plot(&a),
         Command::Metrics(a) => metrics::run(&a),
+        Command::HingeAxis(a) => hinge_axis::run(&a),
         Command::Contacts(a) => contacts::run(&a),
     };
     if let Err(e) = result {

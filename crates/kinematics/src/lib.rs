@@ -9,15 +9,45 @@
 //! - [`metrics`]: the incisor's clinical extremes over a session ([`Metrics`]), and how many
 //!   times the jaw opened.
 //! - [`envelope`]: envelopes of motion as convex hulls in one plane ([`Envelope`]).
+//! - [`hinge`]: the kinematic hinge axis fitted to an opening ([`HingeAxis`]).
 //!
 //! The head frame: X toward the patient's left, Y down, Z posterior (mm).
 
 pub mod envelope;
+pub mod hinge;
 pub mod metrics;
 pub mod mounting;
 pub mod point;
 
 pub use envelope::{Envelope, convex_hull, polygon_area};
+pub use hinge::{HingeAxis, HingeOptions};
 pub use metrics::{Extreme, Metrics, Sample};
 pub use mounting::{Mounting, Side};
 pub use point::{Displacement, Incisor};
+
+/// What the kinematics refuses.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum KinematicsError {
+    /// A setting out of range.
+    #[error("{0}")]
+    Options(String),
+    /// The hinge fit's window holds too few poses or too small a turn.
+    #[error(
+        "the hinge axis needs an opening: the window holds {poses} poses turned between the closed jaw and \
+         {window_deg}° (the widest {widest_deg:.1}°), and the fit needs 3 or more turned at least {least_deg}°; \
+         record the jaw opening slowly from closed by 10–20 mm at the incisors, or choose the window with the opening"
+    )]
+    TooLittleTurn {
+        /// Poses in the window.
+        poses: usize,
+        /// The widest turn among them (°).
+        widest_deg: f64,
+        /// The turn the fit needs (°).
+        least_deg: f64,
+        /// The largest turn the window takes (°).
+        window_deg: f64,
+    },
+    /// The poses do not fix an axis (e.g. all turns about different axes cancel out).
+    #[error("the poses do not fix a hinge axis: their turns share no axis")]
+    Degenerate,
+}

@@ -467,6 +467,7 @@ fn report(run: &Run, o: &Options, files: &[PathBuf], out: &Path) -> String {
         );
     }
 
+    md.push_str(&benchtop::hinge_axis::markdown(run, &main_columns(run)));
     md.push_str(&benchtop::session_report(run));
     let _ = writeln!(md, "## Flips (frames more than {FLIP_DEG}° off)\n");
     let _ = writeln!(md, "| column | static | hinge | excursion |\n|---|---|---|---|");

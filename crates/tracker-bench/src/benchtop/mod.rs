@@ -19,6 +19,7 @@
 //! undefined). To first order, the components equal the Euler-angle errors about the same axes.
 
 pub mod chew;
+pub mod hinge_axis;
 mod session;
 mod tables;
 

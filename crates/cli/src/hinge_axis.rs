@@ -1,0 +1,152 @@
+//! `jawtrack hinge-axis`: the kinematic hinge axis of a recorded opening
+//! (`jawtrack_kinematics::hinge`), in the maxilla marker's frame and, given a registration, in
+//! the upper scan's; printed, or as one JSON object other tools read.
+
+use crate::export::{Rest, SessionArg, load, rest_of};
+use crate::numbers::{clean_json, fixed};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_kinematics::{HingeAxis, HingeOptions, hinge};
+use jawtrack_pose::Pose;
+use jawtrack_tracker::Registration;
+use nalgebra::{Point3, Unit, Vector3};
+use serde_json::{Value, json};
+use std::path::PathBuf;
+
+/// Arguments of `jawtrack hinge-axis`.
+#[derive(Args)]
+pub(crate) struct HingeAxisArgs {
+    /// The recording (JSON lines) of an opening from the closed jaw: slow, 10–20 mm at the
+    /// incisors is enough (the fit takes the pure turn of early opening).
+    recording: PathBuf,
+    #[command(flatten)]
+    session: SessionArg,
+    /// Use the frames from this time (s; the frames' `t`).
+    #[arg(long, value_name = "S")]
+    from: Option<f64>,
+    /// Use the frames up to this time (s).
+    #[arg(long, value_name = "S")]
+    to: Option<f64>,
+    /// The frame (its `frame` number) of the closed jaw the opening starts from; default: the
+    /// bite accepted while recording, else the first frame of the window with a jaw pose.
+    #[arg(long)]
+    rest_frame: Option<u64>,
+    /// Leave out frames turned further than this from the closed jaw (°): past early opening
+    /// the condyles slide forward and no axis is fixed.
+    #[arg(long, default_value_t = HingeOptions::default().max_rotation_deg, value_name = "DEG")]
+    max_rotation_deg: f64,
+    /// The registration file (`jawtrack register`): also give the axis in the upper scan's frame.
+    #[arg(long)]
+    registration: Option<PathBuf>,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `jawtrack hinge-axis`.
+pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
+    let name = a.recording.display();
+    if let (Some(from), Some(to)) = (a.from, a.to)
+        && from >= to
+    {
+        bail!("--from {from} is not before --to {to}: the window is empty");
+    }
+    let registration = match &a.registration {
+        Some(p) => Some(Registration::load(p).with_context(|| format!("registration file {}", p.display()))?),
+        None => None,
+    };
+    let rec = load(&a.recording, a.session)?;
+    let inside = |t: f64| a.from.is_none_or(|f| t >= f) && a.to.is_none_or(|e| t <= e);
+    let window: Vec<(u64, Pose)> =
+        rec.frames.iter().filter(|f| inside(f.t)).filter_map(|f| Some((f.frame, f.maxilla_from_mandible?))).collect();
+    if window.is_empty() {
+        bail!("{name}: no frame {}has a jaw pose (both markers tracked)", window_words(a));
+    }
+    let rest = match (a.rest_frame, rec.rest(None)) {
+        (None, None) => Rest::Frame(window[0].0, window[0].1),
+        (n, _) => rest_of(&rec, n)?.context("no rest pose")?,
+    };
+    let options = HingeOptions { max_rotation_deg: a.max_rotation_deg, ..HingeOptions::default() };
+    let poses: Vec<Pose> = window.iter().map(|(_, p)| *p).collect();
+    let axis = hinge::fit(&poses, &rest.pose(), None, &options).with_context(|| format!("{name}"))?;
+    let scan = registration.as_ref().map(|r| axis.transformed(&r.maxilla_scan_from_maxilla_marker));
+    let mut report = to_json(a, &axis, scan, rest, window.len());
+    clean_json(&mut report);
+    if a.json {
+        say!("{report}");
+    } else {
+        print_summary(&axis, scan, rest, window.len());
+    }
+    Ok(())
+}
+
+/// "between 1 s and 3 s " and the like, for messages.
+fn window_words(a: &HingeAxisArgs) -> String {
+    match (a.from, a.to) {
+        (None, None) => String::new(),
+        (Some(f), None) => format!("from {f} s "),
+        (None, Some(t)) => format!("up to {t} s "),
+        (Some(f), Some(t)) => format!("between {f} s and {t} s "),
+    }
+}
+
+fn xyz(v: &Vector3<f64>) -> Value {
+    json!([v.x, v.y, v.z])
+}
+
+fn to_json(
+    a: &HingeAxisArgs,
+    axis: &HingeAxis,
+    scan: Option<(Point3<f64>, Unit<Vector3<f64>>)>,
+    rest: Rest,
+    frames: usize,
+) -> Value {
+    let mut o = json!({
+        "version": 1,
+        "units": "mm",
+        "frame": "maxilla marker",
+        "point": xyz(&axis.point.coords),
+        "direction": xyz(&axis.direction),
+        "uncertainty": {
+            "point_mm": axis.point_sigma_mm,
+            "direction_deg": axis.direction_sigma_deg,
+            "rms_mm": axis.rms_mm,
+        },
+        "poses_used": axis.poses,
+        "frames_in_window": frames,
+        "max_rotation_deg": axis.max_rotation_deg,
+        "window_s": [a.from, a.to],
+        "rest": rest.to_json(),
+        "recording": a.recording.to_string_lossy(),
+    });
+    if let (Some((p, d)), Value::Object(m)) = (scan, &mut o) {
+        m.insert("point_scan".into(), xyz(&p.coords));
+        m.insert("direction_scan".into(), xyz(&d));
+    }
+    o
+}
+
+fn print_summary(axis: &HingeAxis, scan: Option<(Point3<f64>, Unit<Vector3<f64>>)>, rest: Rest, frames: usize) {
+    let v = |v: &Vector3<f64>, digits: usize| {
+        format!("({}, {}, {})", fixed(v.x, digits), fixed(v.y, digits), fixed(v.z, digits))
+    };
+    say!(
+        "poses              {} of {frames} in the window, turned up to {}° from the closed jaw ({})",
+        axis.poses,
+        fixed(axis.max_rotation_deg, 1),
+        rest.describe()
+    );
+    say!("point              {} mm in the maxilla marker's frame", v(&axis.point.coords, 2));
+    say!("direction          {}", v(&axis.direction, 4));
+    if let Some((p, d)) = scan {
+        say!("point (upper scan) {} mm", v(&p.coords, 2));
+        say!("direction (scan)   {}", v(&d, 4));
+    }
+    say!(
+        "uncertainty (1σ)   {} mm across the axis, {}° in direction; residual RMS {} mm",
+        fixed(axis.point_sigma_mm, 2),
+        fixed(axis.direction_sigma_deg, 2),
+        fixed(axis.rms_mm, 3)
+    );
+    say!("the point is the axis's nearest to the mandible marker at rest, about midway between the condyles");
+}
