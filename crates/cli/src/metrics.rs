@@ -1,6 +1,6 @@
 //! `jawtrack metrics`: the clinical numbers of a recording's lower-incisor motion
 //! (`jawtrack_kinematics::Metrics`: widest opening, lateral excursions, protrusion and
-//! retrusion, each with its frame, and the envelopes of motion), printed, as JSON, or with
+//! retrusion (with the teeth near contact), each with its frame, and the envelopes of motion), printed, as JSON, or with
 //! both envelopes plotted and `metrics.json` written.
 //!
 //! The recording is read as `export` and `plot` read it (sequence order, displacements from the
@@ -10,7 +10,7 @@ use crate::export::{Rest, SessionArg, load, rest_of};
 use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_kinematics::metrics::{frontal, sagittal};
+use jawtrack_kinematics::metrics::{RETRUSION_OPENING_MM, frontal, sagittal};
 use jawtrack_kinematics::{Displacement, Incisor, Metrics, Sample};
 use jawtrack_plot::{self as plot, Series, Style};
 use nalgebra::Point3;
@@ -118,9 +118,18 @@ fn print_summary(m: &Metrics, skipped: usize, rest: Rest, incisor: &Incisor, sta
         ("max left lateral", m.max_left),
         ("max right lateral", m.max_right),
         ("max protrusion", m.max_protrusion),
-        ("max retrusion", m.max_retrusion),
     ] {
         say!("{label:<19} {:>7} mm   (frame {}, t {} s)", mm(e.mm), e.frame, fixed(e.t, 3));
+    }
+    let near = fixed(RETRUSION_OPENING_MM, 0);
+    match m.max_retrusion {
+        Some(e) => say!(
+            "max retrusion       {:>7} mm   (frame {}, t {} s; opened at most {near} mm)",
+            mm(e.mm),
+            e.frame,
+            fixed(e.t, 3)
+        ),
+        None => say!("max retrusion          none   (no frame opened {near} mm or less)"),
     }
     for (label, e) in [("sagittal envelope", &m.sagittal), ("frontal envelope", &m.frontal)] {
         say!("{label:<19} {:>7} mm²  ({} hull vertices)", mm(e.area_mm2), e.hull.len());

@@ -1,5 +1,6 @@
 //! The lower incisor's clinical numbers over a session: widest opening, left and right
-//! lateral excursion, protrusion and retrusion, each with the frame where it happens, and the
+//! lateral excursion, protrusion and retrusion (with the teeth near contact: the backward swing
+//! of an opening arc is not a retrusion), each with the frame where it happens, and the
 //! envelopes of motion in the sagittal plane (protrusive vs opening) and the frontal plane
 //! (lateral vs opening).
 
@@ -41,6 +42,11 @@ impl Extreme {
     }
 }
 
+/// A retrusion is measured with the incisors at most this far open (mm): the mandible pushed
+/// back from rest with the teeth near contact (toward the retruded contact position), not the
+/// backward swing of the incisor on an opening arc, which a hinge opening of 30 mm makes 4 mm.
+pub const RETRUSION_OPENING_MM: f64 = 2.0;
+
 /// The incisor's motion metrics over a path (displacements from rest, mm).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Metrics {
@@ -54,8 +60,9 @@ pub struct Metrics {
     pub max_right: Extreme,
     /// Farthest forward.
     pub max_protrusion: Extreme,
-    /// Farthest back (−protrusive), as a positive number.
-    pub max_retrusion: Extreme,
+    /// Farthest back (−protrusive), as a positive number, among the frames opened no more
+    /// than [`RETRUSION_OPENING_MM`]; `None` when the jaw never came that near closed.
+    pub max_retrusion: Option<Extreme>,
     /// Sagittal envelope: x protrusive, y opening.
     pub sagittal: Envelope,
     /// Frontal envelope: x lateral (patient's left), y opening.
@@ -72,7 +79,11 @@ impl Metrics {
             max_left: Extreme::of(path, |d| d.lateral)?,
             max_right: Extreme::of(path, |d| -d.lateral)?,
             max_protrusion: Extreme::of(path, |d| d.protrusive)?,
-            max_retrusion: Extreme::of(path, |d| -d.protrusive)?,
+            max_retrusion: {
+                let near_closed: Vec<Sample> =
+                    path.iter().copied().filter(|(_, _, d)| d.opening <= RETRUSION_OPENING_MM).collect();
+                Extreme::of(&near_closed, |d| -d.protrusive)
+            },
             sagittal: Envelope::of(&plane(sagittal)),
             frontal: Envelope::of(&plane(frontal)),
         })
@@ -86,7 +97,8 @@ impl Metrics {
             "max_left_lateral": self.max_left.to_json(),
             "max_right_lateral": self.max_right.to_json(),
             "max_protrusion": self.max_protrusion.to_json(),
-            "max_retrusion": self.max_retrusion.to_json(),
+            "max_retrusion": self.max_retrusion.map(Extreme::to_json),
+            "retrusion_max_opening_mm": RETRUSION_OPENING_MM,
             "envelope_sagittal": self.sagittal.to_json("protrusive_mm", "opening_mm"),
             "envelope_frontal": self.frontal.to_json("lateral_mm", "opening_mm"),
         })
@@ -148,24 +160,29 @@ mod tests {
             (0.3, 14, d(1.0, -5.0, 0.5)),
             (0.4, 15, d(3.2, 0.0, 8.0)),
             (0.5, 16, d(30.0, 0.0, 0.0)),
+            (0.6, 17, d(0.8, 0.0, -1.1)),
         ];
         let m = Metrics::compute(&path).expect("a path");
-        assert_eq!(m.frames, 6);
+        assert_eq!(m.frames, 7);
         assert_eq!(m.max_opening, Extreme { mm: 30.0, frame: 11, t: 0.1 }, "ties keep the first frame");
         assert_eq!(m.max_left, Extreme { mm: 6.0, frame: 12, t: 0.2 });
         assert_eq!(m.max_right, Extreme { mm: 5.0, frame: 14, t: 0.3 });
         assert_eq!(m.max_protrusion, Extreme { mm: 8.0, frame: 15, t: 0.4 });
-        assert_eq!(m.max_retrusion, Extreme { mm: 4.0, frame: 11, t: 0.1 });
-        // Sagittal (protrusive, opening): corners (-4,30) (0,0) (8,3.2) (0,30).
-        assert_eq!(m.sagittal.hull.len(), 4);
-        assert!(
-            (m.sagittal.area_mm2 - polygon_area(&[(0.0, 0.0), (8.0, 3.2), (0.0, 30.0), (-4.0, 30.0)])).abs() < 1e-12
-        );
+        // Frame 11 swings 4 mm back while 30 mm open: an opening arc, not a retrusion.
+        assert_eq!(m.max_retrusion, Some(Extreme { mm: 1.1, frame: 17, t: 0.6 }));
+        // Sagittal (protrusive, opening): corners (-4,30) (-1.1,0.8) (0,0) (8,3.2) (0,30).
+        assert_eq!(m.sagittal.hull.len(), 5);
+        let corners = [(-1.1, 0.8), (0.0, 0.0), (8.0, 3.2), (0.0, 30.0), (-4.0, 30.0)];
+        assert!((m.sagittal.area_mm2 - polygon_area(&corners)).abs() < 1e-12);
         assert!(path.iter().all(|(_, _, x)| inside(&m.frontal.hull, frontal(x))));
         assert!(path.iter().all(|(_, _, x)| inside(&m.sagittal.hull, sagittal(x))));
         let j = m.to_json();
         assert_eq!(j["max_right_lateral"]["mm"], 5.0);
-        assert_eq!(j["envelope_sagittal"]["vertices"], 4);
+        assert_eq!(j["envelope_sagittal"]["vertices"], 5);
+        assert_eq!(j["max_retrusion"]["frame"], 17);
+        let open_only = Metrics::compute(&[(0.0, 0, d(5.0, 0.0, -3.0))]).expect("a path");
+        assert_eq!(open_only.max_retrusion, None, "never near closed");
+        assert!(open_only.to_json()["max_retrusion"].is_null());
     }
 
     #[test]
