@@ -208,7 +208,7 @@ fn plot_incisor(
         false,
     );
     let sagittal = plot::chart(
-        "Lower incisor path, sagittal plane (patient facing right)",
+        "Lower incisor path, sagittal plane (seen from the patient's right: facing right)",
         "anterior (mm)",
         "up (mm)",
         &series(&|(_, x)| (closed.z - x.z, closed.y - x.y)),

@@ -10,7 +10,7 @@
 use crate::numbers::{fixed, full};
 use anyhow::{Context, Result, bail};
 use clap::{ArgGroup, Args};
-use jawtrack_kinematics::{Displacement, Incisor};
+use jawtrack_kinematics::{Displacement, Incisor, PlaneView};
 use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{BiteRecord, FrameRecord, Recording, RecordingHeader, SessionId};
@@ -288,49 +288,24 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
             points: path.iter().map(f).collect(),
         }]
     };
-    let [sagittal, frontal, transverse, opening] = PLOTS;
-    let charts = [
-        (
-            sagittal,
-            plot::chart(
-                "Lower incisor, sagittal plane (patient facing right)",
-                "protrusive (mm)",
-                "up (mm)",
-                &series(&|(_, d)| (d.protrusive, -d.opening)),
-                true,
-            ),
+    let mut charts: Vec<(String, _)> = PlaneView::ALL
+        .iter()
+        .map(|&v| {
+            let (x, y) = v.axes();
+            let title = format!("Lower incisor, {}", v.title());
+            (format!("incisor_{}", v.name()), plot::chart(&title, x, y, &series(&|(_, d)| v.project(d)), true))
+        })
+        .collect();
+    charts.push((
+        "incisor_opening".into(),
+        plot::chart(
+            "Lower incisor opening over time",
+            "time (s)",
+            "opening (mm)",
+            &series(&|(t, d)| (*t, d.opening)),
+            false,
         ),
-        (
-            frontal,
-            plot::chart(
-                "Lower incisor, frontal plane (seen from the front)",
-                "patient's left (mm)",
-                "up (mm)",
-                &series(&|(_, d)| (d.lateral, -d.opening)),
-                true,
-            ),
-        ),
-        (
-            transverse,
-            plot::chart(
-                "Lower incisor, transverse plane (seen from above)",
-                "patient's left (mm)",
-                "protrusive (mm)",
-                &series(&|(_, d)| (d.lateral, d.protrusive)),
-                true,
-            ),
-        ),
-        (
-            opening,
-            plot::chart(
-                "Lower incisor opening over time",
-                "time (s)",
-                "opening (mm)",
-                &series(&|(t, d)| (*t, d.opening)),
-                false,
-            ),
-        ),
-    ];
+    ));
     for (stem, doc) in &charts {
         let [svg, png] = plot::save_svg_and_png(doc, &a.out.join(stem))?;
         say!("{}\n{}", svg.display(), png.display());

@@ -10,8 +10,8 @@ use crate::export::{Rest, SessionArg, load, rest_of};
 use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_kinematics::metrics::{RETRUSION_OPENING_MM, frontal, sagittal};
-use jawtrack_kinematics::{Displacement, Incisor, Metrics, Sample};
+use jawtrack_kinematics::metrics::RETRUSION_OPENING_MM;
+use jawtrack_kinematics::{Incisor, Metrics, PlaneView, Sample};
 use jawtrack_plot::{self as plot, Series, Style};
 use nalgebra::Point3;
 use serde_json::{Value, json};
@@ -139,25 +139,9 @@ fn print_summary(m: &Metrics, skipped: usize, rest: Rest, incisor: &Incisor, sta
 /// Writes the two envelope plots (path and hull outline) and metrics.json into `out`.
 fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    // Plotted with "up" upward, as `plot` draws the incisor's path.
+    // The hulls are of (x, opening) pairs; drawn as `plot` draws the path, up upward.
     let up = |(x, y): (f64, f64)| (x, -y);
-    let charts = [
-        (
-            "envelope_sagittal",
-            "Envelope of motion, sagittal plane (patient facing right)",
-            "protrusive (mm)",
-            sagittal as fn(&Displacement) -> (f64, f64),
-            &m.sagittal,
-        ),
-        (
-            "envelope_frontal",
-            "Envelope of motion, frontal plane (seen from the front)",
-            "patient's left (mm)",
-            frontal,
-            &m.frontal,
-        ),
-    ];
-    for (stem, title, x_label, project, envelope) in charts {
+    for (view, envelope) in [(PlaneView::Sagittal, &m.sagittal), (PlaneView::Frontal, &m.frontal)] {
         // The hull closed back to its first corner.
         let outline = envelope.hull.iter().chain(envelope.hull.first()).map(|&q| up(q)).collect();
         // The hull first, so the path stays visible where it runs along the outline.
@@ -167,11 +151,12 @@ fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Re
                 name: "lower incisor",
                 color: "#d62728",
                 style: Style::Line,
-                points: path.iter().map(|(_, _, d)| up(project(d))).collect(),
+                points: path.iter().map(|(_, _, d)| view.project(d)).collect(),
             },
         ];
-        let doc = plot::chart(title, x_label, "up (mm)", &series, true);
-        for p in plot::save_svg_and_png(&doc, &out.join(stem))? {
+        let (x_label, y_label) = view.axes();
+        let doc = plot::chart(&format!("Convex hull of the path, {}", view.title()), x_label, y_label, &series, true);
+        for p in plot::save_svg_and_png(&doc, &out.join(format!("envelope_{}", view.name())))? {
             eprintln!("wrote {}", p.display());
         }
     }

@@ -10,6 +10,8 @@
 //!   times the jaw opened.
 //! - [`envelope`]: envelopes of motion as convex hulls in one plane ([`Envelope`]).
 //! - [`hinge`]: the kinematic hinge axis fitted to an opening ([`HingeAxis`]).
+//! - [`views`]: how each anatomical plane is drawn, and where the patient's left falls
+//!   ([`PlaneView`]).
 //!
 //! The head frame: X toward the patient's left, Y down, Z posterior (mm).
 
@@ -18,12 +20,14 @@ pub mod hinge;
 pub mod metrics;
 pub mod mounting;
 pub mod point;
+pub mod views;
 
 pub use envelope::{Envelope, convex_hull, polygon_area};
 pub use hinge::{HingeAxis, HingeOptions};
 pub use metrics::{Extreme, Metrics, Sample};
 pub use mounting::{Mounting, Side};
 pub use point::{Displacement, Incisor};
+pub use views::PlaneView;
 
 /// What the kinematics refuses.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -653,8 +653,18 @@ fn write_plots(run: &Run, out: &Path) -> Result<Vec<PathBuf>> {
     }
     let main = main_columns(run);
     for (scene, stem, title, axes) in [
-        (SceneKind::Hinge, "hinge_sagittal", "Hinge: lower incisor, sagittal plane (facing right)", [2usize, 1]),
-        (SceneKind::Excursion, "excursion_horizontal", "Excursions: lower incisor, horizontal plane", [0, 2]),
+        (
+            SceneKind::Hinge,
+            "hinge_sagittal",
+            "Hinge: lower incisor, sagittal plane (seen from the patient's right: facing right)",
+            [2usize, 1],
+        ),
+        (
+            SceneKind::Excursion,
+            "excursion_horizontal",
+            "Excursions: lower incisor, horizontal plane (seen from below: the patient's left on the right)",
+            [0, 2],
+        ),
     ] {
         let flip = |axis: usize, v: f64| if axis == 0 { v } else { -v };
         let to_xy = |v: &nalgebra::Vector3<f64>| (flip(axes[0], v[axes[0]]), flip(axes[1], v[axes[1]]));
@@ -678,7 +688,7 @@ fn write_plots(run: &Run, out: &Path) -> Result<Vec<PathBuf>> {
         let (xl, yl) = if scene == SceneKind::Hinge {
             ("anterior (mm)", "up (mm)")
         } else {
-            ("patient's left (mm)", "anterior (mm)")
+            ("toward the patient's left (mm)", "anterior (mm)")
         };
         let doc = plot::chart(title, xl, yl, &series, true);
         files.extend(plot::save_svg_and_png(&doc, &out.join(stem))?);
