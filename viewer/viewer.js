@@ -9,6 +9,8 @@
 // Server contract (matrices are 16 numbers, row-major 4x4; JSON null where unknown):
 //   GET /api/scene -> {"mode": "live"|"replay", "maxilla": MESH, "mandible": MESH,
 //                      "maxilla_from_mandible_rest": [16] | null}
+//     where a scan's MESH may carry "marker_from_mesh": [16] (row-major), its place in
+//     its marker's frame from the registration
 //     MESH = {"format": "stl"|"ply"|"obj", "url": "/api/mesh/..."}
 //          | {"format": "mesh", "positions": [x,y,z,...], "indices": [i,j,k,...]}
 //   GET /api/recording (replay) -> {"frames": [{"t", "seq", "maxilla_from_mandible",
@@ -50,6 +52,11 @@ const hook = {
   lastStatus: null,
   frameCount: 0,
   mandibleMatrix: () => Array.from(mandibleRoot.matrix.elements),
+  // A loaded mesh's placement in its marker's frame, row-major (null before it loads).
+  meshMatrix: (name) => {
+    const o = scene.getObjectByName(`${name}-mesh`);
+    return o ? Array.from(o.matrix.clone().transpose().elements) : null;
+  },
   seek: (i) => {
     if (replay) replay.seek(i);
   },
@@ -331,6 +338,11 @@ async function loadInto(root, spec, name, colour) {
   try {
     const obj = await loadObject(spec, name, colour);
     obj.name = `${name}-mesh`;
+    // A scan with a registration is drawn in its marker's frame (row-major 4x4).
+    if (spec && isMatrix16(spec.marker_from_mesh)) {
+      obj.matrixAutoUpdate = false;
+      obj.matrix.set(...spec.marker_from_mesh);
+    }
     root.add(obj);
     return null;
   } catch (e) {

@@ -237,6 +237,21 @@ try {
         if (!shown.includes(`frame ${want} `)) fail(`the timeline should name frame ${want}: it shows "${shown}"`);
       }
     }
+    // Each scan the server placed by a registration is drawn where it says.
+    const placement = await page.evaluate(async () => {
+      const spec = await (await fetch('/api/scene')).json();
+      return ['maxilla', 'mandible'].map((name) => ({
+        name,
+        want: spec[name] && spec[name].marker_from_mesh,
+        got: window.jawtrack.meshMatrix(name),
+      }));
+    });
+    for (const { name, want, got } of placement) {
+      if (!Array.isArray(want)) continue;
+      if (!Array.isArray(got)) fail(`the ${name} scan is not in the scene`);
+      const off = Math.max(...want.map((v, i) => Math.abs(v - got[i])));
+      if (!(off < 1e-9)) fail(`the ${name} scan is not drawn where its registration places it (off by ${off})`);
+    }
     posesApplied = await page.evaluate(() => window.jawtrack.posesApplied);
 
     // Let at least two frames render after the last pose/seek.

@@ -4,6 +4,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_occlusion::Mesh;
+use jawtrack_tracker::Registration;
 use jawtrack_viewer::{LiveServer, LiveState, ViewerOptions};
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -19,6 +20,11 @@ pub(crate) struct ViewerArgs {
     /// The lower arch's scan, placed by each frame's pose of the mandible in the maxilla.
     #[arg(long, requires = "maxilla")]
     mandible: Option<PathBuf>,
+    /// The registration file (`jawtrack register`): draws each scan on its marker through it,
+    /// so the lower arch sits against the upper in its bite. Without it, the scans are drawn as
+    /// if they were in their markers' frames.
+    #[arg(long, requires = "maxilla")]
+    registration: Option<PathBuf>,
     /// Serve the page from this folder (with three.js installed by `npm ci --prefix viewer`)
     /// instead of the copy built into jawtrack: for working on the page.
     #[arg(long)]
@@ -34,9 +40,21 @@ impl ViewerArgs {
                 Mesh::load(p).with_context(|| option)?;
             }
         }
+        let registration = match &self.registration {
+            Some(p) => Some(Registration::load(p).with_context(|| format!("registration file {}", p.display()))?),
+            None => None,
+        };
+        if self.maxilla.is_some() && registration.is_none() {
+            eprintln!(
+                "warning: --maxilla and --mandible without --registration: the scans are drawn as if they were in \
+                 their markers' frames, so unless they were exported so, the lower arch will not sit in its bite; \
+                 give the registration file `jawtrack register` wrote"
+            );
+        }
         Ok(ViewerOptions {
             maxilla: self.maxilla.clone(),
             mandible: self.mandible.clone(),
+            registration,
             page_dir: self.viewer_dir.clone(),
         })
     }

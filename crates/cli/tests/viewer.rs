@@ -12,6 +12,11 @@ use std::process::{Child, Command, Output, Stdio};
 mod common;
 use common::{jawtrack, refused, s};
 
+/// Each scan a few millimetres and degrees off its marker (row-major 4x4 poses).
+const REGISTRATION: &str = r#"{"version": 1, "units": "mm",
+    "maxilla_scan_from_maxilla_marker": [0.9950041652780258, -0.09983341664682815, 0, 3, 0.09983341664682815, 0.9950041652780258, 0, -2, 0, 0, 1, 5, 0, 0, 0, 1],
+    "mandible_scan_from_mandible_marker": [1, 0, 0, -4, 0, 0.9800665778412416, -0.19866933079506122, 1, 0, 0.19866933079506122, 0.9800665778412416, 2, 0, 0, 0, 1]}"#;
+
 const KEY: &str = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff";
 
 fn viewer_dir() -> PathBuf {
@@ -111,8 +116,11 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
     eprintln!("live: {}", String::from_utf8_lossy(&live.stdout).trim());
 
     let http = free_port();
-    // The replay shows meshes from files: the harness body (STL) on both jaws.
+    // The replay shows meshes from files: the harness body (STL) on both jaws, each placed on
+    // its marker by a registration (check.mjs checks each is drawn where it says).
     let stl = concat!(env!("CARGO_MANIFEST_DIR"), "/../../harness-cad/dodecahedron-with-post.stl");
+    let registration = dir.path().join("registration.json");
+    std::fs::write(&registration, REGISTRATION).expect("write");
     let mut viewer = spawn(&[
         "view",
         recording_str,
@@ -124,6 +132,8 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
         stl,
         "--mandible",
         stl,
+        "--registration",
+        s(&registration),
     ]);
     let replay = check(&format!("http://127.0.0.1:{http}/"), "replay", &dir.path().join("replay.png"));
     viewer.kill().ok();
@@ -162,6 +172,23 @@ fn view_refuses_a_mesh_it_cannot_show_before_serving() {
         "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 20000 0 0\nvertex 0 20000 0\nendloop\nendfacet\nendsolid t\n",
     )
     .expect("write");
+    let serve = format!("127.0.0.1:{}", free_port());
+    let missing = dir.path().join("missing-registration.json");
+    let o = jawtrack(&[
+        "view",
+        s(&recording),
+        "--serve",
+        &serve,
+        "--duration",
+        "1",
+        "--maxilla",
+        good,
+        "--mandible",
+        good,
+        "--registration",
+        s(&missing),
+    ]);
+    refused(&o, "missing-registration.json");
     for (option, bad, why) in [
         ("--maxilla", &photo, "not a readable STL mesh"),
         ("--mandible", &empty, "empty.ply"),

@@ -21,7 +21,7 @@ use jawtrack_kinematics::Incisor;
 use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{BiteRecord, FrameRecord, SessionId};
-use jawtrack_tracker::{BiteRule, BiteWindow};
+use jawtrack_tracker::{BiteRule, BiteWindow, Registration};
 use jawtrack_wire::link::Counters;
 use serde_json::{Value, json};
 use std::net::SocketAddr;
@@ -79,6 +79,11 @@ pub struct ViewerOptions {
     pub maxilla: Option<PathBuf>,
     /// The lower arch's scan, placed by each frame's pose of the mandible in the maxilla.
     pub mandible: Option<PathBuf>,
+    /// How each scan sits on its marker (`jawtrack register`): with it, each scan is drawn in
+    /// its marker's frame through the inverse of its registration, so the lower scan sits
+    /// against the upper as `Registration::maxilla_scan_from_mandible_scan` places it (in its
+    /// bite at rest). Without it, the scans are drawn as if given in their markers' frames.
+    pub registration: Option<Registration>,
     /// Serve the page from this folder (with three.js installed by `npm ci`) instead of the
     /// copy built into the program: for working on the page.
     pub page_dir: Option<PathBuf>,
@@ -89,6 +94,8 @@ pub struct LiveState {
     mode: &'static str,
     page_dir: Option<PathBuf>,
     meshes: [Option<(PathBuf, &'static str)>; 2],
+    /// Per mesh, its marker's frame from the scan's (the inverse of its registration).
+    marker_from_scan: [Option<Pose>; 2],
     tx: tokio::sync::broadcast::Sender<Arc<str>>,
     inner: Mutex<Inner>,
     recording: Option<Value>,
@@ -135,10 +142,14 @@ impl LiveState {
                 *slot = Some((p.clone(), format));
             }
         }
+        let marker_from_scan = options.registration.as_ref().map_or([None, None], |r| {
+            [Some(r.maxilla_scan_from_maxilla_marker.inverse()), Some(r.mandible_scan_from_mandible_marker.inverse())]
+        });
         Ok(LiveState {
             mode,
             page_dir: options.page_dir.clone(),
             meshes,
+            marker_from_scan,
             tx: tokio::sync::broadcast::channel(256).0,
             inner: Mutex::new(Inner {
                 bite: BiteWindow::new(BiteRule::default()),
@@ -275,7 +286,9 @@ impl LiveState {
 
     fn scene(&self) -> Value {
         let mesh = |i: usize, name: &str| match &self.meshes[i] {
-            Some((_, format)) => json!({"format": format, "url": format!("/api/mesh/{name}")}),
+            Some((_, format)) => {
+                json!({"format": format, "url": format!("/api/mesh/{name}"), "marker_from_mesh": self.marker_from_scan[i]})
+            }
             None => dodecahedron_mesh(),
         };
         json!({
@@ -495,6 +508,37 @@ mod tests {
         );
         let bad = ViewerOptions { maxilla: Some("a.dxf".into()), mandible: Some("b.stl".into()), ..options() };
         assert!(LiveState::new(&bad, "live").is_err_and(|e| e.to_string().contains("STL, PLY or OBJ")));
+    }
+
+    #[test]
+    fn with_a_registration_the_scans_sit_against_each_other_as_it_places_them() {
+        let stl = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../harness-cad/dodecahedron-with-post.stl"));
+        let registration = Registration {
+            maxilla_scan_from_maxilla_marker: Pose::from_axis_angle(
+                Vector3::new(0.1, 0.2, -0.3),
+                Vector3::new(5.0, -40.0, 2.0),
+            ),
+            mandible_scan_from_mandible_marker: Pose::from_axis_angle(
+                Vector3::new(-0.2, 0.0, 0.1),
+                Vector3::new(1.0, 3.0, -44.0),
+            ),
+            ..Registration::identity()
+        };
+        let scans = ViewerOptions { maxilla: Some(stl.clone()), mandible: Some(stl), ..options() };
+        let with = ViewerOptions { registration: Some(registration), ..scans.clone() };
+        let placed = LiveState::new(&with, "replay").expect("state").scene();
+        let pose = |v: &Value| serde_json::from_value::<Pose>(v.clone()).expect("a row-major 4x4");
+        let (upper, lower) =
+            (pose(&placed["maxilla"]["marker_from_mesh"]), pose(&placed["mandible"]["marker_from_mesh"]));
+        // The page draws both in the maxilla marker's frame: the lower scan at
+        // maxilla_from_mandible · lower, seen from the upper scan.
+        let m = frame(0.2).maxilla_from_mandible.expect("pose");
+        let (angle, dist) =
+            (upper.inverse() * m * lower).distance_to(&registration.maxilla_scan_from_mandible_scan(&m));
+        assert!(angle < 1e-12 && dist < 1e-9, "{angle} {dist}");
+        // Without one, the scans are drawn as given (and the command says so).
+        let plain = LiveState::new(&scans, "replay").expect("state").scene();
+        assert!(plain["maxilla"]["marker_from_mesh"].is_null() && plain["mandible"]["marker_from_mesh"].is_null());
     }
 
     /// A GET over a plain socket: (status line, content type, body length).
