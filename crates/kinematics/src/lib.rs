@@ -10,11 +10,14 @@
 //!   times the jaw opened.
 //! - [`envelope`]: envelopes of motion as convex hulls in one plane ([`Envelope`]).
 //! - [`hinge`]: the kinematic hinge axis fitted to an opening ([`HingeAxis`]).
+//! - [`articulator`]: condylar inclination, Bennett angle, immediate side shift and incisal
+//!   guidance from border movements ([`ArticulatorValues`]).
 //! - [`views`]: how each anatomical plane is drawn, and where the patient's left falls
 //!   ([`PlaneView`]).
 //!
 //! The head frame: X toward the patient's left, Y down, Z posterior (mm).
 
+pub mod articulator;
 pub mod envelope;
 pub mod hinge;
 pub mod metrics;
@@ -22,6 +25,7 @@ pub mod mounting;
 pub mod point;
 pub mod views;
 
+pub use articulator::{ArticulatorOptions, ArticulatorValues, Movements};
 pub use envelope::{Envelope, convex_hull, polygon_area};
 pub use hinge::{HingeAxis, HingeOptions};
 pub use metrics::{Extreme, Metrics, Sample};
@@ -50,6 +54,21 @@ pub enum KinematicsError {
         least_deg: f64,
         /// The largest turn the window takes (°).
         window_deg: f64,
+    },
+    /// A movement's path has too few points within the travel its value is read over.
+    #[error(
+        "{what} has {points} points between {from_mm} and {over_mm} mm of travel, and the value needs 3 or more: \
+         record the movement slowly and at least {over_mm} mm long, or choose its window"
+    )]
+    TooLittlePath {
+        /// The path, in words.
+        what: String,
+        /// Its points within the travel.
+        points: usize,
+        /// The least travel counted (mm).
+        from_mm: f64,
+        /// The travel the value is read over (mm).
+        over_mm: f64,
     },
     /// The poses do not fix an axis (e.g. all turns about different axes cancel out).
     #[error("the poses do not fix a hinge axis: their turns share no axis")]

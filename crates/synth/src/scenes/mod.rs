@@ -12,6 +12,9 @@
 //! 22 mm below it. The mandible hinges about a transverse axis 95 mm behind and 20 mm above
 //! the incisal point (the condyles).
 
+pub mod guided;
+
+pub use guided::Guidance;
 use jawtrack_kinematics::Mounting;
 use jawtrack_pose::Pose;
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
