@@ -23,6 +23,7 @@ fn stdout_failed(e: &std::io::Error) -> ! {
     std::process::exit(1);
 }
 
+mod articulator;
 mod bench;
 mod calibrate;
 mod calibrate_camera;
@@ -112,6 +113,9 @@ enum Command {
     /// The kinematic hinge axis of a recorded opening: a point and direction in the maxilla
     /// marker's frame (and the upper scan's, given a registration), with its uncertainty.
     HingeAxis(hinge_axis::HingeAxisArgs),
+    /// Articulator values from border movements: sagittal condylar inclination, Bennett angle
+    /// and immediate side shift per condyle, protrusive and lateral incisal guidance.
+    Articulator(articulator::ArticulatorArgs),
     /// Occlusal contacts over a recording: places the lower scan by each frame's pose, finds
     /// where the arches penetrate or come within a threshold, groups them into regions
     /// (centroid, area, depth, tooth), and writes contacts.jsonl, contact-frequency and depth
@@ -144,6 +148,7 @@ fn main() {
         Command::Plot(a) => export::plot(&a),
         Command::Metrics(a) => metrics::run(&a),
         Command::HingeAxis(a) => hinge_axis::run(&a),
+        Command::Articulator(a) => articulator::run(&a),
         Command::Contacts(a) => contacts::run(&a),
     };
     if let Err(e) = result {

@@ -1,0 +1,156 @@
+//! `jawtrack articulator`: the articulator values of a recording's border movements
+//! (`jawtrack_kinematics::articulator`). Each movement is given as a window of the recording: a
+//! protrusion, and a laterotrusion toward each side. The output is printed, or given as one JSON
+//! object.
+
+use crate::export::{SessionArg, load, rest_of};
+use crate::numbers::{clean_json, fixed};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_kinematics::articulator::name;
+use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, Mounting, Movements, Side};
+use jawtrack_pose::Pose;
+use jawtrack_recording::Recording;
+use serde_json::{Value, json};
+use std::path::PathBuf;
+
+/// A window of a recording, `FROM:TO` in seconds of the frames' `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Window {
+    from: f64,
+    to: f64,
+}
+
+fn parse_window(s: &str) -> Result<Window, String> {
+    let (a, b) = s.split_once(':').ok_or_else(|| format!("expected FROM:TO in seconds, got '{s}'"))?;
+    let num = |v: &str| v.trim().parse::<f64>().map_err(|e| format!("'{v}' in '{s}': {e}"));
+    let (from, to) = (num(a)?, num(b)?);
+    if !(from.is_finite() && to.is_finite() && from < to) {
+        return Err(format!("'{s}': FROM must be before TO"));
+    }
+    Ok(Window { from, to })
+}
+
+/// Arguments of `jawtrack articulator`.
+#[derive(Args)]
+pub(crate) struct ArticulatorArgs {
+    /// The recording (JSON lines) holding the border movements, each made slowly from the
+    /// closed jaw with the teeth in light contact.
+    recording: PathBuf,
+    #[command(flatten)]
+    session: SessionArg,
+    /// The protrusion's window, FROM:TO (s): the condylar inclination per side and the
+    /// protrusive incisal guidance.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    protrusion: Option<Window>,
+    /// The laterotrusion toward the patient's left (s): the right condyle's Bennett angle and
+    /// side shift, the lateral guidance toward the left.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    left: Option<Window>,
+    /// The laterotrusion toward the patient's right (s): the left condyle's Bennett angle and
+    /// side shift, the lateral guidance toward the right.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    right: Option<Window>,
+    /// The frame (its `frame` number) of the closed jaw every movement is measured from;
+    /// default: the bite accepted while recording, else the first frame with a jaw pose.
+    #[arg(long)]
+    rest_frame: Option<u64>,
+    /// Read each value over this much of its path's travel (mm).
+    #[arg(long, default_value_t = ArticulatorOptions::default().over_mm, value_name = "MM")]
+    over_mm: f64,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The poses in `w`.
+fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
+    rec.frames.iter().filter(|f| (w.from..=w.to).contains(&f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
+}
+
+/// Runs `jawtrack articulator`.
+pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
+    let name_of = a.recording.display();
+    if a.protrusion.is_none() && a.left.is_none() && a.right.is_none() {
+        bail!("give the window of at least one movement: --protrusion FROM:TO, --left FROM:TO or --right FROM:TO (s)");
+    }
+    if !(a.over_mm.is_finite() && a.over_mm > 1.0) {
+        bail!("--over-mm must be a number of mm above 1, got {}", a.over_mm);
+    }
+    let rec = load(&a.recording, a.session)?;
+    let rest = rest_of(&rec, a.rest_frame)?
+        .with_context(|| format!("{name_of}: no frame has a jaw pose (both markers tracked)"))?;
+    let windows = [("--protrusion", a.protrusion), ("--left", a.left), ("--right", a.right)];
+    let poses: Vec<Option<Vec<Pose>>> = windows.iter().map(|(_, w)| w.map(|w| poses_in(&rec, w))).collect();
+    for ((flag, w), p) in windows.iter().zip(&poses) {
+        if let (Some(w), Some(p)) = (w, p)
+            && p.is_empty()
+        {
+            bail!("{flag} {}:{}: no frame of {name_of} in that window has a jaw pose", w.from, w.to);
+        }
+    }
+    let movements = Movements {
+        protrusion: poses[0].as_deref(),
+        toward_left: poses[1].as_deref(),
+        toward_right: poses[2].as_deref(),
+    };
+    let options = ArticulatorOptions { over_mm: a.over_mm, ..ArticulatorOptions::default() };
+    let mounting = Mounting::default();
+    let v = ArticulatorValues::measure(&mounting, &rest.pose(), &movements, &options)
+        .with_context(|| format!("{name_of}"))?;
+    let mut report = to_json(&v, a, &options, rest.to_json());
+    clean_json(&mut report);
+    if a.json {
+        say!("{report}");
+    } else {
+        print_summary(&v, &options, &rest.describe());
+    }
+    Ok(())
+}
+
+fn to_json(v: &ArticulatorValues, a: &ArticulatorArgs, o: &ArticulatorOptions, rest: Value) -> Value {
+    let side = |k: usize| {
+        json!({
+            "condylar_inclination_deg": v.condylar_inclination_deg[k],
+            "bennett_deg": v.bennett_deg[k],
+            "immediate_side_shift_mm": v.side_shift_mm[k],
+        })
+    };
+    let window = |w: Option<Window>| w.map(|w| [w.from, w.to]);
+    json!({
+        "version": 1,
+        "units": {"angles": "deg", "lengths": "mm"},
+        "reference_plane": "the head frame's horizontal plane of the standard harness mounting",
+        "landmarks": "the standard harness mounting's condyles and lower incisal point",
+        "read_over_mm": o.over_mm,
+        "left_condyle": side(0),
+        "right_condyle": side(1),
+        "protrusive_incisal_guidance_deg": v.protrusive_guidance_deg,
+        "lateral_incisal_guidance_deg": {"toward_left": v.lateral_guidance_deg[0], "toward_right": v.lateral_guidance_deg[1]},
+        "windows_s": {"protrusion": window(a.protrusion), "left": window(a.left), "right": window(a.right)},
+        "rest": rest,
+        "recording": a.recording.to_string_lossy(),
+    })
+}
+
+fn print_summary(v: &ArticulatorValues, o: &ArticulatorOptions, rest: &str) {
+    let deg = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{}°", fixed(x, 1)));
+    let mm = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{} mm", fixed(x, 2)));
+    say!("read over the first {} mm of each path, from {rest}", fixed(o.over_mm, 1));
+    say!("                         left condyle   right condyle");
+    say!(
+        "condylar inclination     {:>12}   {:>13}",
+        deg(v.condylar_inclination_deg[0]),
+        deg(v.condylar_inclination_deg[1])
+    );
+    say!("Bennett angle            {:>12}   {:>13}", deg(v.bennett_deg[0]), deg(v.bennett_deg[1]));
+    say!("immediate side shift     {:>12}   {:>13}", mm(v.side_shift_mm[0]), mm(v.side_shift_mm[1]));
+    say!("protrusive incisal guidance {}", deg(v.protrusive_guidance_deg));
+    for (k, side) in [Side::Left, Side::Right].iter().enumerate() {
+        say!("lateral incisal guidance toward the {} {}", name(*side), deg(v.lateral_guidance_deg[k]));
+    }
+    say!(
+        "angles are to the reference plane (the head frame's horizontal of the standard harness mounting); the \
+         condyles and incisal point are that mounting's"
+    );
+}

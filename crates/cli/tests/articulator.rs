@@ -1,0 +1,94 @@
+//! `jawtrack articulator` on a recording of programmed border movements (`synth::scenes::guided`):
+//! a protrusion (0–2 s), a laterotrusion toward the left (3–5 s) and toward the right (6–8 s),
+//! each from the closed jaw, noise-free. The values printed as JSON must be the programmed ones.
+
+use jawtrack_kinematics::Side;
+use jawtrack_pose::Pose;
+use jawtrack_synth::scenes::{Guidance, Rig};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+mod common;
+use common::{jawtrack, ok, refused, s};
+
+/// Only the poses' JSON round trip limits noise-free poses.
+const TOL: f64 = 1e-5;
+
+const GUIDANCE: Guidance = Guidance {
+    condylar_inclination_deg: 36.0,
+    bennett_deg: 11.0,
+    side_shift_mm: 0.6,
+    protrusive_guidance_deg: 48.0,
+    lateral_guidance_deg: 31.0,
+};
+
+fn session(dir: &Path) -> PathBuf {
+    let rig = Rig::default();
+    let m = &rig.mounting;
+    let header = jawtrack_recording::RecordingHeader::new("articulator test").to_line();
+    let mut lines = vec![header];
+    let mut frame = 0u64;
+    let mut push = |t: f64, jaw: Pose| {
+        let pose = m.head_from_maxilla.inverse() * jaw * m.head_from_mandible_rest;
+        let pose = serde_json::to_value(pose).expect("a pose serialises");
+        lines.push(
+            json!({"frame": frame, "t": t, "maxilla": null, "mandible": null, "maxilla_from_mandible": pose})
+                .to_string(),
+        );
+        frame += 1;
+    };
+    for k in 0..=40u32 {
+        let u = f64::from(k) / 40.0;
+        push(2.0 * u, rig.protrusion(&GUIDANCE, 8.0 * u));
+    }
+    for (start, side) in [(3.0, Side::Left), (6.0, Side::Right)] {
+        for k in 0..=44u32 {
+            // The side shift over the first 4 steps, then 8 mm of the non-working condyle's path.
+            let travel = if k <= 4 { -1.0 + f64::from(k) / 4.0 } else { 8.0 * f64::from(k - 4) / 40.0 };
+            push(start + 2.0 * f64::from(k) / 44.0, rig.laterotrusion(&GUIDANCE, side, travel));
+        }
+    }
+    let file = dir.join("border.jsonl");
+    std::fs::write(&file, lines.join("\n") + "\n").expect("write");
+    file
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("a number: {v}"))
+}
+
+#[test]
+fn the_programmed_guidance_is_read_back() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    let out =
+        ok(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:2", "--left", "3:5", "--right", "6:8", "--json"]));
+    let v: Value = serde_json::from_str(&out).expect("one JSON object");
+    let g = GUIDANCE;
+    for condyle in ["left_condyle", "right_condyle"] {
+        let c = &v[condyle];
+        assert!((num(&c["condylar_inclination_deg"]) - g.condylar_inclination_deg).abs() < TOL, "{v}");
+        assert!((num(&c["bennett_deg"]) - g.bennett_deg).abs() < TOL, "{v}");
+        assert!((num(&c["immediate_side_shift_mm"]) - g.side_shift_mm).abs() < TOL, "{v}");
+    }
+    assert!((num(&v["protrusive_incisal_guidance_deg"]) - g.protrusive_guidance_deg).abs() < TOL, "{v}");
+    for side in ["toward_left", "toward_right"] {
+        assert!((num(&v["lateral_incisal_guidance_deg"][side]) - g.lateral_guidance_deg).abs() < TOL, "{v}");
+    }
+    assert_eq!(v["read_over_mm"], 5.0);
+    // The summary, in words.
+    let text = ok(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:2", "--left", "3:5"]));
+    assert!(text.contains("condylar inclination") && text.contains("36.0°"), "{text}");
+    // Without --right, the left condyle's Bennett angle is unknown, not zero.
+    assert!(text.lines().any(|l| l.starts_with("Bennett angle") && l.contains('—') && l.contains("11.0°")), "{text}");
+}
+
+#[test]
+fn missing_or_short_movements_are_refused_naming_them() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    refused(&jawtrack(&["articulator", s(&rec)]), "at least one movement");
+    refused(&jawtrack(&["articulator", s(&rec), "--protrusion", "2:1"]), "FROM must be before TO");
+    refused(&jawtrack(&["articulator", s(&rec), "--protrusion", "20:30"]), "no frame");
+    // The first 0.2 s of the protrusion: 0.8 mm of travel, under the 5 mm the values are read over.
+    refused(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:0.2"]), "protrusive path");
+}
