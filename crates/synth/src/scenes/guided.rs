@@ -21,9 +21,10 @@ use super::Rig;
 use jawtrack_kinematics::Side;
 use jawtrack_pose::Pose;
 use nalgebra::{Point3, Unit, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
 
 /// The programmed guidance (degrees, mm).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Guidance {
     /// Sagittal condylar inclination: the condyles' forward path below the reference plane.
     pub condylar_inclination_deg: f64,

@@ -15,7 +15,7 @@
 pub mod guided;
 
 pub use guided::Guidance;
-use jawtrack_kinematics::Mounting;
+use jawtrack_kinematics::{Mounting, Side};
 use jawtrack_pose::Pose;
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
@@ -52,17 +52,22 @@ pub enum SceneKind {
     /// camera, the markers swept over the whole image at 90–200 mm, tilted ±25°, at about 100
     /// mm/s (peaks near 180) so that a rolling shutter shears them ([`Wave`]); `cycles` × 2 s.
     Wave,
+    /// Border movements guided by programmed condylar paths ([`Guidance::default`], see
+    /// [`guided`]): a protrusion and laterotrusions toward the left and the right, each 6 mm of
+    /// condylar travel out and back in 2 s (`cycles` rounds), filmed as the hinge is.
+    Border,
 }
 
 impl SceneKind {
     /// All scenes.
-    pub const ALL: [SceneKind; 6] = [
+    pub const ALL: [SceneKind; 7] = [
         SceneKind::Static,
         SceneKind::Hinge,
         SceneKind::Excursion,
         SceneKind::Chew,
         SceneKind::Calibration,
         SceneKind::Wave,
+        SceneKind::Border,
     ];
 
     /// The scene's name on the command line.
@@ -74,6 +79,7 @@ impl SceneKind {
             SceneKind::Chew => "chew",
             SceneKind::Calibration => "calibration",
             SceneKind::Wave => "wave",
+            SceneKind::Border => "border",
         }
     }
 }
@@ -81,10 +87,9 @@ impl SceneKind {
 impl std::str::FromStr for SceneKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        SceneKind::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| format!("unknown scene '{s}' (choose static, hinge, excursion, chew, calibration or wave)"))
+        SceneKind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| {
+            format!("unknown scene '{s}' (choose static, hinge, excursion, chew, calibration, wave or border)")
+        })
     }
 }
 
@@ -125,6 +130,21 @@ pub enum JawMotion {
         direction: Glide,
         /// Peak incisal displacement (mm).
         amplitude_mm: f64,
+        /// When it starts (s).
+        start_s: f64,
+        /// Out-and-back duration (s).
+        period_s: f64,
+    },
+    /// A border movement out and back along programmed condylar paths ([`guided`]): a
+    /// protrusion (`movement` "protrusive") or a laterotrusion toward `movement`'s side, the
+    /// condyles travelling `travel_mm` at the peak (after the immediate side shift).
+    Border {
+        /// Which movement.
+        movement: Glide,
+        /// The condylar and incisal guidance.
+        guidance: Guidance,
+        /// Peak condylar travel (mm).
+        travel_mm: f64,
         /// When it starts (s).
         start_s: f64,
         /// Out-and-back duration (s).
@@ -212,6 +232,15 @@ impl Rig {
                         );
                         rotation_about(&condyle, &Vector3::y_axis(), angle) * open
                     }
+                }
+            }
+            JawMotion::Border { movement, guidance, travel_mm, start_s, period_s } => {
+                let out = cycle(t, start_s, period_s);
+                match movement {
+                    Glide::Protrusive => self.protrusion(&guidance, travel_mm * out),
+                    // The side shift over the first part of the way out, then the path.
+                    Glide::Left => self.laterotrusion(&guidance, Side::Left, out * (travel_mm + 1.0) - 1.0),
+                    Glide::Right => self.laterotrusion(&guidance, Side::Right, out * (travel_mm + 1.0) - 1.0),
                 }
             }
             JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s } => {
@@ -429,6 +458,9 @@ fn one_cycle(start: f64, period: f64, dt: f64, view: View, motion: JawMotion) ->
 /// through 25 mm openings (the maxilla marker's upper tag stays out of the frame).
 const CHEW_TARGET: [f64; 3] = [0.0, 14.0, -38.0];
 
+/// Peak condylar travel of the border scene's movements (mm).
+pub const BORDER_TRAVEL_MM: f64 = 6.0;
+
 /// The frames of a scene. `seed` draws the hand tremor, the glide amplitudes and the chewing
 /// cycles.
 pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<FrameSpec> {
@@ -552,6 +584,30 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
                         t += dt;
                     }
                     t += 1.0;
+                }
+            }
+        }
+        SceneKind::Border => {
+            let view = View {
+                distance_mm: 120.0,
+                azimuth_deg: 30.0,
+                elevation_deg: 0.0,
+                target: [0.0, 20.0, -34.0],
+                hand_seed: None,
+                orientation: Orientation::Upright,
+            };
+            let (period, mut start) = (2.0, 0.0);
+            for _ in 0..opts.cycles {
+                for movement in [Glide::Protrusive, Glide::Left, Glide::Right] {
+                    let motion = JawMotion::Border {
+                        movement,
+                        guidance: Guidance::default(),
+                        travel_mm: BORDER_TRAVEL_MM,
+                        start_s: start,
+                        period_s: period,
+                    };
+                    frames.extend(one_cycle(start, period, dt, view, motion));
+                    start += period;
                 }
             }
         }

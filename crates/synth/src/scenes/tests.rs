@@ -217,3 +217,30 @@ fn landscape_turns_the_phone_a_quarter_turn() {
     let motion: JawMotion = serde_json::from_str(old).expect("an old chew reads");
     assert!(matches!(motion, JawMotion::Chew { start_s, .. } if start_s == 0.0));
 }
+
+#[test]
+fn the_border_scene_runs_each_guided_movement_out_and_back() {
+    let rig = Rig::default();
+    let opts = SceneOptions { cycles: 1, fps: 10.0, ..SceneOptions::default() };
+    let frames = scene_frames(SceneKind::Border, &opts, 1);
+    assert_eq!(frames.len(), 3 * 20, "three movements of 2 s at 10 fps");
+    let g = Guidance::default();
+    let condyle = |side| Point3::from(rig.mounting.condyle(side));
+    // At each movement's peak (1 s in), the condyles are where the guided motion puts them.
+    for (k, f) in frames.iter().enumerate().filter(|(k, _)| k % 20 == 10) {
+        let jaw = rig.jaw(&f.motion, f.t);
+        let (want, side) = match k / 20 {
+            0 => (rig.protrusion(&g, BORDER_TRAVEL_MM), Side::Left),
+            1 => (rig.laterotrusion(&g, Side::Left, BORDER_TRAVEL_MM), Side::Right),
+            _ => (rig.laterotrusion(&g, Side::Right, BORDER_TRAVEL_MM), Side::Left),
+        };
+        let off = (jaw.transform_point(&condyle(side)) - want.transform_point(&condyle(side))).norm();
+        assert!(off < 1e-9, "frame {k}: {off}");
+        let travelled = (jaw.transform_point(&condyle(side)) - condyle(side)).norm();
+        assert!(travelled > BORDER_TRAVEL_MM - 1e-6, "frame {k}: {travelled}");
+    }
+    // Each starts and ends closed.
+    for f in frames.iter().step_by(20) {
+        assert!(rig.jaw(&f.motion, f.t).translation().norm() < 1e-9);
+    }
+}

@@ -219,6 +219,7 @@ pub fn dynamic_rows(run: &Run, scene: SceneKind, column: usize) -> Vec<DynamicRo
             JawMotion::Glide { direction, .. } => format!("{direction:?}").to_lowercase(),
             JawMotion::Rest => "rest".into(),
             JawMotion::Chew { .. } => "chew".into(),
+            JawMotion::Border { movement, .. } => format!("border {movement:?}").to_lowercase(),
         };
         let row = match rows.iter_mut().find(|r| r.label == label) {
             Some(r) => r,
