@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `jawtrack export`.
 #[derive(Args)]
-#[command(group(ArgGroup::new("format").required(true).args(["csv", "jsonl"])))]
+#[command(group(ArgGroup::new("format").required(true).args(["csv", "jsonl", "transforms_csv", "transforms_json"])))]
 pub(crate) struct ExportArgs {
     /// The recording (JSON lines).
     recording: PathBuf,
@@ -30,6 +30,19 @@ pub(crate) struct ExportArgs {
     /// The recording cleaned: a header line, then every readable frame in sequence order.
     #[arg(long)]
     jsonl: bool,
+    /// For dental CAD: per frame, the lower scan in the upper scan's frame as a 4×4 row-major
+    /// matrix (mm), one CSV row per frame with a jaw pose (`frame,t_s,m00,m01,…,m33`). Needs
+    /// `--registration`, or a recording tracked with one.
+    #[arg(long)]
+    transforms_csv: bool,
+    /// The same as one JSON object: `{"version":1,"units":"mm","transform":
+    /// "maxilla_scan_from_mandible_scan","layout":"row-major 4x4","frames":[{"frame","t_s","matrix"}]}`.
+    #[arg(long)]
+    transforms_json: bool,
+    /// The registration file (`jawtrack register`) the transforms are taken through; without
+    /// it, the recording's own `maxilla_scan_from_mandible_scan` (tracked with a registration).
+    #[arg(long)]
+    registration: Option<PathBuf>,
     /// Output file; `-` for standard output.
     #[arg(long, default_value = "-")]
     out: PathBuf,
@@ -178,6 +191,38 @@ pub(crate) fn rest_of(rec: &Recording, rest_frame: Option<u64>) -> Result<Option
     }
 }
 
+/// Per frame with a jaw pose: (frame, t, the lower scan in the upper scan's frame), through
+/// `registration`, else the recording's own transforms; refused when there are neither.
+fn scan_transforms(rec: &Recording, registration: Option<&Path>) -> Result<Vec<(u64, f64, Pose)>> {
+    let through = match registration {
+        Some(p) => Some(
+            jawtrack_tracker::Registration::load(p).with_context(|| format!("registration file {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let out: Vec<(u64, f64, Pose)> = rec
+        .frames
+        .iter()
+        .filter_map(|f| {
+            let m = match &through {
+                Some(r) => r.maxilla_scan_from_mandible_scan(&f.maxilla_from_mandible?),
+                None => f.maxilla_scan_from_mandible_scan?,
+            };
+            Some((f.frame, f.t, m))
+        })
+        .collect();
+    if out.is_empty() {
+        match through {
+            Some(_) => bail!("no frame has a jaw pose (both markers tracked): nothing to export"),
+            None => bail!(
+                "no frame carries maxilla_scan_from_mandible_scan (the recording was tracked without a registration): \
+                 give --registration reg.json (`jawtrack register` writes it)"
+            ),
+        }
+    }
+    Ok(out)
+}
+
 /// A frame's time and the incisor's displacement.
 type Timed = (f64, Displacement);
 
@@ -198,6 +243,38 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
             std::fs::File::create(&a.out).with_context(|| format!("creating {}", a.out.display()))?,
         ))
     };
+    if a.transforms_csv || a.transforms_json {
+        let transforms = scan_transforms(&rec, a.registration.as_deref())?;
+        if a.transforms_csv {
+            let mut w = csv::Writer::from_writer(out);
+            let mut head = vec!["frame".to_string(), "t_s".to_string()];
+            head.extend((0..16).map(|k| format!("m{}{}", k / 4, k % 4)));
+            w.write_record(&head)?;
+            for (frame, t, m) in &transforms {
+                let mut row = vec![frame.to_string(), full(*t)];
+                row.extend(m.to_row_major().iter().map(|v| full(*v)));
+                w.write_record(&row)?;
+            }
+            w.flush()?;
+        } else {
+            let frames: Vec<serde_json::Value> = transforms
+                .iter()
+                .map(|(frame, t, m)| serde_json::json!({"frame": frame, "t_s": t, "matrix": m.to_row_major()}))
+                .collect();
+            let doc = serde_json::json!({
+                "version": 1,
+                "units": "mm",
+                "transform": "maxilla_scan_from_mandible_scan",
+                "description": "the lower scan placed in the upper scan's frame at each frame: p_upper = M · [p_lower, 1]",
+                "layout": "row-major 4x4",
+                "frames": frames,
+            });
+            writeln!(out, "{doc}")?;
+            out.flush()?;
+        }
+        eprintln!("exported {} transforms of {} frames", transforms.len(), rec.frames.len());
+        return Ok(());
+    }
     if a.jsonl {
         let header = rec.header.clone().unwrap_or_else(|| RecordingHeader::new("jawtrack export"));
         writeln!(out, "{}", header.to_line())?;

@@ -186,3 +186,58 @@ fn two_sessions_in_one_file_are_never_mixed() {
     check(jawtrack(&["metrics", file, "--session", "00000000000000cc"]), "no frame of session 00000000000000cc");
     check(jawtrack(&["metrics", file, "--session", "xyz"]), "16 hex digits");
 }
+
+#[test]
+fn transforms_for_cad_are_the_lower_scan_in_the_upper_scan_s_frame() {
+    use jawtrack_pose::Pose;
+    use jawtrack_tracker::Registration;
+    use nalgebra::Vector3;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let poses = tracked_hinge(dir.path());
+    let registration = Registration {
+        maxilla_scan_from_maxilla_marker: Pose::from_axis_angle(
+            Vector3::new(0.1, -0.2, 0.3),
+            Vector3::new(4.0, -38.0, 9.0),
+        ),
+        mandible_scan_from_mandible_marker: Pose::from_axis_angle(
+            Vector3::new(0.0, 0.2, -0.1),
+            Vector3::new(-2.0, 40.0, 7.0),
+        ),
+        ..Registration::identity()
+    };
+    let reg = dir.path().join("reg.json");
+    std::fs::write(&reg, registration.to_json()).expect("write");
+    let reg = reg.to_str().expect("utf-8");
+    let recording = jawtrack_recording::open(Path::new(&poses)).expect("reads");
+    let want: Vec<[f64; 16]> = recording
+        .frames
+        .iter()
+        .filter_map(|f| Some(registration.maxilla_scan_from_mandible_scan(&f.maxilla_from_mandible?).to_row_major()))
+        .collect();
+    assert_eq!(want.len(), 5);
+    let text = ok(&jawtrack(&["export", &poses, "--transforms-csv", "--registration", reg]));
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
+    let headers: Vec<String> = reader.headers().expect("header").iter().map(str::to_owned).collect();
+    assert_eq!(headers[..3], ["frame", "t_s", "m00"]);
+    assert_eq!(headers.last().map(String::as_str), Some("m33"));
+    let rows: Vec<Vec<f64>> = reader
+        .records()
+        .map(|r| r.expect("row").iter().skip(2).map(|v| v.parse().expect("a number")).collect())
+        .collect();
+    assert_eq!(rows.len(), want.len());
+    for (row, w) in rows.iter().zip(&want) {
+        assert!(row.iter().zip(w).all(|(a, b)| (a - b).abs() < 1e-9), "{row:?} vs {w:?}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&jawtrack(&["export", &poses, "--transforms-json", "--registration", reg])))
+            .expect("one JSON object");
+    assert_eq!(json["units"], "mm");
+    assert_eq!(json["layout"], "row-major 4x4");
+    let first: Vec<f64> =
+        json["frames"][0]["matrix"].as_array().expect("16").iter().map(|v| v.as_f64().expect("num")).collect();
+    assert!(first.iter().zip(&want[0]).all(|(a, b)| (a - b).abs() < 1e-9));
+    // Tracked without a registration, and none given: refused, saying what to give.
+    let o = jawtrack(&["export", &poses, "--transforms-csv"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("--registration"), "{e}");
+}
