@@ -63,6 +63,22 @@ pub(crate) struct ArticulatorArgs {
     json: bool,
 }
 
+/// Warns when `rec` was tracked with the nominal marker, whose tags sit where the ideal solid
+/// puts them and not where the print did: on rendered border movements with a print's usual
+/// error (0.2 mm RMS per tag), `what` (docs/kinematics.md).
+pub(crate) fn warn_if_nominal(rec: &Recording, what: &str) {
+    let marker = rec.header.as_ref().and_then(|h| h.marker.as_ref());
+    let nominal = marker
+        .and_then(|m| jawtrack_marker::Marker::from_json(&m.to_string()).ok())
+        .is_some_and(|m| m.measured_tags().is_empty());
+    if nominal {
+        eprintln!(
+            "warning: this recording was tracked with the nominal marker: against a print's tag errors, {what}; \
+             calibrate the marker (`jawtrack calibrate-marker`) and track again with it"
+        );
+    }
+}
+
 /// The poses in `w`.
 fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
     rec.frames.iter().filter(|f| (w.from..=w.to).contains(&f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
@@ -78,6 +94,7 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
         bail!("--over-mm must be a number of mm above 1, got {}", a.over_mm);
     }
     let rec = load(&a.recording, a.session)?;
+    warn_if_nominal(&rec, "the condylar inclinations moved 7–22° and the side shifts 1–1.5 mm");
     let rest = rest_of(&rec, a.rest_frame)?
         .with_context(|| format!("{name_of}: no frame has a jaw pose (both markers tracked)"))?;
     let windows = [("--protrusion", a.protrusion), ("--left", a.left), ("--right", a.right)];

@@ -92,3 +92,24 @@ fn missing_or_short_movements_are_refused_naming_them() {
     // The first 0.2 s of the protrusion: 0.8 mm of travel, under the 5 mm the values are read over.
     refused(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:0.2"]), "protrusive path");
 }
+
+#[test]
+fn a_recording_tracked_with_the_nominal_marker_is_warned_about() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    let text = std::fs::read_to_string(&rec).expect("read");
+    let (_, frames) = text.split_once('\n').expect("a header line");
+    let mut header = jawtrack_recording::RecordingHeader::new("articulator test");
+    let nominal = jawtrack_marker::Marker::default().to_json();
+    header.marker = Some(serde_json::from_str(&nominal).expect("marker JSON"));
+    let tracked = dir.path().join("nominal.jsonl");
+    std::fs::write(&tracked, format!("{}\n{frames}", header.to_line())).expect("write");
+    let o = jawtrack(&["articulator", s(&tracked), "--protrusion", "0:2"]);
+    ok(&o);
+    let e = common::stderr(&o);
+    assert!(e.contains("nominal marker") && e.contains("calibrate-marker"), "{e}");
+    let o = jawtrack(&["hinge-axis", s(&tracked), "--to", "2"]);
+    assert!(common::stderr(&o).contains("nominal marker"), "{}", common::stderr(&o));
+    // The programmed recording's header names no marker: no warning.
+    assert!(!common::stderr(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:2"])).contains("nominal"));
+}
