@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `jawtrack export`.
 #[derive(Args)]
-#[command(group(ArgGroup::new("format").required(true).args(["csv", "jsonl", "transforms_csv", "transforms_json"])))]
+#[command(group(ArgGroup::new("format").required(true).args(["csv", "jsonl", "transforms_csv", "transforms_json", "trc", "mot"])))]
 pub(crate) struct ExportArgs {
     /// The recording (JSON lines).
     recording: PathBuf,
@@ -39,6 +39,15 @@ pub(crate) struct ExportArgs {
     /// "maxilla_scan_from_mandible_scan","layout":"row-major 4x4","frames":[{"frame","t_s","matrix"}]}`.
     #[arg(long)]
     transforms_json: bool,
+    /// For OpenSim: the lower incisal point's and both condyles' trajectories (mm), in
+    /// OpenSim's axes (X anterior, Y up, Z right; origin the upper incisal point), the points
+    /// the standard mounting's. Frames without a jaw pose have blank markers.
+    #[arg(long)]
+    trc: bool,
+    /// For OpenSim: the jaw's coordinates over time from the rest position: body-fixed X–Y–Z
+    /// angles (°) and the condylar midpoint's shift (m), in OpenSim's axes.
+    #[arg(long)]
+    mot: bool,
     /// The registration file (`jawtrack register`) the transforms are taken through; without
     /// it, the recording's own `maxilla_scan_from_mandible_scan` (tracked with a registration).
     #[arg(long)]
@@ -191,6 +200,13 @@ pub(crate) fn rest_of(rec: &Recording, rest_frame: Option<u64>) -> Result<Option
     }
 }
 
+/// The frames' rate (frames/s): the inverse of the median interval, 30 when unknown.
+fn frame_rate(frames: &[(f64, Option<Pose>)]) -> f64 {
+    let mut dt: Vec<f64> = frames.windows(2).map(|w| w[1].0 - w[0].0).filter(|d| *d > 0.0).collect();
+    dt.sort_by(f64::total_cmp);
+    dt.get(dt.len() / 2).map_or(30.0, |d| (1.0 / d * 1000.0).round() / 1000.0)
+}
+
 /// Per frame with a jaw pose: (frame, t, the lower scan in the upper scan's frame), through
 /// `registration`, else the recording's own transforms; refused when there are neither.
 fn scan_transforms(rec: &Recording, registration: Option<&Path>) -> Result<Vec<(u64, f64, Pose)>> {
@@ -243,6 +259,24 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
             std::fs::File::create(&a.out).with_context(|| format!("creating {}", a.out.display()))?,
         ))
     };
+    if a.trc || a.mot {
+        let Some(rest) = rest else {
+            bail!("{}: no frame has a jaw pose (both markers tracked), nothing to export", a.recording.display());
+        };
+        let mounting = jawtrack_kinematics::Mounting::default();
+        let frames: Vec<(f64, Option<Pose>)> = rec.frames.iter().map(|f| (f.t, f.maxilla_from_mandible)).collect();
+        let named = if a.out.as_os_str() == "-" { &a.recording } else { &a.out };
+        let name = named.file_name().map_or_else(|| "jawtrack".into(), |n| n.to_string_lossy().into_owned());
+        let text = if a.trc {
+            jawtrack_kinematics::opensim::trc(&mounting, &rest, &frames, frame_rate(&frames), &name)
+        } else {
+            jawtrack_kinematics::opensim::mot(&mounting, &rest, &frames, &name)
+        };
+        out.write_all(text.as_bytes())?;
+        out.flush()?;
+        eprintln!("exported {} frames as {}", rec.frames.len(), if a.trc { "OpenSim .trc" } else { "OpenSim .mot" });
+        return Ok(());
+    }
     if a.transforms_csv || a.transforms_json {
         let transforms = scan_transforms(&rec, a.registration.as_deref())?;
         if a.transforms_csv {

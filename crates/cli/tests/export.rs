@@ -241,3 +241,23 @@ fn transforms_for_cad_are_the_lower_scan_in_the_upper_scan_s_frame() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("--registration"), "{e}");
 }
+
+#[test]
+fn opensim_files_carry_every_frame_in_opensim_s_axes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let poses = tracked_hinge(dir.path());
+    let trc = ok(&jawtrack(&["export", &poses, "--trc"]));
+    let lines: Vec<&str> = trc.lines().collect();
+    assert!(lines[0].starts_with("PathFileType\t4\t(X/Y/Z)\thinge.jsonl"), "{}", lines[0]);
+    let rate_row: Vec<&str> = lines[2].split('\t').collect();
+    assert_eq!((rate_row[2], rate_row[3], rate_row[4]), ("5", "3", "mm"), "{}", lines[2]);
+    assert_eq!(lines.len(), 5 + 5);
+    let mot = ok(&jawtrack(&["export", &poses, "--mot"]));
+    assert!(mot.contains("nRows=5\nnColumns=7\ninDegrees=yes\nendheader\ntime\tjaw_rx"), "{mot}");
+    // The hinge fixture opens the jaw: its turn is about OpenSim's Z (the patient's right),
+    // chin down being negative, and exceeds the other two.
+    let rows: Vec<Vec<f64>> =
+        mot.lines().skip(7).map(|l| l.split('\t').map(|v| v.parse().expect("a number")).collect()).collect();
+    let widest = rows.iter().max_by(|a, b| a[3].abs().total_cmp(&b[3].abs())).expect("rows");
+    assert!(widest[3] < -5.0 && widest[1].abs() < 1.0 && widest[2].abs() < 1.0, "{widest:?}");
+}

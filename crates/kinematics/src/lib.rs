@@ -12,6 +12,7 @@
 //! - [`hinge`]: the kinematic hinge axis fitted to an opening ([`HingeAxis`]).
 //! - [`articulator`]: condylar inclination, Bennett angle, immediate side shift and incisal
 //!   guidance from border movements ([`ArticulatorValues`]).
+//! - [`opensim`]: OpenSim marker trajectories (`.trc`) and jaw coordinates (`.mot`).
 //! - [`views`]: how each anatomical plane is drawn, and where the patient's left falls
 //!   ([`PlaneView`]).
 //!
@@ -22,6 +23,7 @@ pub mod envelope;
 pub mod hinge;
 pub mod metrics;
 pub mod mounting;
+pub mod opensim;
 pub mod point;
 pub mod views;
 
