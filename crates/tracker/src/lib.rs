@@ -25,6 +25,7 @@
 //! before the bodies are solved, so both are reported at the same instant.
 
 pub mod bite;
+mod flicker;
 pub mod oblique;
 pub mod registration;
 pub mod roi;
@@ -43,7 +44,6 @@ use jawtrack_pose::{
 };
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use nalgebra::{Matrix6, Point2, Point3};
-use oblique::tag_rms;
 use roi::{BodyState, Timed};
 use std::time::Instant;
 
@@ -624,52 +624,6 @@ impl Tracker {
         let carried = to_frame_time(&seen, shutter, camera, &raw, &velocity);
         let pose = solve_pnp(&carried, camera, Some(&raw), &self.config.pnp)?;
         Ok((pose, carried, Some(raw)))
-    }
-
-    /// Drops a tag that just appeared beside tags tracked in the frame before and fits far
-    /// worse than they do, and in a `smeared` frame an oblique tag that misses the face-on
-    /// ones' pose ([`oblique`]), and solves again without them. Returns the pose and every tag
-    /// dropped.
-    fn drop_flicker(
-        &self,
-        kind: BodyKind,
-        pose: BodyPose,
-        mut observations: Vec<Observation>,
-        camera: &CameraIntrinsics,
-        prior: Option<&Pose>,
-        smeared: bool,
-    ) -> (BodyPose, Vec<u32>) {
-        let mut rejected = pose.rejected_tags.clone();
-        let before = &self.bodies[slot(kind)].tags;
-        let (new, kept): (Vec<u32>, Vec<u32>) = pose.tags.iter().partition(|id| !before.contains(id));
-        let error = |ids: &[u32]| tag_rms(&observations, ids, &pose.camera_from_body, camera);
-        let settled = error(&kept);
-        let mut flickers: Vec<u32> = match kept.is_empty() {
-            true => Vec::new(),
-            false => new.into_iter().filter(|&id| error(&[id]) > self.config.flicker_px.max(3.0 * settled)).collect(),
-        };
-        if smeared {
-            let (pnp, body) = (&self.config.pnp, &pose.camera_from_body);
-            let misfits =
-                oblique::smeared_misfits(&self.marker, &self.measured, &pose.tags, &observations, body, camera, pnp);
-            flickers.extend(misfits);
-            flickers.sort_unstable();
-            flickers.dedup();
-        }
-        if flickers.is_empty() {
-            return (pose, rejected);
-        }
-        observations.retain(|o| !flickers.contains(&o.tag));
-        match solve_pnp(&observations, camera, prior, &self.config.pnp) {
-            Ok(again) => {
-                rejected.extend(again.rejected_tags.iter().copied());
-                rejected.extend(flickers);
-                rejected.sort_unstable();
-                rejected.dedup();
-                (again, rejected)
-            }
-            Err(_) => (pose, rejected),
-        }
     }
 
     /// Settles a single tag's mirror ambiguity by `expected`, flags what is worth knowing, and
