@@ -38,9 +38,36 @@ pub(crate) struct HingeAxisArgs {
     /// The registration file (`jawtrack register`): also give the axis in the upper scan's frame.
     #[arg(long)]
     registration: Option<PathBuf>,
+    /// The condyles, LX,LY,LZ,RX,RY,RZ in the maxilla marker's frame (mm; from a CBCT or by
+    /// palpation, through the registration), to be moved onto the axis; default: the standard
+    /// harness mounting's.
+    #[arg(long, value_name = "LX,LY,LZ,RX,RY,RZ", value_parser = parse_condyles, allow_hyphen_values = true)]
+    condyles: Option<[Point3<f64>; 2]>,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     json: bool,
+}
+
+/// Parses six numbers (mm) into the left and right condyle.
+fn parse_condyles(s: &str) -> Result<[Point3<f64>; 2], String> {
+    let v: Vec<f64> =
+        s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| format!("'{c}': {e}"))).collect::<Result<_, _>>()?;
+    match v[..] {
+        [lx, ly, lz, rx, ry, rz] if v.iter().all(|c| c.is_finite()) => {
+            Ok([Point3::new(lx, ly, lz), Point3::new(rx, ry, rz)])
+        }
+        [_, _, _, _, _, _] => Err("the coordinates must be finite".into()),
+        _ => Err(format!("expected LX,LY,LZ,RX,RY,RZ (six numbers in mm), got {} numbers", v.len())),
+    }
+}
+
+/// The condyles (maxilla marker frame), given or the standard mounting's.
+fn condyles(a: &HingeAxisArgs) -> [Point3<f64>; 2] {
+    a.condyles.unwrap_or_else(|| {
+        let m = jawtrack_kinematics::Mounting::default();
+        let at = |side| m.head_from_maxilla.inverse().transform_point(&Point3::from(m.condyle(side)));
+        [at(jawtrack_kinematics::Side::Left), at(jawtrack_kinematics::Side::Right)]
+    })
 }
 
 /// Runs `jawtrack hinge-axis`.
@@ -77,6 +104,18 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
         say!("{report}");
     } else {
         print_summary(&axis, scan, rest, window.len());
+        let [l, r] = condyles(a);
+        let whose = if a.condyles.is_some() { "given" } else { "the standard mounting's" };
+        for (name, c) in [("left", l), ("right", r)] {
+            let p = axis.project(&c).coords;
+            say!(
+                "{name} condyle on the axis ({}, {}, {}) mm, moved {} mm ({whose})",
+                fixed(p.x, 2),
+                fixed(p.y, 2),
+                fixed(p.z, 2),
+                fixed(axis.distance_to(&c), 2)
+            );
+        }
     }
     Ok(())
 }
@@ -123,6 +162,14 @@ fn to_json(
     if let (Some((p, d)), Value::Object(m)) = (scan, &mut o) {
         m.insert("point_scan".into(), xyz(&p.coords));
         m.insert("direction_scan".into(), xyz(&d));
+    }
+    if let Value::Object(m) = &mut o {
+        let moved = |c: &Point3<f64>| json!({"point": xyz(&axis.project(c).coords), "moved_mm": axis.distance_to(c)});
+        let [l, r] = condyles(a);
+        m.insert(
+            "condyles_on_axis".into(),
+            json!({"left": moved(&l), "right": moved(&r), "given": a.condyles.is_some()}),
+        );
     }
     o
 }

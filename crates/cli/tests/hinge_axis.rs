@@ -104,6 +104,23 @@ fn the_opening_gives_the_rig_s_hinge_axis_in_both_frames() {
     let (ps, ds) = (vec3(&out["point_scan"]), vec3(&out["direction_scan"]));
     assert!((ps - scan_from_maxilla.transform_point(&Point3::from(p)).coords).norm() < 1e-9);
     assert!((ds - scan_from_maxilla.rotation() * d).norm() < 1e-9);
+    // The standard mounting's condyles lie on the rig's axis: moved by nothing.
+    for side in ["left", "right"] {
+        let c = &out["condyles_on_axis"][side];
+        assert!(c["moved_mm"].as_f64().expect("mm") < TOL_MM, "{out}");
+    }
+    assert_eq!(out["condyles_on_axis"]["given"], false);
+    // Condyles given 3 mm off the axis (from a CBCT, say) are moved onto it.
+    let up = Vector3::new(0.0, 1.0, 0.0).cross(&dir_true).normalize() * 3.0;
+    let (l, r) = (condyles[0].coords + up, condyles[1].coords + up);
+    let given = format!("{},{},{},{},{},{}", l.x, l.y, l.z, r.x, r.y, r.z);
+    let moved = json_of(&["hinge-axis", s(&rec), "--to", "1.99", "--condyles", &given, "--json"]);
+    for (side, truth) in [("left", condyles[0]), ("right", condyles[1])] {
+        let c = &moved["condyles_on_axis"][side];
+        assert!((c["moved_mm"].as_f64().expect("mm") - 3.0).abs() < TOL_MM, "{moved}");
+        assert!((vec3(&c["point"]) - truth.coords).norm() < TOL_MM, "{moved}");
+    }
+    refused(&jawtrack(&["hinge-axis", s(&rec), "--condyles", "1,2,3"]), "six numbers");
     // The summary says the same in words.
     let text = ok(&jawtrack(&["hinge-axis", s(&rec), "--to", "1.99"]));
     assert!(text.contains("maxilla marker's frame") && text.contains("uncertainty (1σ)"), "{text}");

@@ -71,8 +71,13 @@ impl HingeAxis {
 
     /// Distance (mm) from `q` to the axis line.
     pub fn distance_to(&self, q: &Point3<f64>) -> f64 {
-        let d = q - self.point;
-        (d - self.direction.into_inner() * d.dot(&self.direction)).norm()
+        (q - self.project(q)).norm()
+    }
+
+    /// The point of the axis nearest `q`: a condyle moved onto the kinematic axis.
+    pub fn project(&self, q: &Point3<f64>) -> Point3<f64> {
+        let u = self.direction.into_inner();
+        self.point + u * (q - self.point).dot(&u)
     }
 }
 
@@ -292,6 +297,18 @@ mod tests {
         assert!(fit(&small, &closed, None, &bad).expect_err("NaN").to_string().contains("largest turn"));
         let bad = HingeOptions { min_rotation_deg: 20.0, ..HingeOptions::default() };
         assert!(fit(&small, &closed, None, &bad).expect_err("inverted").to_string().contains("below"));
+    }
+
+    #[test]
+    fn a_condyle_moved_onto_the_axis_lands_on_it_at_its_nearest_point() {
+        let (closed, p, u) = rig();
+        let axis =
+            fit(&opening(&closed, &p, &u, &[2.0, 5.0, 9.0]), &closed, None, &HingeOptions::default()).expect("fits");
+        let off = Vector3::new(0.0, 3.0, 4.0).cross(&u).normalize() * 5.0;
+        let condyle = Point3::from(p + u.into_inner() * 48.0 + off);
+        let moved = axis.project(&condyle);
+        assert!(axis.distance_to(&moved) < 1e-9 && ((condyle - moved).norm() - 5.0).abs() < 1e-9);
+        assert!((axis.distance_to(&condyle) - 5.0).abs() < 1e-9);
     }
 
     #[test]
