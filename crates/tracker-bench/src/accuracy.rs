@@ -722,22 +722,10 @@ fn write_plots(run: &Run, out: &Path) -> Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use jawtrack_marker::Marker;
 
     /// A run with one column of ours and no frames: enough for the report's prose.
     fn empty_run(reference: std::result::Result<String, String>) -> Run {
-        Run {
-            columns: vec![Column { stack: Stack::Ours, marker: MarkerFile::Calibrated }],
-            reference,
-            calibration: Vec::new(),
-            calibrated_marker: Marker::default(),
-            front_only: Vec::new(),
-            front_only_marker: Marker::default(),
-            sessions: Vec::new(),
-            bite_steps: vec![None, None],
-            calibration_frames: 0,
-            frames: Vec::new(),
-        }
+        Run::judged(vec![Column { stack: Stack::Ours, marker: MarkerFile::Calibrated }], reference, Vec::new())
     }
 
     fn options() -> Options {

@@ -458,6 +458,17 @@ fn one_cycle(start: f64, period: f64, dt: f64, view: View, motion: JawMotion) ->
 /// through 25 mm openings (the maxilla marker's upper tag stays out of the frame).
 const CHEW_TARGET: [f64; 3] = [0.0, 14.0, -38.0];
 
+/// Where the hinge and border scenes film the jaw from: a tripod 120 mm away, 30° to the side,
+/// aimed below the incisors so that the opening jaw stays in the frame.
+const OPENING_VIEW: View = View {
+    distance_mm: 120.0,
+    azimuth_deg: 30.0,
+    elevation_deg: 0.0,
+    target: [0.0, 20.0, -34.0],
+    hand_seed: None,
+    orientation: Orientation::Upright,
+};
+
 /// Peak condylar travel of the border scene's movements (mm).
 pub const BORDER_TRAVEL_MM: f64 = 6.0;
 
@@ -492,14 +503,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             }
         }
         SceneKind::Hinge => {
-            let view = View {
-                distance_mm: 120.0,
-                azimuth_deg: 30.0,
-                elevation_deg: 0.0,
-                target: [0.0, 20.0, -34.0],
-                hand_seed: None,
-                orientation: Orientation::Upright,
-            };
+            let view = OPENING_VIEW;
             let period = 2.0;
             let mut start = 0.0;
             // Rounds of the four openings, so that the first rounds of a long session are a
@@ -588,14 +592,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
             }
         }
         SceneKind::Border => {
-            let view = View {
-                distance_mm: 120.0,
-                azimuth_deg: 30.0,
-                elevation_deg: 0.0,
-                target: [0.0, 20.0, -34.0],
-                hand_seed: None,
-                orientation: Orientation::Upright,
-            };
+            let view = OPENING_VIEW;
             let (period, mut start) = (2.0, 0.0);
             for _ in 0..opts.cycles {
                 for movement in [Glide::Protrusive, Glide::Left, Glide::Right] {

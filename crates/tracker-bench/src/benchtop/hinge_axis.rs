@@ -135,7 +135,6 @@ pub fn markdown(run: &Run, columns: &[usize]) -> String {
 mod tests {
     use super::*;
     use crate::benchtop::{Column, FrameRecord, MarkerFile, Stack};
-    use jawtrack_marker::Marker;
     use jawtrack_synth::scenes::{Rig, SceneOptions, scene_frames};
 
     /// A run of the hinge scene whose one column reports the truth, every third frame lost.
@@ -160,18 +159,7 @@ mod tests {
                 }
             })
             .collect();
-        Run {
-            columns: vec![Column { stack: Stack::Ours, marker: MarkerFile::Printed }],
-            reference: Err("not run".into()),
-            calibration: Vec::new(),
-            calibrated_marker: Marker::default(),
-            front_only: Vec::new(),
-            front_only_marker: Marker::default(),
-            sessions: Vec::new(),
-            bite_steps: vec![None, None],
-            calibration_frames: 0,
-            frames,
-        }
+        Run::judged(vec![Column { stack: Stack::Ours, marker: MarkerFile::Printed }], Err("not run".into()), frames)
     }
 
     #[test]

@@ -597,6 +597,30 @@ fn read_luma(path: &std::path::Path) -> Result<Luma> {
 }
 
 #[cfg(test)]
+impl Run {
+    /// A run of `columns` over `frames` alone (no calibration, no sessions, neither stack with
+    /// a bite step): what the report's tables and prose are tested on.
+    pub(crate) fn judged(
+        columns: Vec<Column>,
+        reference: std::result::Result<String, String>,
+        frames: Vec<FrameRecord>,
+    ) -> Run {
+        Run {
+            bite_steps: vec![None, None],
+            columns,
+            reference,
+            calibration: Vec::new(),
+            calibrated_marker: Marker::default(),
+            front_only: Vec::new(),
+            front_only_marker: Marker::default(),
+            sessions: Vec::new(),
+            calibration_frames: 0,
+            frames,
+        }
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use jawtrack_kinematics::Mounting;
@@ -687,18 +711,7 @@ mod tests {
                 estimates: vec![Some(estimate)],
             });
         }
-        Run {
-            columns: vec![Column { stack: Stack::Ours, marker: MarkerFile::Calibrated }],
-            reference: Err("not run".into()),
-            calibration: Vec::new(),
-            calibrated_marker: Marker::default(),
-            front_only: Vec::new(),
-            front_only_marker: Marker::default(),
-            sessions: Vec::new(),
-            bite_steps: vec![None],
-            calibration_frames: 0,
-            frames,
-        }
+        Run::judged(vec![Column { stack: Stack::Ours, marker: MarkerFile::Calibrated }], Err("not run".into()), frames)
     }
 
     #[test]
