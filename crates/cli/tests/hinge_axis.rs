@@ -51,7 +51,7 @@ fn true_axis() -> (Point3<f64>, [Point3<f64>; 2], Vector3<f64>) {
     let maxilla_from_head = m.head_from_maxilla.inverse();
     let at = |p: Vector3<f64>| maxilla_from_head.transform_point(&Point3::from(p));
     (
-        at(m.hinge_point),
+        at(m.hinge_point()),
         [at(m.condyle(Side::Left)), at(m.condyle(Side::Right))],
         maxilla_from_head.rotation() * Vector3::x(),
     )

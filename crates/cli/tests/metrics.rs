@@ -118,9 +118,9 @@ fn check_envelope(env: &Value, points: &[[f64; 2]]) -> f64 {
 /// The true peak opening of the hinge at a point `r` mm from the hinge axis (Y, Z in the head
 /// frame), turned by the angle that opens the standard incisal point by the chord `HINGE_MM`.
 fn hinge_opening(rig: &Rig, point: Vector3<f64>) -> f64 {
-    let lever = rig.mounting.lower_incisal_point - rig.mounting.hinge_point;
+    let lever = rig.mounting.lower_incisal_point - rig.mounting.hinge_point();
     let a = 2.0 * (HINGE_MM / (2.0 * lever.norm())).asin();
-    let r = point - rig.mounting.hinge_point;
+    let r = point - rig.mounting.hinge_point();
     // A turn by `a` about +X: y' = y cos a − z sin a.
     r.y * (a.cos() - 1.0) - r.z * a.sin()
 }

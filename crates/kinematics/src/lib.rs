@@ -4,6 +4,8 @@
 //!
 //! - [`mounting`]: how the harnesses sit on the head ([`Mounting`]): the head frame, the
 //!   markers' rest poses, the hinge axis, the condyles and the lower incisal point.
+//! - [`anatomy`]: the patient's frame and points from the upper scan ([`AnatomicalPoints`]):
+//!   the occlusal plane, the midline, the lower incisal point, the condyles (given or Bonwill's).
 //! - [`point`]: a point fixed to the mandible (the incisor by default, or a condyle) carried
 //!   by tracked poses, and its [`Displacement`] from rest.
 //! - [`metrics`]: the incisor's clinical extremes over a session ([`Metrics`]), and how many
@@ -18,6 +20,7 @@
 //!
 //! The head frame: X toward the patient's left, Y down, Z posterior (mm).
 
+pub mod anatomy;
 pub mod articulator;
 pub mod envelope;
 pub mod hinge;
@@ -27,6 +30,7 @@ pub mod opensim;
 pub mod point;
 pub mod views;
 
+pub use anatomy::AnatomicalPoints;
 pub use articulator::{ArticulatorOptions, ArticulatorValues, Movements};
 pub use envelope::{Envelope, convex_hull, polygon_area};
 pub use hinge::{HingeAxis, HingeOptions};
@@ -72,6 +76,9 @@ pub enum KinematicsError {
         /// The travel the value is read over (mm).
         over_mm: f64,
     },
+    /// A points file that is not one, or holds points no patient has.
+    #[error("points file: {0}")]
+    Points(String),
     /// The poses do not fix an axis (e.g. all turns about different axes cancel out).
     #[error("the poses do not fix a hinge axis: their turns share no axis")]
     Degenerate,

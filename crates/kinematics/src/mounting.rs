@@ -1,5 +1,5 @@
 //! The harness mounting: where the two markers sit on the head, and the anatomy the
-//! kinematics needs (hinge axis, condyles, lower incisal point), all in the head frame.
+//! kinematics needs (the condyles, whose line is the hinge axis, and the lower incisal point), all in the head frame.
 //! [`Mounting::default`] is the standard harness mounting; the renderer's rig embeds the same
 //! one, so rendered sessions and their readouts agree by construction.
 
@@ -24,10 +24,9 @@ pub struct Mounting {
     pub head_from_maxilla: Pose,
     /// Pose of the mandible marker with the jaw closed.
     pub head_from_mandible_rest: Pose,
-    /// A point on the hinge (condylar) axis; the axis runs along head X.
-    pub hinge_point: Vector3<f64>,
-    /// Distance between the condyles (mm).
-    pub intercondylar_mm: f64,
+    /// The condyles with the jaw closed, left then right: the ends of the hinge (condylar)
+    /// axis.
+    pub condyles: [Vector3<f64>; 2],
     /// The lower incisal point with the jaw closed.
     pub lower_incisal_point: Vector3<f64>,
 }
@@ -40,8 +39,8 @@ impl Default for Mounting {
         Mounting {
             head_from_maxilla: Pose::from_parts(facing, Vector3::new(0.0, -22.0, -38.0)),
             head_from_mandible_rest: Pose::from_parts(facing, Vector3::new(0.0, 22.0, -38.0)),
-            hinge_point: Vector3::new(0.0, -20.0, 95.0),
-            intercondylar_mm: 100.0,
+            // 100 mm apart on a transverse line through (0, −20, 95).
+            condyles: [Vector3::new(50.0, -20.0, 95.0), Vector3::new(-50.0, -20.0, 95.0)],
             lower_incisal_point: Vector3::new(0.0, 1.5, 1.0),
         }
     }
@@ -53,14 +52,22 @@ impl Mounting {
         self.head_from_maxilla.inverse() * self.head_from_mandible_rest
     }
 
-    /// The condyle of `side` with the jaw closed (head frame): on the hinge axis, half the
-    /// intercondylar distance from the hinge point.
+    /// The condyle of `side` with the jaw closed (head frame).
     pub fn condyle(&self, side: Side) -> Vector3<f64> {
-        let sign = match side {
-            Side::Left => 1.0,
-            Side::Right => -1.0,
-        };
-        self.hinge_point + Vector3::new(sign * self.intercondylar_mm / 2.0, 0.0, 0.0)
+        match side {
+            Side::Left => self.condyles[0],
+            Side::Right => self.condyles[1],
+        }
+    }
+
+    /// The midpoint of the condyles: the hinge axis's point on the midline.
+    pub fn hinge_point(&self) -> Vector3<f64> {
+        (self.condyles[0] + self.condyles[1]) / 2.0
+    }
+
+    /// The distance between the condyles (mm).
+    pub fn intercondylar_mm(&self) -> f64 {
+        (self.condyles[0] - self.condyles[1]).norm()
     }
 
     /// A head-frame point of the closed jaw, in the mandible marker's frame: where a point
@@ -92,7 +99,7 @@ mod tests {
     fn the_condyles_straddle_the_hinge_point_along_the_axis() {
         let m = Mounting::default();
         let (l, r) = (m.condyle(Side::Left), m.condyle(Side::Right));
-        assert!((l - r - Vector3::new(m.intercondylar_mm, 0.0, 0.0)).norm() < 1e-12);
-        assert!(((l + r) / 2.0 - m.hinge_point).norm() < 1e-12);
+        assert!((l - r - Vector3::new(m.intercondylar_mm(), 0.0, 0.0)).norm() < 1e-12);
+        assert!(((l + r) / 2.0 - m.hinge_point()).norm() < 1e-12);
     }
 }

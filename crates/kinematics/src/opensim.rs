@@ -95,7 +95,7 @@ pub fn jaw_coordinates(mounting: &Mounting, rest: &Pose, m: &Pose) -> [f64; 6] {
     let b = r[(0, 2)].clamp(-1.0, 1.0).asin();
     let a = (-r[(1, 2)]).atan2(r[(2, 2)]);
     let g = (-r[(0, 1)]).atan2(r[(0, 0)]);
-    let mid = mounting.hinge_point;
+    let mid = mounting.hinge_point();
     let shift: Vector3<f64> = c * (jaw.transform_point(&Point3::from(mid)).coords - mid) / 1000.0;
     [a.to_degrees(), b.to_degrees(), g.to_degrees(), shift.x, shift.y, shift.z]
 }
@@ -148,7 +148,7 @@ mod tests {
         let m = Mounting::default();
         let rest = m.maxilla_from_mandible_rest();
         // Opening: a positive turn about head +X (chin down and back) is about OpenSim −Z.
-        let h = m.hinge_point;
+        let h = m.hinge_point();
         let r = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.2);
         let open = tracked(&m, Pose::from_parts(r, h - r * h));
         let v = jaw_coordinates(&m, &rest, &open);

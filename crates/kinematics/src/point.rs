@@ -78,7 +78,7 @@ mod tests {
     /// The tracked pose after the mandible turns by `angle` about the hinge axis (head X).
     fn hinge(m: &Mounting, angle: f64) -> Pose {
         let r = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), angle);
-        let jaw = Pose::from_parts(r, m.hinge_point - r * m.hinge_point);
+        let jaw = Pose::from_parts(r, m.hinge_point() - r * m.hinge_point());
         m.head_from_maxilla.inverse() * jaw * m.head_from_mandible_rest
     }
 
@@ -86,7 +86,7 @@ mod tests {
     fn a_hinge_opening_reads_as_opening_and_a_shift_forward_as_protrusion() {
         let m = Mounting::default();
         let (incisor, rest) = (Incisor::standard(), m.maxilla_from_mandible_rest());
-        let lever = (m.lower_incisal_point - m.hinge_point).norm();
+        let lever = (m.lower_incisal_point - m.hinge_point()).norm();
         // A positive turn about +X swings the chin down (+Y) and back: a 30 mm chord.
         let open = incisor.displacement(&hinge(&m, 2.0 * (15.0 / lever).asin()), &rest);
         assert!((open.opening.hypot(open.protrusive) - 30.0).abs() < 1e-9, "{open:?}");

@@ -109,7 +109,7 @@ impl Rig {
         let c = g.condylar_inclination_deg.to_radians();
         let slide = Vector3::new(0.0, c.sin(), -c.cos()) * travel_mm;
         let base = Pose::from_parts(UnitQuaternion::identity(), slide);
-        let hinge = self.mounting.hinge_point + slide;
+        let hinge = self.mounting.hinge_point() + slide;
         let tan = g.protrusive_guidance_deg.to_radians().tan();
         // Down (+Y) against forward (−Z) at the guidance angle; a turn opening the jaw (about
         // +X) moves the incisor down and back.
@@ -186,7 +186,7 @@ mod tests {
                 // The condyles stay as far apart as they were.
                 let wc = p.transform_point(&Point3::from(rig.mounting.condyle(working))).coords;
                 let nc = p.transform_point(&Point3::from(n0)).coords;
-                assert!(((wc - nc).norm() - rig.mounting.intercondylar_mm).abs() < 1e-9);
+                assert!(((wc - nc).norm() - rig.mounting.intercondylar_mm()).abs() < 1e-9);
                 let i = moved(&p, &rig.mounting.lower_incisal_point);
                 assert!((i.y.atan2(i.dot(&w)).to_degrees() - g.lateral_guidance_deg).abs() < 1e-6, "{i:?}");
                 assert!(i.dot(&w) > 0.5 * travel, "the incisor swings toward the working side: {i:?}");

@@ -191,7 +191,7 @@ fn rotation_about(point: &Vector3<f64>, axis: &Unit<Vector3<f64>>, angle: f64) -
 impl Rig {
     /// Hinge angle (rad) that moves the lower incisal point by `chord` mm.
     fn hinge_angle(&self, chord: f64) -> f64 {
-        let r = (self.mounting.lower_incisal_point - self.mounting.hinge_point).norm();
+        let r = (self.mounting.lower_incisal_point - self.mounting.hinge_point()).norm();
         2.0 * (chord / (2.0 * r)).clamp(-1.0, 1.0).asin()
     }
 
@@ -202,7 +202,7 @@ impl Rig {
             JawMotion::Hinge { opening_mm, start_s, period_s } => {
                 let a = self.hinge_angle(opening_mm) * cycle(t, start_s, period_s);
                 // A positive turn about +X swings the chin down (+Y) and back.
-                rotation_about(&self.mounting.hinge_point, &Vector3::x_axis(), a)
+                rotation_about(&self.mounting.hinge_point(), &Vector3::x_axis(), a)
             }
             JawMotion::Glide { direction, amplitude_mm, start_s, period_s } => {
                 let s = cycle(t, start_s, period_s);
@@ -214,9 +214,9 @@ impl Rig {
                     Glide::Left | Glide::Right => {
                         // Rotation about the working condyle's vertical axis (Bennett movement)
                         // plus a slight opening from canine guidance.
-                        let side = if direction == Glide::Left { 1.0 } else { -1.0 };
-                        let condyle = self.mounting.hinge_point
-                            + Vector3::new(side * self.mounting.intercondylar_mm / 2.0, 0.0, 0.0);
+                        let (side, working) =
+                            if direction == Glide::Left { (1.0, Side::Left) } else { (-1.0, Side::Right) };
+                        let condyle = self.mounting.condyle(working);
                         let lever = self.mounting.lower_incisal_point - condyle;
                         let horizontal = (lever.x * lever.x + lever.z * lever.z).sqrt();
                         let angle = amplitude_mm * s / horizontal;
@@ -226,7 +226,7 @@ impl Rig {
                             - self.mounting.lower_incisal_point.x;
                         let angle = if moved * side >= 0.0 { angle } else { -angle };
                         let open = rotation_about(
-                            &self.mounting.hinge_point,
+                            &self.mounting.hinge_point(),
                             &Vector3::x_axis(),
                             self.hinge_angle(0.3 * amplitude_mm * s),
                         );
@@ -246,8 +246,11 @@ impl Rig {
             JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s } => {
                 let phase = TAU * (t - start_s) / period_s;
                 let open = 0.5 * (1.0 - phase.cos());
-                let hinge =
-                    rotation_about(&self.mounting.hinge_point, &Vector3::x_axis(), self.hinge_angle(opening_mm * open));
+                let hinge = rotation_about(
+                    &self.mounting.hinge_point(),
+                    &Vector3::x_axis(),
+                    self.hinge_angle(opening_mm * open),
+                );
                 // Out on one side, back on the other: a loop in the frontal plane. sin·(1 − cos)/2
                 // peaks at 3√3/8, scaled out so that `lateral_mm` is the peak.
                 let swing = phase.sin() * open / (3.0 * 3f64.sqrt() / 8.0);

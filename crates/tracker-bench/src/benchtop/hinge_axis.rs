@@ -55,7 +55,7 @@ fn truth(m: &Mounting) -> (Point3<f64>, [Point3<f64>; 2], Vector3<f64>) {
     let maxilla_from_head = m.head_from_maxilla.inverse();
     let at = |p: Vector3<f64>| maxilla_from_head.transform_point(&Point3::from(p));
     let dir = maxilla_from_head.rotation() * Vector3::x();
-    (at(m.hinge_point), [at(m.condyle(Side::Left)), at(m.condyle(Side::Right))], dir)
+    (at(m.hinge_point()), [at(m.condyle(Side::Left)), at(m.condyle(Side::Right))], dir)
 }
 
 /// Every hinge opening of `run`, fitted from `column`'s poses, in both windows.
