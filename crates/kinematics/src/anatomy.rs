@@ -270,7 +270,7 @@ mod tests {
             at(Vector3::new(0.0, 1.5, 1.0)),
             condyles.map(|[l, r]| Condyles { left: at(l), right: at(r) }),
         )
-        .unwrap()
+        .expect("the points are an arch's")
     }
 
     #[test]
@@ -324,20 +324,20 @@ mod tests {
     #[test]
     fn a_file_round_trips_and_bad_ones_are_refused_by_name() {
         let p = points(None);
-        assert_eq!(AnatomicalPoints::from_json(&p.to_json()).unwrap(), p);
+        assert_eq!(AnatomicalPoints::from_json(&p.to_json()).expect("its own file"), p);
         let o = p.occlusal_plane;
         let on_a_line = OcclusalPlane { right_molar: arr(v(&o.incisal) * 2.0 - v(&o.left_molar)), ..o };
-        let e = AnatomicalPoints::new(on_a_line, p.lower_incisal_point, None).unwrap_err().to_string();
+        let e = AnatomicalPoints::new(on_a_line, p.lower_incisal_point, None).expect_err("refused").to_string();
         assert!(e.contains("nearly on a line"), "{e}");
         let close = OcclusalPlane { left_molar: arr(v(&o.incisal) + Vector3::new(1.0, 2.0, 3.0)), ..o };
-        let e = AnatomicalPoints::new(close, p.lower_incisal_point, None).unwrap_err().to_string();
+        let e = AnatomicalPoints::new(close, p.lower_incisal_point, None).expect_err("refused").to_string();
         assert!(e.contains("incisal to left molar"), "{e}");
-        let e = AnatomicalPoints::from_json(&p.to_json().replace("\"mm\"", "\"m\"")).unwrap_err().to_string();
+        let e = AnatomicalPoints::from_json(&p.to_json().replace("\"mm\"", "\"m\"")).expect_err("refused").to_string();
         assert!(e.contains("units"), "{e}");
-        let e = AnatomicalPoints::new(o, [f64::NAN, 0.0, 0.0], None).unwrap_err().to_string();
+        let e = AnatomicalPoints::new(o, [f64::NAN, 0.0, 0.0], None).expect_err("refused").to_string();
         assert!(e.contains("lower_incisal_point"), "{e}");
         let same = Condyles { left: [0.0, 0.0, 90.0], right: [10.0, 0.0, 90.0] };
-        let e = AnatomicalPoints::new(o, p.lower_incisal_point, Some(same)).unwrap_err().to_string();
+        let e = AnatomicalPoints::new(o, p.lower_incisal_point, Some(same)).expect_err("refused").to_string();
         assert!(e.contains("condyles"), "{e}");
     }
 }
