@@ -5,10 +5,11 @@
 
 use crate::export::{SessionArg, load, rest_of};
 use crate::numbers::{clean_json, fixed};
+use crate::points::{Anatomy, PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::articulator::name;
-use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, Mounting, Movements, Side};
+use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, Movements, Side};
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
 use serde_json::{Value, json};
@@ -58,6 +59,11 @@ pub(crate) struct ArticulatorArgs {
     /// Read each value over this much of its path's travel (mm).
     #[arg(long, default_value_t = ArticulatorOptions::default().over_mm, value_name = "MM")]
     over_mm: f64,
+    /// The registration file (`jawtrack register`), for --points.
+    #[arg(long, value_name = "FILE")]
+    registration: Option<PathBuf>,
+    #[command(flatten)]
+    points: PointsArg,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     json: bool,
@@ -93,6 +99,7 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     if !(a.over_mm.is_finite() && a.over_mm > 1.0) {
         bail!("--over-mm must be a number of mm above 1, got {}", a.over_mm);
     }
+    let reg = registration(a.registration.as_deref())?;
     let rec = load(&a.recording, a.session)?;
     warn_if_nominal(&rec, "the condylar inclinations moved 7–22° and the side shifts 1–1.5 mm");
     let rest = rest_of(&rec, a.rest_frame)?
@@ -112,20 +119,26 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
         toward_right: poses[2].as_deref(),
     };
     let options = ArticulatorOptions { over_mm: a.over_mm, ..ArticulatorOptions::default() };
-    let mounting = Mounting::default();
-    let v = ArticulatorValues::measure(&mounting, &rest.pose(), &movements, &options)
+    let anatomy = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
+    let v = ArticulatorValues::measure(&anatomy.mounting, &rest.pose(), &movements, &options)
         .with_context(|| format!("{name_of}"))?;
-    let mut report = to_json(&v, a, &options, rest.to_json());
+    let mut report = to_json(&v, a, &options, &anatomy, rest.to_json());
     clean_json(&mut report);
     if a.json {
         say!("{report}");
     } else {
-        print_summary(&v, &options, &rest.describe());
+        print_summary(&v, &options, &anatomy, &rest.describe());
     }
     Ok(())
 }
 
-fn to_json(v: &ArticulatorValues, a: &ArticulatorArgs, o: &ArticulatorOptions, rest: Value) -> Value {
+fn to_json(
+    v: &ArticulatorValues,
+    a: &ArticulatorArgs,
+    o: &ArticulatorOptions,
+    anatomy: &Anatomy,
+    rest: Value,
+) -> Value {
     let side = |k: usize| {
         json!({
             "condylar_inclination_deg": v.condylar_inclination_deg[k],
@@ -137,8 +150,8 @@ fn to_json(v: &ArticulatorValues, a: &ArticulatorArgs, o: &ArticulatorOptions, r
     json!({
         "version": 1,
         "units": {"angles": "deg", "lengths": "mm"},
-        "reference_plane": "the head frame's horizontal plane of the standard harness mounting",
-        "landmarks": "the standard harness mounting's condyles and lower incisal point",
+        "reference_plane": anatomy.reference_plane,
+        "landmarks": anatomy.landmarks,
         "read_over_mm": o.over_mm,
         "left_condyle": side(0),
         "right_condyle": side(1),
@@ -150,7 +163,7 @@ fn to_json(v: &ArticulatorValues, a: &ArticulatorArgs, o: &ArticulatorOptions, r
     })
 }
 
-fn print_summary(v: &ArticulatorValues, o: &ArticulatorOptions, rest: &str) {
+fn print_summary(v: &ArticulatorValues, o: &ArticulatorOptions, anatomy: &Anatomy, rest: &str) {
     let deg = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{}°", fixed(x, 1)));
     let mm = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{} mm", fixed(x, 2)));
     say!("read over the first {} mm of each path, from {rest}", fixed(o.over_mm, 1));
@@ -166,8 +179,5 @@ fn print_summary(v: &ArticulatorValues, o: &ArticulatorOptions, rest: &str) {
     for (k, side) in [Side::Left, Side::Right].iter().enumerate() {
         say!("lateral incisal guidance toward the {} {}", name(*side), deg(v.lateral_guidance_deg[k]));
     }
-    say!(
-        "angles are to the reference plane (the head frame's horizontal of the standard harness mounting); the \
-         condyles and incisal point are that mounting's"
-    );
+    say!("angles are to {}; the landmarks are {}", anatomy.reference_plane, anatomy.landmarks);
 }

@@ -3,7 +3,8 @@
 //! the upper scan's; printed, or as one JSON object other tools read.
 
 use crate::export::{Rest, SessionArg, load, rest_of};
-use crate::numbers::{clean_json, fixed};
+use crate::numbers::{clean_json, fixed, parse_numbers};
+use crate::points::{PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::{HingeAxis, HingeOptions, hinge};
@@ -39,10 +40,12 @@ pub(crate) struct HingeAxisArgs {
     #[arg(long)]
     registration: Option<PathBuf>,
     /// The condyles, LX,LY,LZ,RX,RY,RZ in the maxilla marker's frame (mm; from a CBCT or by
-    /// palpation, through the registration), to be moved onto the axis; default: the standard
-    /// harness mounting's.
+    /// palpation, through the registration), to be moved onto the axis; default: the points
+    /// file's (--points), else the standard harness mounting's.
     #[arg(long, value_name = "LX,LY,LZ,RX,RY,RZ", value_parser = parse_condyles, allow_hyphen_values = true)]
     condyles: Option<[Point3<f64>; 2]>,
+    #[command(flatten)]
+    points: PointsArg,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     json: bool,
@@ -50,24 +53,25 @@ pub(crate) struct HingeAxisArgs {
 
 /// Parses six numbers (mm) into the left and right condyle.
 fn parse_condyles(s: &str) -> Result<[Point3<f64>; 2], String> {
-    let v: Vec<f64> =
-        s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| format!("'{c}': {e}"))).collect::<Result<_, _>>()?;
-    match v[..] {
-        [lx, ly, lz, rx, ry, rz] if v.iter().all(|c| c.is_finite()) => {
-            Ok([Point3::new(lx, ly, lz), Point3::new(rx, ry, rz)])
-        }
-        [_, _, _, _, _, _] => Err("the coordinates must be finite".into()),
-        _ => Err(format!("expected LX,LY,LZ,RX,RY,RZ (six numbers in mm), got {} numbers", v.len())),
-    }
+    let v = parse_numbers(s, 6, "LX,LY,LZ,RX,RY,RZ")?;
+    Ok([Point3::new(v[0], v[1], v[2]), Point3::new(v[3], v[4], v[5])])
 }
 
-/// The condyles (maxilla marker frame), given or the standard mounting's.
-fn condyles(a: &HingeAxisArgs) -> [Point3<f64>; 2] {
-    a.condyles.unwrap_or_else(|| {
-        let m = jawtrack_kinematics::Mounting::default();
-        let at = |side| m.head_from_maxilla.inverse().transform_point(&Point3::from(m.condyle(side)));
-        [at(jawtrack_kinematics::Side::Left), at(jawtrack_kinematics::Side::Right)]
-    })
+/// The condyles (maxilla marker frame) and where they came from: `--condyles`, else the
+/// points file's through the registration, else the standard mounting's.
+fn condyles(a: &HingeAxisArgs, reg: Option<&Registration>, rest: &Pose) -> Result<([Point3<f64>; 2], &'static str)> {
+    if let Some(c) = a.condyles {
+        return Ok((c, "given"));
+    }
+    let anatomy = anatomy(a.points.points.as_deref(), reg, rest)?;
+    let m = anatomy.mounting;
+    let at = |side| m.head_from_maxilla.inverse().transform_point(&Point3::from(m.condyle(side)));
+    let whose = match (a.points.points.is_some(), anatomy.condyles_given) {
+        (false, _) => "the standard mounting's",
+        (true, true) => "the points file's",
+        (true, false) => "the points file's Bonwill triangle's",
+    };
+    Ok(([at(jawtrack_kinematics::Side::Left), at(jawtrack_kinematics::Side::Right)], whose))
 }
 
 /// Runs `jawtrack hinge-axis`.
@@ -78,10 +82,7 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
     {
         bail!("--from {from} is not before --to {to}: the window is empty");
     }
-    let registration = match &a.registration {
-        Some(p) => Some(Registration::load(p).with_context(|| format!("registration file {}", p.display()))?),
-        None => None,
-    };
+    let registration = registration(a.registration.as_deref())?;
     let rec = load(&a.recording, a.session)?;
     crate::articulator::warn_if_nominal(&rec, "the axis of a rendered 40 mm opening moved 1.7–2.4 mm and 2–3°");
     let inside = |t: f64| a.from.is_none_or(|f| t >= f) && a.to.is_none_or(|e| t <= e);
@@ -98,14 +99,14 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
     let poses: Vec<Pose> = window.iter().map(|(_, p)| *p).collect();
     let axis = hinge::fit(&poses, &rest.pose(), None, &options).with_context(|| format!("{name}"))?;
     let scan = registration.as_ref().map(|r| axis.transformed(&r.maxilla_scan_from_maxilla_marker));
-    let mut report = to_json(a, &axis, scan, rest, window.len());
+    let (condyles, whose) = condyles(a, registration.as_ref(), &rest.pose())?;
+    let mut report = to_json(a, &axis, scan, rest, window.len(), (condyles, whose));
     clean_json(&mut report);
     if a.json {
         say!("{report}");
     } else {
         print_summary(&axis, scan, rest, window.len());
-        let [l, r] = condyles(a);
-        let whose = if a.condyles.is_some() { "given" } else { "the standard mounting's" };
+        let [l, r] = condyles;
         for (name, c) in [("left", l), ("right", r)] {
             let p = axis.project(&c).coords;
             say!(
@@ -140,6 +141,7 @@ fn to_json(
     scan: Option<(Point3<f64>, Unit<Vector3<f64>>)>,
     rest: Rest,
     frames: usize,
+    (condyles, whose): ([Point3<f64>; 2], &str),
 ) -> Value {
     let mut o = json!({
         "version": 1,
@@ -165,10 +167,10 @@ fn to_json(
     }
     if let Value::Object(m) = &mut o {
         let moved = |c: &Point3<f64>| json!({"point": xyz(&axis.project(c).coords), "moved_mm": axis.distance_to(c)});
-        let [l, r] = condyles(a);
+        let [l, r] = condyles;
         m.insert(
             "condyles_on_axis".into(),
-            json!({"left": moved(&l), "right": moved(&r), "given": a.condyles.is_some()}),
+            json!({"left": moved(&l), "right": moved(&r), "given": whose == "given" || whose == "the points file's", "source": whose}),
         );
     }
     o

@@ -38,6 +38,7 @@ mod marker;
 mod metrics;
 mod numbers;
 mod output;
+mod points;
 mod progress;
 mod register;
 mod synth;
@@ -110,6 +111,9 @@ enum Command {
     /// excursion, protrusion and retrusion, and the envelope of motion (convex hull area) in
     /// the sagittal and frontal planes; optionally plot the envelopes.
     Metrics(metrics::MetricsArgs),
+    /// Write or check the anatomical points file: the occlusal plane, midline, lower incisal
+    /// point and condyles picked on the upper scan, which replace the standard harness mounting.
+    Points(points::PointsArgs),
     /// The kinematic hinge axis of a recorded opening: a point and direction in the maxilla
     /// marker's frame (and the upper scan's, given a registration), with its uncertainty.
     HingeAxis(hinge_axis::HingeAxisArgs),
@@ -147,6 +151,7 @@ fn main() {
         Command::Export(a) => export::export(&a),
         Command::Plot(a) => export::plot(&a),
         Command::Metrics(a) => metrics::run(&a),
+        Command::Points(a) => points::run(&a),
         Command::HingeAxis(a) => hinge_axis::run(&a),
         Command::Articulator(a) => articulator::run(&a),
         Command::Contacts(a) => contacts::run(&a),

@@ -28,6 +28,20 @@ pub(crate) fn clean_json(v: &mut Value) {
     }
 }
 
+/// Parses `count` comma-separated finite numbers (mm), for flags giving points; `what` names
+/// them in the error ("LX,LY,LZ,RX,RY,RZ").
+pub(crate) fn parse_numbers(s: &str, count: usize, what: &str) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> =
+        s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| format!("'{c}': {e}"))).collect::<Result<_, _>>()?;
+    if v.len() != count {
+        return Err(format!("expected {what} ({count} numbers in mm), got {} numbers", v.len()));
+    }
+    if v.iter().any(|c| !c.is_finite()) {
+        return Err("the coordinates must be finite".into());
+    }
+    Ok(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -42,5 +56,13 @@ mod tests {
         let mut v = serde_json::json!({"a": -0.0, "b": [-0.0, -1.0, 3], "c": "-0.0"});
         clean_json(&mut v);
         assert_eq!(v.to_string(), r#"{"a":0.0,"b":[0.0,-1.0,3],"c":"-0.0"}"#);
+    }
+
+    #[test]
+    fn numbers_are_counted_and_must_be_finite() {
+        assert_eq!(parse_numbers("1, -2.5,3", 3, "X,Y,Z"), Ok(vec![1.0, -2.5, 3.0]));
+        assert!(parse_numbers("1,2", 3, "X,Y,Z").is_err_and(|e| e.contains("X,Y,Z") && e.contains("got 2")));
+        assert!(parse_numbers("1,inf,2", 3, "X,Y,Z").is_err_and(|e| e.contains("finite")));
+        assert!(parse_numbers("1,a,2", 3, "X,Y,Z").is_err_and(|e| e.contains("'a'")));
     }
 }

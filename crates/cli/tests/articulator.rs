@@ -113,3 +113,74 @@ fn a_recording_tracked_with_the_nominal_marker_is_warned_about() {
     // The programmed recording's header names no marker: no warning.
     assert!(!common::stderr(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:2"])).contains("nominal"));
 }
+
+/// A points file whose occlusal plane is the standard head frame's horizontal turned by
+/// `tilt_deg` about the transverse axis, with the rig's own condyles and incisal point, and a
+/// registration placing the upper scan at an arbitrary pose on the maxilla marker.
+fn tilted_anatomy(dir: &Path, tilt_deg: f64) -> (PathBuf, PathBuf, nalgebra::UnitQuaternion<f64>) {
+    use nalgebra::{Point3, UnitQuaternion, Vector3};
+    let m = Rig::default().mounting;
+    let tilt = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), tilt_deg.to_radians());
+    let scan_from_head = Pose::from_axis_angle(Vector3::new(0.2, 0.9, -0.3), Vector3::new(5.0, 30.0, -12.0));
+    let at = |h: Vector3<f64>| {
+        let p = scan_from_head.transform_point(&Point3::from(h));
+        format!("{},{},{}", p.x, p.y, p.z)
+    };
+    let file = dir.join("points.json");
+    ok(&jawtrack(&[
+        "points",
+        "--occlusal",
+        &[at(Vector3::zeros()), at(tilt * Vector3::new(25.0, 0.0, 35.0)), at(tilt * Vector3::new(-25.0, 0.0, 35.0))]
+            .join(","),
+        "--lower-incisal",
+        &at(m.lower_incisal_point),
+        "--condyles",
+        &format!("{},{}", at(m.condyles[0]), at(m.condyles[1])),
+        "--out",
+        s(&file),
+    ]));
+    let reg = jawtrack_tracker::Registration {
+        maxilla_scan_from_maxilla_marker: scan_from_head * m.head_from_maxilla,
+        ..jawtrack_tracker::Registration::identity()
+    };
+    let reg_file = dir.join("registration.json");
+    std::fs::write(&reg_file, reg.to_json()).expect("write");
+    (file, reg_file, tilt)
+}
+
+#[test]
+fn with_a_points_file_angles_are_to_its_occlusal_plane() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    let (points, reg, tilt) = tilted_anatomy(dir.path(), 10.0);
+    let out = ok(&jawtrack(&[
+        "articulator",
+        s(&rec),
+        "--protrusion",
+        "0:2",
+        "--points",
+        s(&points),
+        "--registration",
+        s(&reg),
+        "--json",
+    ]));
+    let v: Value = serde_json::from_str(&out).expect("one JSON object");
+    // A straight path forward (−Z) and down (+Y) at `deg` in the head frame, read in the tilted
+    // frame: its angle below that frame's horizontal.
+    let in_tilted = |deg: f64| {
+        let r = deg.to_radians();
+        let d = tilt.inverse() * nalgebra::Vector3::new(0.0, r.sin(), -r.cos());
+        d.y.atan2(-d.z).to_degrees()
+    };
+    let g = GUIDANCE;
+    let want = in_tilted(g.condylar_inclination_deg);
+    assert!((want - g.condylar_inclination_deg).abs() > 9.0, "the tilt must show: {want}");
+    for condyle in ["left_condyle", "right_condyle"] {
+        assert!((num(&v[condyle]["condylar_inclination_deg"]) - want).abs() < TOL, "{want}: {v}");
+    }
+    let want = in_tilted(g.protrusive_guidance_deg);
+    assert!((num(&v["protrusive_incisal_guidance_deg"]) - want).abs() < TOL, "{want}: {v}");
+    assert_eq!(v["reference_plane"], "the occlusal plane of the points file", "{v}");
+    // The points need the registration that places them.
+    refused(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:2", "--points", s(&points)]), "--registration");
+}

@@ -120,7 +120,37 @@ fn the_opening_gives_the_rig_s_hinge_axis_in_both_frames() {
         assert!((c["moved_mm"].as_f64().expect("mm") - 3.0).abs() < TOL_MM, "{moved}");
         assert!((vec3(&c["point"]) - truth.coords).norm() < TOL_MM, "{moved}");
     }
-    refused(&jawtrack(&["hinge-axis", s(&rec), "--condyles", "1,2,3"]), "six numbers");
+    // The same condyles from a points file, through the registration.
+    let scan_from_head = scan_from_maxilla * Mounting::default().head_from_maxilla.inverse();
+    let in_scan = |p: Vector3<f64>, from_head: bool| {
+        let q = if from_head { scan_from_head } else { scan_from_maxilla }.transform_point(&Point3::from(p));
+        format!("{},{},{}", q.x, q.y, q.z)
+    };
+    let occlusal = [Vector3::zeros(), Vector3::new(25.0, 0.0, 35.0), Vector3::new(-25.0, 0.0, 35.0)]
+        .map(|p| in_scan(p, true))
+        .join(",");
+    let points = dir.path().join("points.json");
+    ok(&jawtrack(&[
+        "points",
+        "--occlusal",
+        &occlusal,
+        "--lower-incisal",
+        &in_scan(Vector3::new(0.0, 1.5, 1.0), true),
+        "--condyles",
+        &format!("{},{}", in_scan(l, false), in_scan(r, false)),
+        "--out",
+        s(&points),
+    ]));
+    let args = ["hinge-axis", s(&rec), "--to", "1.99", "--json", "--points", s(&points), "--registration"];
+    let from_points = json_of(&[&args[..], &[s(&registration)]].concat());
+    assert_eq!(from_points["condyles_on_axis"]["source"], "the points file's", "{from_points}");
+    for (side, truth) in [("left", condyles[0]), ("right", condyles[1])] {
+        let c = &from_points["condyles_on_axis"][side];
+        assert!((c["moved_mm"].as_f64().expect("mm") - 3.0).abs() < TOL_MM, "{from_points}");
+        assert!((vec3(&c["point"]) - truth.coords).norm() < TOL_MM, "{from_points}");
+    }
+    refused(&jawtrack(&args[..7]), "--points needs --registration");
+    refused(&jawtrack(&["hinge-axis", s(&rec), "--condyles", "1,2,3"]), "6 numbers in mm");
     // The summary says the same in words.
     let text = ok(&jawtrack(&["hinge-axis", s(&rec), "--to", "1.99"]));
     assert!(text.contains("maxilla marker's frame") && text.contains("uncertainty (1σ)"), "{text}");
