@@ -3,14 +3,7 @@
 
 use serde_json::Value;
 
-/// `v` with `decimals` decimals; a value that rounds to zero prints without a minus sign.
-pub(crate) fn fixed(v: f64, decimals: usize) -> String {
-    let s = format!("{v:.decimals$}");
-    match s.strip_prefix('-') {
-        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
-        _ => s,
-    }
-}
+pub(crate) use jawtrack_plot::fixed;
 
 /// `v` in full (the shortest text that reads back the same), -0 as 0.
 pub(crate) fn full(v: f64) -> String {

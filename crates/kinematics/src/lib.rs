@@ -10,7 +10,10 @@
 //!   by tracked poses, and its [`Displacement`] from rest.
 //! - [`metrics`]: the incisor's clinical extremes over a session ([`Metrics`]), and how many
 //!   times the jaw opened.
+//! - [`centric`]: the slide from centric occlusion into maximal intercuspation ([`CoMi`]).
 //! - [`envelope`]: envelopes of motion as convex hulls in one plane ([`Envelope`]).
+//! - [`border`]: Posselt's envelope as the incisor traced it, with its landmarks and
+//!   movements labelled ([`Border`]).
 //! - [`hinge`]: the kinematic hinge axis fitted to an opening ([`HingeAxis`]).
 //! - [`articulator`]: condylar inclination, Bennett angle, immediate side shift and incisal
 //!   guidance from border movements ([`ArticulatorValues`]).
@@ -22,6 +25,8 @@
 
 pub mod anatomy;
 pub mod articulator;
+pub mod border;
+pub mod centric;
 pub mod envelope;
 pub mod hinge;
 pub mod metrics;
@@ -32,12 +37,30 @@ pub mod views;
 
 pub use anatomy::AnatomicalPoints;
 pub use articulator::{ArticulatorOptions, ArticulatorValues, Movements};
+pub use border::Border;
+pub use centric::{CoMi, co_mi};
 pub use envelope::{Envelope, convex_hull, polygon_area};
 pub use hinge::{HingeAxis, HingeOptions};
 pub use metrics::{Extreme, Metrics, Sample};
 pub use mounting::{Mounting, Side};
 pub use point::{Displacement, Incisor};
 pub use views::PlaneView;
+
+/// A window of a recording, in seconds of the frames' `t`: where a movement was made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Window {
+    /// From (s).
+    pub from: f64,
+    /// To (s), after `from`.
+    pub to: f64,
+}
+
+impl Window {
+    /// Whether `t` lies in the window, ends included.
+    pub fn holds(&self, t: f64) -> bool {
+        (self.from..=self.to).contains(&t)
+    }
+}
 
 /// What the kinematics refuses.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -40,6 +40,12 @@ impl Incisor {
         Incisor { mounting, on_mandible: mounting.on_mandible(&mounting.lower_incisal_point) }
     }
 
+    /// The point of the mandible that sits at `head_point` (head frame) with the jaw closed,
+    /// carried as `mounting` carries it: a condyle, say.
+    pub fn fixed_at(mounting: Mounting, head_point: &nalgebra::Vector3<f64>) -> Self {
+        Incisor { mounting, on_mandible: mounting.on_mandible(head_point) }
+    }
+
     /// Another point, given in the mandible marker's frame (mm); the head frame is still the
     /// standard mounting's (placed by the maxilla marker).
     pub fn at(point_in_mandible_marker: Point3<f64>) -> Self {

@@ -9,6 +9,16 @@ use std::path::{Path, PathBuf};
 use svg::Document;
 use svg::node::element::{Circle, Line, Polyline, Rectangle, Text};
 
+/// `v` with `decimals` decimals, as every report shows a number: a value that rounds to zero
+/// prints without a minus sign ("-0.00 mm" reads as a direction).
+pub fn fixed(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    match s.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
+        _ => s,
+    }
+}
+
 /// How a series is drawn.
 #[derive(Clone, Copy)]
 pub enum Style {
@@ -16,6 +26,9 @@ pub enum Style {
     Line,
     /// A dot at each point.
     Dots,
+    /// A larger dot at each point with the series' name written beside it, for a few named
+    /// points (landmarks).
+    Marked,
 }
 
 /// One series of a chart.
@@ -133,7 +146,8 @@ pub fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], e
             .set("fill", "none")
             .set("stroke", "#444"),
     );
-    for (i, s) in series.iter().enumerate() {
+    let mut legend = 0;
+    for s in series {
         let pts: Vec<(f64, f64)> =
             s.points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).map(|&(x, y)| (sx(x), sy(y))).collect();
         match s.style {
@@ -152,8 +166,30 @@ pub fn chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], e
                     doc = doc.add(Circle::new().set("cx", *x).set("cy", *y).set("r", 3).set("fill", s.color));
                 }
             }
+            Style::Marked => {
+                for (x, y) in &pts {
+                    // The name on the side of the plot's centre, so it stays inside the frame.
+                    let right = *x < LEFT + pw / 2.0;
+                    let (dx, anchor) = if right { (8.0, "start") } else { (-8.0, "end") };
+                    doc = doc
+                        .add(
+                            Circle::new()
+                                .set("cx", *x)
+                                .set("cy", *y)
+                                .set("r", 5)
+                                .set("fill", s.color)
+                                .set("stroke", "white"),
+                        )
+                        .add(label(s.name, x + dx, y - 6.0, anchor).set("font-size", 11));
+                }
+            }
         }
-        let ly = TOP + 14.0 + 16.0 * i as f64;
+        // Marked points carry their names beside them, not in the legend.
+        if matches!(s.style, Style::Marked) {
+            continue;
+        }
+        let ly = TOP + 14.0 + 16.0 * legend as f64;
+        legend += 1;
         doc = doc
             .add(
                 Rectangle::new()
