@@ -9,20 +9,15 @@ use crate::points::{Anatomy, PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::articulator::name;
-use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, Movements, Side};
+use jawtrack_kinematics::{Window, ArticulatorOptions, ArticulatorValues, CoMi, Displacement, Movements, Side, co_mi};
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
+use jawtrack_tracker::registration::mean_pose;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
-/// A window of a recording, `FROM:TO` in seconds of the frames' `t`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Window {
-    from: f64,
-    to: f64,
-}
-
-fn parse_window(s: &str) -> Result<Window, String> {
+/// Parses a window, `FROM:TO` in seconds of the frames' `t`.
+pub(crate) fn parse_window(s: &str) -> Result<Window, String> {
     let (a, b) = s.split_once(':').ok_or_else(|| format!("expected FROM:TO in seconds, got '{s}'"))?;
     let num = |v: &str| v.trim().parse::<f64>().map_err(|e| format!("'{v}' in '{s}': {e}"));
     let (from, to) = (num(a)?, num(b)?);
@@ -52,6 +47,14 @@ pub(crate) struct ArticulatorArgs {
     /// side shift, the lateral guidance toward the right.
     #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
     right: Option<Window>,
+    /// The jaw held in centric occlusion (s): guided back into centric relation and closed to
+    /// the first tooth contact. With it, the CO–MI slide into the bite is measured.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    co: Option<Window>,
+    /// The jaw held in maximal intercuspation (s), for --co; default: the closed jaw (--rest-frame,
+    /// else the bite accepted while recording, else the first frame with a jaw pose).
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
+    mi: Option<Window>,
     /// The frame (its `frame` number) of the closed jaw every movement is measured from;
     /// default: the bite accepted while recording, else the first frame with a jaw pose.
     #[arg(long)]
@@ -86,15 +89,18 @@ pub(crate) fn warn_if_nominal(rec: &Recording, what: &str) {
 }
 
 /// The poses in `w`.
-fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
-    rec.frames.iter().filter(|f| (w.from..=w.to).contains(&f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
+pub(crate) fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
+    rec.frames.iter().filter(|f| w.holds(f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
 }
 
 /// Runs `jawtrack articulator`.
 pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     let name_of = a.recording.display();
-    if a.protrusion.is_none() && a.left.is_none() && a.right.is_none() {
-        bail!("give the window of at least one movement: --protrusion FROM:TO, --left FROM:TO or --right FROM:TO (s)");
+    if a.protrusion.is_none() && a.left.is_none() && a.right.is_none() && a.co.is_none() {
+        bail!(
+            "give the window of at least one movement: --protrusion FROM:TO, --left FROM:TO or --right FROM:TO (s), \
+             or of centric occlusion: --co FROM:TO"
+        );
     }
     if !(a.over_mm.is_finite() && a.over_mm > 1.0) {
         bail!("--over-mm must be a number of mm above 1, got {}", a.over_mm);
@@ -104,7 +110,8 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     warn_if_nominal(&rec, "the condylar inclinations moved 7–22° and the side shifts 1–1.5 mm");
     let rest = rest_of(&rec, a.rest_frame)?
         .with_context(|| format!("{name_of}: no frame has a jaw pose (both markers tracked)"))?;
-    let windows = [("--protrusion", a.protrusion), ("--left", a.left), ("--right", a.right)];
+    let windows =
+        [("--protrusion", a.protrusion), ("--left", a.left), ("--right", a.right), ("--co", a.co), ("--mi", a.mi)];
     let poses: Vec<Option<Vec<Pose>>> = windows.iter().map(|(_, w)| w.map(|w| poses_in(&rec, w))).collect();
     for ((flag, w), p) in windows.iter().zip(&poses) {
         if let (Some(w), Some(p)) = (w, p)
@@ -122,14 +129,49 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     let anatomy = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
     let v = ArticulatorValues::measure(&anatomy.mounting, &rest.pose(), &movements, &options)
         .with_context(|| format!("{name_of}"))?;
+    // Each held position is the mean of its window's poses.
+    let held = |k: usize| poses[k].as_deref().and_then(mean_pose);
+    let slide = held(3).map(|co| co_mi(&anatomy.mounting, &co, &held(4).unwrap_or_else(|| rest.pose())));
     let mut report = to_json(&v, a, &options, &anatomy, rest.to_json());
+    if let (Some(s), Value::Object(o)) = (slide, &mut report) {
+        o.insert("co_mi".into(), co_mi_json(&s));
+    }
     clean_json(&mut report);
     if a.json {
         say!("{report}");
     } else {
-        print_summary(&v, &options, &anatomy, &rest.describe());
+        if a.protrusion.is_some() || a.left.is_some() || a.right.is_some() {
+            print_summary(&v, &options, &anatomy, &rest.describe());
+        }
+        if let Some(s) = slide {
+            let mi = if a.mi.is_some() { "the --mi window".to_string() } else { rest.describe() };
+            print_co_mi(&s, &mi);
+        }
     }
     Ok(())
+}
+
+/// The CO–MI slide as JSON: each point's components and length (mm).
+pub(crate) fn co_mi_json(s: &CoMi) -> Value {
+    let d = |d: &Displacement| json!({"forward_mm": d.protrusive, "down_mm": d.opening, "toward_left_mm": d.lateral, "length_mm": d.norm()});
+    json!({
+        "from": "centric occlusion",
+        "to": "maximal intercuspation",
+        "lower_incisal_point": d(&s.incisor),
+        "left_condyle": d(&s.condyles[0]),
+        "right_condyle": d(&s.condyles[1]),
+    })
+}
+
+fn print_co_mi(s: &CoMi, mi: &str) {
+    let mm = |x: f64| fixed(x, 2);
+    say!("CO–MI slide, from centric occlusion into maximal intercuspation ({mi}), mm:");
+    say!("                          forward     down   toward left   length");
+    for (name, d) in
+        [("lower incisal point", s.incisor), ("left condyle", s.condyles[0]), ("right condyle", s.condyles[1])]
+    {
+        say!("{name:<22} {:>10} {:>8} {:>13} {:>8}", mm(d.protrusive), mm(d.opening), mm(d.lateral), mm(d.norm()));
+    }
 }
 
 fn to_json(
@@ -157,7 +199,10 @@ fn to_json(
         "right_condyle": side(1),
         "protrusive_incisal_guidance_deg": v.protrusive_guidance_deg,
         "lateral_incisal_guidance_deg": {"toward_left": v.lateral_guidance_deg[0], "toward_right": v.lateral_guidance_deg[1]},
-        "windows_s": {"protrusion": window(a.protrusion), "left": window(a.left), "right": window(a.right)},
+        "windows_s": {
+            "protrusion": window(a.protrusion), "left": window(a.left), "right": window(a.right),
+            "co": window(a.co), "mi": window(a.mi),
+        },
         "rest": rest,
         "recording": a.recording.to_string_lossy(),
     })

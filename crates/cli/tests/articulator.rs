@@ -1,6 +1,7 @@
 //! `jawtrack articulator` on a recording of programmed border movements (`synth::scenes::guided`):
 //! a protrusion (0–2 s), a laterotrusion toward the left (3–5 s) and toward the right (6–8 s),
-//! each from the closed jaw, noise-free. The values printed as JSON must be the programmed ones.
+//! each from the closed jaw, then centric occlusion held (9–9.5 s), noise-free. The values
+//! printed as JSON must be the programmed ones.
 
 use jawtrack_kinematics::Side;
 use jawtrack_pose::Pose;
@@ -46,6 +47,11 @@ fn session(dir: &Path) -> PathBuf {
             let travel = if k <= 4 { -1.0 + f64::from(k) / 4.0 } else { 8.0 * f64::from(k - 4) / 40.0 };
             push(start + 2.0 * f64::from(k) / 44.0, rig.laterotrusion(&GUIDANCE, side, travel));
         }
+    }
+    // Centric occlusion held at 9–9.5 s: 0.8 mm back and 0.3 mm up of the bite.
+    for k in 0..=5u32 {
+        let held = Pose::from_parts(nalgebra::UnitQuaternion::identity(), nalgebra::Vector3::new(0.0, -0.3, 0.8));
+        push(9.0 + 0.1 * f64::from(k), held);
     }
     let file = dir.join("border.jsonl");
     std::fs::write(&file, lines.join("\n") + "\n").expect("write");
@@ -183,4 +189,20 @@ fn with_a_points_file_angles_are_to_its_occlusal_plane() {
     assert_eq!(v["reference_plane"], "the occlusal plane of the points file", "{v}");
     // The points need the registration that places them.
     refused(&jawtrack(&["articulator", s(&rec), "--protrusion", "0:2", "--points", s(&points)]), "--registration");
+}
+
+#[test]
+fn the_co_mi_slide_is_the_held_offset() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    let v: Value =
+        serde_json::from_str(&ok(&jawtrack(&["articulator", s(&rec), "--co", "9:9.5", "--json"]))).expect("JSON");
+    for point in ["lower_incisal_point", "left_condyle", "right_condyle"] {
+        let d = &v["co_mi"][point];
+        assert!((num(&d["forward_mm"]) - 0.8).abs() < TOL && (num(&d["down_mm"]) - 0.3).abs() < TOL, "{v}");
+        assert!(num(&d["toward_left_mm"]).abs() < TOL && (num(&d["length_mm"]) - 0.8f64.hypot(0.3)).abs() < TOL);
+    }
+    let text = ok(&jawtrack(&["articulator", s(&rec), "--co", "9:9.5"]));
+    assert!(text.contains("CO–MI slide") && text.contains("0.85"), "{text}");
+    refused(&jawtrack(&["articulator", s(&rec), "--mi", "0:0.1"]), "--co");
 }
