@@ -41,6 +41,7 @@ mod output;
 mod points;
 mod progress;
 mod register;
+mod report;
 mod synth;
 mod track;
 mod viewer;
@@ -120,6 +121,10 @@ enum Command {
     /// Articulator values from border movements: sagittal condylar inclination, Bennett angle
     /// and immediate side shift per condyle, protrusive and lateral incisal guidance.
     Articulator(articulator::ArticulatorArgs),
+    /// One self-contained HTML report of a session (and a PDF through headless Chromium): session
+    /// and calibration, quality, incisor metrics, Posselt's border movements, condylar paths, and
+    /// the hinge axis, articulator values and CO–MI of the windows given.
+    Report(report::ReportArgs),
     /// Occlusal contacts over a recording: places the lower scan by each frame's pose, finds
     /// where the arches penetrate or come within a threshold, groups them into regions
     /// (centroid, area, depth, tooth), and writes contacts.jsonl, contact-frequency and depth
@@ -154,6 +159,7 @@ fn main() {
         Command::Points(a) => points::run(&a),
         Command::HingeAxis(a) => hinge_axis::run(&a),
         Command::Articulator(a) => articulator::run(&a),
+        Command::Report(a) => report::run(&a),
         Command::Contacts(a) => contacts::run(&a),
     };
     if let Err(e) = result {

@@ -143,6 +143,86 @@ impl Rig {
     }
 }
 
+/// A rehearsed clinical session as exact poses, the truth whole-session tools (the report,
+/// its benchmark) are checked against: the jaw closed, a 40 mm hinge opening, a protrusion and
+/// a laterotrusion to each side along the programmed guidance (each out over 2 s and back over
+/// 1 s), centric occlusion held, then chewing.
+#[derive(Debug, Clone)]
+pub struct ClinicalSession {
+    /// (t in s, `maxilla_from_mandible`), at the frame rate asked.
+    pub poses: Vec<(f64, Pose)>,
+    /// The opening's window (s).
+    pub opening: (f64, f64),
+    /// The protrusion's way out (s).
+    pub protrusion: (f64, f64),
+    /// The laterotrusion toward the patient's left, out (s).
+    pub left: (f64, f64),
+    /// Toward the right, out (s).
+    pub right: (f64, f64),
+    /// Centric occlusion held (s).
+    pub co: (f64, f64),
+    /// Where centric occlusion holds the mandible from the closed jaw (head frame, mm): back
+    /// and up of the bite.
+    pub co_offset: Vector3<f64>,
+}
+
+/// The session's opening at the incisors (mm).
+pub const SESSION_OPENING_MM: f64 = 40.0;
+/// How far each border movement goes (mm of the guided path).
+pub const SESSION_TRAVEL_MM: f64 = 8.0;
+
+impl Rig {
+    /// The clinical session with guidance `g`, sampled at `fps`, chewing for `chew_s` seconds at
+    /// its end (the session lasts 15 s plus that).
+    pub fn clinical_session(&self, g: &Guidance, fps: f64, chew_s: f64) -> ClinicalSession {
+        let co_offset = Vector3::new(0.0, -0.3, 0.8);
+        let back = |jaw: Pose, s: f64| {
+            Pose::from_parts(jaw.rotation().nlerp(&UnitQuaternion::identity(), s), jaw.translation() * (1.0 - s))
+        };
+        // Out over [a, a + 2], back over [a + 2, a + 3].
+        let border = |t: f64, a: f64, at: &dyn Fn(f64) -> Pose| {
+            if t < a + 2.0 { at((t - a) / 2.0) } else { back(at(1.0), t - a - 2.0) }
+        };
+        let travel = |u: f64| u * (SESSION_TRAVEL_MM + 1.0) - 1.0;
+        let jaw = |t: f64| -> Pose {
+            match t {
+                t if t < 0.5 => Pose::identity(),
+                t if t < 2.5 => self
+                    .jaw(&super::JawMotion::Hinge { opening_mm: SESSION_OPENING_MM, start_s: 0.5, period_s: 2.0 }, t),
+                t if t < 3.0 => Pose::identity(),
+                t if t < 6.0 => border(t, 3.0, &|u| self.protrusion(g, SESSION_TRAVEL_MM * u)),
+                t if t < 6.5 => Pose::identity(),
+                t if t < 9.5 => border(t, 6.5, &|u| self.laterotrusion(g, Side::Left, travel(u))),
+                t if t < 10.0 => Pose::identity(),
+                t if t < 13.0 => border(t, 10.0, &|u| self.laterotrusion(g, Side::Right, travel(u))),
+                t if (13.5..14.5).contains(&t) => Pose::from_parts(UnitQuaternion::identity(), co_offset),
+                t if t < 15.0 => Pose::identity(),
+                t => self.jaw(
+                    &super::JawMotion::Chew { opening_mm: 18.0, lateral_mm: 4.0, start_s: 15.0, period_s: 0.8 },
+                    t,
+                ),
+            }
+        };
+        let m = &self.mounting;
+        let frames = ((15.0 + chew_s) * fps).round() as usize;
+        let poses = (0..frames)
+            .map(|k| {
+                let t = k as f64 / fps;
+                (t, m.head_from_maxilla.inverse() * jaw(t) * m.head_from_mandible_rest)
+            })
+            .collect();
+        ClinicalSession {
+            poses,
+            opening: (0.5, 2.5),
+            protrusion: (3.0, 5.0),
+            left: (6.5, 8.5),
+            right: (10.0, 12.0),
+            co: (13.6, 14.4),
+            co_offset,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,161 @@
+//! `jawtrack report`: one self-contained HTML report of a session (`jawtrack_report`), and a PDF
+//! of it through headless Chromium when asked.
+
+use crate::articulator::{parse_window, poses_in};
+use crate::export::{SessionArg, load, rest_of};
+use crate::output::ForceArgs;
+use crate::points::{PointsArg, anatomy, registration};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use jawtrack_kinematics::Window;
+use jawtrack_report::{Anatomy, Centric, Inputs, Windows};
+use jawtrack_tracker::registration::mean_pose;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Arguments of `jawtrack report`.
+#[derive(Args)]
+#[command(after_help = "Sections whose movement is not given say so on the page, naming the flag that would \
+                        measure them. Windows are FROM:TO in seconds of the frames' t.")]
+pub(crate) struct ReportArgs {
+    /// The recording (JSON lines).
+    recording: PathBuf,
+    #[command(flatten)]
+    session: SessionArg,
+    /// The report to write (HTML).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// Also print it to this PDF, through headless Chromium (`CHROMIUM`, else `chromium`,
+    /// `chromium-browser` or `google-chrome` on the PATH).
+    #[arg(long, value_name = "FILE")]
+    pdf: Option<PathBuf>,
+    /// The registration file (`jawtrack register`), for --points.
+    #[arg(long, value_name = "FILE")]
+    registration: Option<PathBuf>,
+    #[command(flatten)]
+    points: PointsArg,
+    /// The frame (its `frame` number) of the closed jaw; default: the bite accepted while
+    /// recording, else the first frame with a jaw pose.
+    #[arg(long)]
+    rest_frame: Option<u64>,
+    /// A slow opening from the closed jaw: the hinge axis.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    opening: Option<Window>,
+    /// A protrusion from the closed jaw: condylar inclination, protrusive guidance.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    protrusion: Option<Window>,
+    /// A laterotrusion toward the patient's left.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    left: Option<Window>,
+    /// A laterotrusion toward the patient's right.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    right: Option<Window>,
+    /// The jaw held in centric occlusion: the CO–MI slide.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    co: Option<Window>,
+    /// The jaw held in maximal intercuspation, for --co; default: the closed jaw.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
+    mi: Option<Window>,
+    #[command(flatten)]
+    force: ForceArgs,
+}
+
+/// Runs `jawtrack report`.
+pub(crate) fn run(a: &ReportArgs) -> Result<()> {
+    let name = a.recording.display();
+    a.force.check_file(&a.out)?;
+    if let Some(pdf) = &a.pdf {
+        a.force.check_file(pdf)?;
+    }
+    let reg = registration(a.registration.as_deref())?;
+    let rec = load(&a.recording, a.session)?;
+    let rest = rest_of(&rec, a.rest_frame)?
+        .with_context(|| format!("{name}: no frame has a jaw pose (both markers tracked): nothing to report"))?;
+    let held = |flag: &str, w: Window| {
+        mean_pose(&poses_in(&rec, w))
+            .with_context(|| format!("{flag} {}:{}: no frame of {name} in that window has a jaw pose", w.from, w.to))
+    };
+    let centric = match a.co {
+        Some(w) => Some(Centric {
+            co: held("--co", w)?,
+            mi: a.mi.map(|m| held("--mi", m)).transpose()?.unwrap_or_else(|| rest.pose()),
+            co_window: w,
+        }),
+        None => None,
+    };
+    let anatomy_of = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
+    let file = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let inputs = Inputs {
+        recording: &rec,
+        recording_name: a.recording.file_name().map_or_else(|| name.to_string(), |f| f.to_string_lossy().into()),
+        anatomy: Anatomy {
+            mounting: anatomy_of.mounting,
+            reference_plane: anatomy_of.reference_plane.into(),
+            landmarks: anatomy_of.landmarks.into(),
+            points_file: file(&a.points.points),
+            registration_file: file(&a.registration),
+        },
+        rest: rest.pose(),
+        rest_words: rest.describe(),
+        windows: Windows { opening: a.opening, protrusion: a.protrusion, left: a.left, right: a.right },
+        centric,
+        made_unix_s: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64()),
+    };
+    let report = jawtrack_report::render(&inputs);
+    std::fs::write(&a.out, &report.html).with_context(|| format!("writing {}", a.out.display()))?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    say!("wrote {} ({} sections, {} kB)", a.out.display(), report.sections.len(), report.html.len() / 1024);
+    if let Some(pdf) = &a.pdf {
+        print_pdf(&a.out, pdf)?;
+        say!("wrote {}", pdf.display());
+    }
+    Ok(())
+}
+
+/// The Chromium to print with: `CHROMIUM`, else the first of the usual names on the PATH.
+fn chromium() -> Option<PathBuf> {
+    if let Some(c) = std::env::var_os("CHROMIUM") {
+        return Some(PathBuf::from(c));
+    }
+    let path = std::env::var_os("PATH")?;
+    ["chromium", "chromium-browser", "google-chrome", "google-chrome-stable"]
+        .iter()
+        .flat_map(|n| std::env::split_paths(&path).map(move |d| d.join(n)))
+        .find(|p| p.is_file())
+}
+
+/// Prints `html` to `pdf` with headless Chromium.
+fn print_pdf(html: &Path, pdf: &Path) -> Result<()> {
+    let Some(browser) = chromium() else {
+        bail!(
+            "no Chromium to print the PDF with (set CHROMIUM, or install chromium); the HTML report {} was written \
+             and prints from any browser",
+            html.display()
+        );
+    };
+    // What --force allowed to be replaced goes first, so an old file cannot pass for a print.
+    let _ = std::fs::remove_file(pdf);
+    let url = format!("file://{}", std::fs::canonicalize(html)?.display());
+    // The page is ours, has no script and loads nothing, so the sandbox (which cannot start as
+    // root) adds nothing here.
+    let out = Command::new(&browser)
+        .args(["--headless", "--disable-gpu", "--no-sandbox", "--no-pdf-header-footer"])
+        .arg(format!("--print-to-pdf={}", pdf.display()))
+        .arg(&url)
+        .output()
+        .with_context(|| format!("starting {}", browser.display()))?;
+    let printed = std::fs::metadata(pdf).is_ok_and(|m| m.len() > 0);
+    if !out.status.success() || !printed {
+        bail!(
+            "{} could not print {}: {}",
+            browser.display(),
+            html.display(),
+            String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("no message")
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,109 @@
+//! `jawtrack report` on a rehearsed clinical session with exact poses (`synth`'s
+//! `ClinicalSession`): the page is written, refuses to overwrite, names the flags of what it
+//! could not measure; in headless Chromium (`viewer/tests/report.mjs`) it shows every section
+//! with no console error; and it prints to PDF.
+//!
+//! The Chromium checks need Chromium (`/usr/bin/chromium`, or `CHROMIUM`) and
+//! `npm ci --prefix viewer`; without them they say SKIPPED and the rest still runs.
+
+use jawtrack_synth::scenes::{Guidance, Rig};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+mod common;
+use common::{jawtrack, ok, refused, s};
+
+const SECTIONS: &str = "session,quality,incisor,border,condyles,hinge,articulator,co-mi,definitions";
+
+/// The session as a recording in `dir`, and its windows as flags.
+fn session(dir: &Path) -> (PathBuf, Vec<String>) {
+    let c = Rig::default().clinical_session(&Guidance::default(), 20.0, 5.0);
+    let mut lines = vec![jawtrack_recording::RecordingHeader::new("report test").to_line()];
+    for (k, (t, pose)) in c.poses.iter().enumerate() {
+        lines.push(
+            json!({"frame": k, "t": t, "maxilla": null, "mandible": null, "maxilla_from_mandible": pose}).to_string(),
+        );
+    }
+    let file = dir.join("session.jsonl");
+    std::fs::write(&file, lines.join("\n") + "\n").expect("write");
+    let w = |flag: &str, (a, b): (f64, f64)| [flag.to_string(), format!("{a}:{b}")];
+    let flags = [
+        w("--opening", c.opening),
+        w("--protrusion", c.protrusion),
+        w("--left", c.left),
+        w("--right", c.right),
+        w("--co", c.co),
+    ]
+    .concat();
+    (file, flags)
+}
+
+fn chromium() -> Option<String> {
+    let c = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
+    Path::new(&c).is_file().then_some(c)
+}
+
+fn viewer_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../viewer")
+}
+
+#[test]
+fn the_report_is_written_and_chromium_shows_every_section() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (rec, flags) = session(dir.path());
+    let out = dir.path().join("report.html");
+    let mut args = vec!["report", s(&rec), "--out", s(&out)];
+    args.extend(flags.iter().map(String::as_str));
+    let said = ok(&jawtrack(&args));
+    assert!(said.contains("9 sections"), "{said}");
+    let html = std::fs::read_to_string(&out).expect("the report");
+    assert!(html.starts_with("<!doctype html>") && html.contains("40.0°"), "the programmed inclination");
+    assert!(!html.contains("<script") && !html.contains("src=\"http"), "self-contained, no script");
+    refused(&jawtrack(&args), "--force");
+    let Some(browser) = chromium() else {
+        eprintln!("SKIPPED: the Chromium check of the report: no Chromium (set CHROMIUM)");
+        return;
+    };
+    if !viewer_dir().join("node_modules/playwright-core/package.json").is_file() {
+        eprintln!("SKIPPED: the Chromium check of the report: run `npm ci --prefix viewer`");
+        return;
+    }
+    let shot = dir.path().join("report.png");
+    let check = Command::new("node")
+        .arg(viewer_dir().join("tests/report.mjs"))
+        .args(["--file", s(&out), "--sections", SECTIONS, "--screenshot", s(&shot), "--chromium", &browser])
+        .output()
+        .expect("node runs");
+    assert!(check.status.success(), "{}", String::from_utf8_lossy(&check.stderr));
+    let summary = String::from_utf8_lossy(&check.stdout);
+    assert!(summary.contains("\"sections\":9") && summary.contains("\"figures\":5"), "{summary}");
+    if let Ok(keep) = std::env::var("JAWTRACK_KEEP_REPORT") {
+        std::fs::copy(&shot, Path::new(&keep).join("report.png")).expect("copy the screenshot");
+        std::fs::copy(&out, Path::new(&keep).join("report.html")).expect("copy the report");
+    }
+    // Printed to PDF through the same Chromium.
+    let pdf = dir.path().join("report.pdf");
+    let mut args = vec!["report", s(&rec), "--out", s(&out), "--force", "--pdf", s(&pdf)];
+    args.extend(flags.iter().map(String::as_str));
+    let printed =
+        Command::new(env!("CARGO_BIN_EXE_jawtrack")).args(&args).env("CHROMIUM", &browser).output().expect("runs");
+    assert!(printed.status.success(), "{}", String::from_utf8_lossy(&printed.stderr));
+    let bytes = std::fs::read(&pdf).expect("the PDF");
+    assert!(bytes.starts_with(b"%PDF-") && bytes.len() > 20_000, "{} bytes", bytes.len());
+}
+
+#[test]
+fn bad_windows_and_missing_poses_are_refused_by_name() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (rec, _) = session(dir.path());
+    let out = dir.path().join("r.html");
+    refused(&jawtrack(&["report", s(&rec), "--out", s(&out), "--co", "100:101"]), "--co 100:101");
+    refused(&jawtrack(&["report", s(&rec), "--out", s(&out), "--opening", "3:2"]), "FROM must be before TO");
+    refused(&jawtrack(&["report", s(&rec), "--out", s(&out), "--mi", "0:1"]), "--co");
+    assert!(!out.exists());
+    // Frames, but never both markers.
+    let lost = dir.path().join("lost.jsonl");
+    let line = json!({"frame": 0, "t": 0.0, "maxilla": null, "mandible": null, "maxilla_from_mandible": null});
+    std::fs::write(&lost, format!("{line}\n")).expect("write");
+    refused(&jawtrack(&["report", s(&lost), "--out", s(&out)]), "nothing to report");
+}

@@ -1,0 +1,95 @@
+//! The session report: one self-contained, print-friendly HTML page of a recording's jaw
+//! kinematics, for the patient's file. Every number on it comes from `jawtrack_kinematics`
+//! (each function there has its unit test against a closed form or the renderer's truth); this
+//! crate only chooses what to show and lays it out: the session and its calibration, quality
+//! flags, the lower incisor's metrics, Posselt's border movements as traced, the condylar
+//! paths, and, for the windows the caller names, the hinge axis, the articulator values and the
+//! CO–MI slide. Plots are inline SVG, the page has no script and loads nothing, so it prints
+//! and archives as it is.
+
+mod html;
+mod sections;
+
+use jawtrack_kinematics::Mounting;
+pub use jawtrack_kinematics::Window;
+use jawtrack_pose::Pose;
+use jawtrack_recording::Recording;
+
+/// The movements the caller located in the recording; what is not given is not measured, and
+/// the report says which flag would measure it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Windows {
+    /// A slow opening from the closed jaw: the hinge axis.
+    pub opening: Option<Window>,
+    /// A protrusion: condylar inclination, protrusive guidance.
+    pub protrusion: Option<Window>,
+    /// A laterotrusion toward the patient's left.
+    pub left: Option<Window>,
+    /// A laterotrusion toward the patient's right.
+    pub right: Option<Window>,
+}
+
+/// The anatomy the numbers are read with, and where it came from, in words.
+#[derive(Debug, Clone)]
+pub struct Anatomy {
+    /// The head frame, condyles and lower incisal point.
+    pub mounting: Mounting,
+    /// The plane angles are measured to.
+    pub reference_plane: String,
+    /// Where the condyles and the incisal point came from.
+    pub landmarks: String,
+    /// The points file, if one was given.
+    pub points_file: Option<String>,
+    /// The registration file, if one was given.
+    pub registration_file: Option<String>,
+}
+
+/// What the report is made from.
+#[derive(Debug, Clone)]
+pub struct Inputs<'a> {
+    /// The recording, read.
+    pub recording: &'a Recording,
+    /// Its file name, as the report names it.
+    pub recording_name: String,
+    /// The anatomy.
+    pub anatomy: Anatomy,
+    /// The closed jaw every displacement is measured from (`maxilla_from_mandible`).
+    pub rest: Pose,
+    /// Where the closed jaw came from, in words ("the bite accepted at 1.20 s").
+    pub rest_words: String,
+    /// The movements located in the recording.
+    pub windows: Windows,
+    /// Centric occlusion and maximal intercuspation as held positions (each the mean pose of
+    /// its window), and the windows in words, for the CO–MI slide.
+    pub centric: Option<Centric>,
+    /// When the report was made (s since the Unix epoch), printed on it.
+    pub made_unix_s: f64,
+}
+
+/// The held positions of the CO–MI slide.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Centric {
+    /// Centric occlusion (`maxilla_from_mandible`).
+    pub co: Pose,
+    /// Maximal intercuspation.
+    pub mi: Pose,
+    /// The window CO was held in.
+    pub co_window: Window,
+}
+
+/// A made report.
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// The page.
+    pub html: String,
+    /// The sections' ids, in order (every one is always on the page, saying why when it has
+    /// nothing to show).
+    pub sections: Vec<&'static str>,
+    /// The quality warnings, as the page lists them.
+    pub warnings: Vec<String>,
+}
+
+/// Makes the report of `inputs`.
+pub fn render(inputs: &Inputs) -> Report {
+    sections::render(inputs)
+}

@@ -1,0 +1,123 @@
+//! The report of a rehearsed clinical session with exact poses (`synth`'s `ClinicalSession`):
+//! every section is on the page, and the numbers it prints are the programmed ones.
+
+use jawtrack_kinematics::{Mounting, Window};
+use jawtrack_recording::{Recording, RecordingHeader, read_recording};
+use jawtrack_report::{Anatomy, Centric, Inputs, Windows, render};
+use jawtrack_synth::scenes::guided::ClinicalSession;
+use jawtrack_synth::scenes::{Guidance, Rig};
+use serde_json::json;
+
+const GUIDANCE: Guidance = Guidance {
+    condylar_inclination_deg: 37.0,
+    bennett_deg: 13.0,
+    side_shift_mm: 0.7,
+    protrusive_guidance_deg: 46.0,
+    lateral_guidance_deg: 33.0,
+};
+
+fn recording(s: &ClinicalSession) -> Recording {
+    let mut lines = vec![RecordingHeader::new("report test").to_line()];
+    for (k, (t, pose)) in s.poses.iter().enumerate() {
+        lines.push(
+            json!({"frame": k, "t": t, "maxilla": null, "mandible": null, "maxilla_from_mandible": pose}).to_string(),
+        );
+    }
+    read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording")
+}
+
+fn window((from, to): (f64, f64)) -> Option<Window> {
+    Some(Window { from, to })
+}
+
+#[test]
+fn the_report_prints_the_programmed_session() {
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 20.0, 5.0);
+    let rec = recording(&session);
+    let rest = rec.frames[0].maxilla_from_mandible.expect("a pose");
+    let co = session.poses.iter().find(|(t, _)| *t > session.co.0).expect("held").1;
+    let inputs = Inputs {
+        recording: &rec,
+        recording_name: "session <1>.jsonl".into(),
+        anatomy: Anatomy {
+            mounting: Mounting::default(),
+            reference_plane: "the standard plane".into(),
+            landmarks: "the standard landmarks".into(),
+            points_file: None,
+            registration_file: None,
+        },
+        rest,
+        rest_words: "frame 0".into(),
+        windows: Windows {
+            opening: window(session.opening),
+            protrusion: window(session.protrusion),
+            left: window(session.left),
+            right: window(session.right),
+        },
+        centric: Some(Centric { co, mi: rest, co_window: Window { from: session.co.0, to: session.co.1 } }),
+        made_unix_s: 1.7e9,
+    };
+    let r = render(&inputs);
+    for id in ["session", "quality", "incisor", "border", "condyles", "hinge", "articulator", "co-mi", "definitions"] {
+        assert!(r.html.contains(&format!("<section id=\"{id}\">")), "section {id} missing");
+    }
+    assert!(!r.html.contains("Not measured"), "every window was given");
+    // The file name is text, not markup.
+    assert!(r.html.contains("session &lt;1&gt;.jsonl") && !r.html.contains("session <1>"));
+    // Articulator values, as the page prints them (one decimal).
+    let g = GUIDANCE;
+    for v in [g.condylar_inclination_deg, g.bennett_deg, g.protrusive_guidance_deg, g.lateral_guidance_deg] {
+        let cell = format!("<td>{v:.1}°</td>");
+        assert!(r.html.matches(&cell).count() >= 1, "{cell} not on the page");
+    }
+    assert_eq!(r.html.matches(&format!("<td>{:.2} mm</td>", g.side_shift_mm)).count(), 2, "both side shifts");
+    // The CO–MI slide: the held offset reversed, for every point (forward 0.80, down 0.30).
+    let back = -session.co_offset;
+    let slide = format!("<td>{:.2} mm</td><td>{:.2} mm</td>", -back.z, back.y);
+    assert_eq!(r.html.matches(&slide).count(), 3, "{slide}");
+    // The hinge axis: the mounting's, along head X through the condyles (4 decimals).
+    assert!(r.html.contains("(1.0000, 0.0000, 0.0000)"), "head-frame direction");
+    let c = Mounting::default().condyles[0];
+    assert!(r.html.contains(&format!("({:.2}, {:.2}, {:.2}) mm in the head frame, moved 0.00 mm", c.x, c.y, c.z)));
+    // Maximum opening: the hinge opening's widest, as the incisor's displacement reads it.
+    let incisor = jawtrack_kinematics::Incisor::standard();
+    let widest = session.poses.iter().map(|(_, p)| incisor.displacement(p, &rest).opening).fold(0.0, f64::max);
+    assert!(widest > 35.0, "{widest}");
+    assert!(r.html.contains(&format!("<td>maximum opening</td><td>{widest:.1} mm</td>")), "{widest}");
+    // Posselt: all three planes, with the sagittal border's movements named.
+    assert_eq!(r.html.matches("<figure>").count(), 5, "three border plots and two condyle plots");
+    assert!(r.html.contains("opening from protrusion (anterior border)"), "sagittal movements named");
+    // No anatomy file and no marker in the header: both said, and nothing else.
+    assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+    assert!(r.warnings[0].contains("standard harness mounting"));
+}
+
+#[test]
+fn sections_without_their_movement_say_which_flag_fills_them() {
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 10.0, 1.0);
+    let rec = recording(&session);
+    let rest = rec.frames[0].maxilla_from_mandible.expect("a pose");
+    let inputs = Inputs {
+        recording: &rec,
+        recording_name: "s.jsonl".into(),
+        anatomy: Anatomy {
+            mounting: Mounting::default(),
+            reference_plane: "p".into(),
+            landmarks: "l".into(),
+            points_file: None,
+            registration_file: None,
+        },
+        rest,
+        rest_words: "frame 0".into(),
+        windows: Windows::default(),
+        centric: None,
+        made_unix_s: 1.7e9,
+    };
+    let r = render(&inputs);
+    for flag in ["--opening FROM:TO", "--protrusion FROM:TO", "--co FROM:TO"] {
+        assert!(r.html.contains(flag), "{flag}");
+    }
+    assert_eq!(r.html.matches("Not measured").count(), 3);
+}
