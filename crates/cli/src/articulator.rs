@@ -9,7 +9,7 @@ use crate::points::{Anatomy, PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::articulator::name;
-use jawtrack_kinematics::{Window, ArticulatorOptions, ArticulatorValues, CoMi, Displacement, Movements, Side, co_mi};
+use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Displacement, Movements, Side, Window, co_mi};
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
 use jawtrack_tracker::registration::mean_pose;
