@@ -109,8 +109,8 @@ enum Command {
     /// (SVG and PNG).
     Plot(export::PlotArgs),
     /// Measure a recording's lower-incisor motion: widest opening, left and right lateral
-    /// excursion, protrusion and retrusion, and the envelope of motion (convex hull area) in
-    /// the sagittal and frontal planes; optionally plot the envelopes.
+    /// excursion, protrusion and retrusion, Posselt's border as traced in the sagittal, frontal
+    /// and transverse planes (and the convex hulls); optionally plot them.
     Metrics(metrics::MetricsArgs),
     /// Write or check the anatomical points file: the occlusal plane, midline, lower incisal
     /// point and condyles picked on the upper scan, which replace the standard harness mounting.

@@ -1,7 +1,8 @@
 //! `jawtrack metrics`: the clinical numbers of a recording's lower-incisor motion
 //! (`jawtrack_kinematics::Metrics`: widest opening, lateral excursions, protrusion and
-//! retrusion (with the teeth near contact), each with its frame, and the envelopes of motion), printed, as JSON, or with
-//! both envelopes plotted and `metrics.json` written.
+//! retrusion (with the teeth near contact), each with its frame, Posselt's border as traced in
+//! three planes, and the convex hulls), printed, as JSON, or with the borders and hulls plotted
+//! and `metrics.json` written.
 //!
 //! The recording is read as `export` and `plot` read it (sequence order, displacements from the
 //! rest position); frames without a jaw pose are skipped and counted.
@@ -11,7 +12,7 @@ use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::metrics::RETRUSION_OPENING_MM;
-use jawtrack_kinematics::{Incisor, Metrics, PlaneView, Sample};
+use jawtrack_kinematics::{Border, Incisor, Metrics, PlaneView, Sample};
 use jawtrack_plot::{self as plot, Series, Style};
 use nalgebra::Point3;
 use serde_json::{Value, json};
@@ -82,6 +83,9 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
         o.insert("rest".into(), rest_at.to_json());
         o.insert("incisor_in_mandible_marker_mm".into(), json!([p.x, p.y, p.z]));
         o.insert("incisor_standard".into(), json!(a.incisor.is_none()));
+        for view in PlaneView::ALL {
+            o.insert(format!("border_{}", view.name()), Border::of(view, &path, &metrics).to_json());
+        }
     }
     clean_json(&mut report);
     if skipped > 0 {
@@ -94,6 +98,15 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
         say!("{report}");
     } else {
         print_summary(&metrics, skipped, rest_at, &incisor, a.incisor.is_none());
+        for view in PlaneView::ALL {
+            let b = Border::of(view, &path, &metrics);
+            say!(
+                "{:<19} {:>7} mm²  (traced; {} outline points)",
+                format!("{} border", view.name()),
+                fixed(b.area_mm2, 2),
+                b.outline.len()
+            );
+        }
     }
     Ok(())
 }
@@ -131,8 +144,8 @@ fn print_summary(m: &Metrics, skipped: usize, rest: Rest, incisor: &Incisor, sta
         ),
         None => say!("max retrusion          none   (no frame opened {near} mm or less)"),
     }
-    for (label, e) in [("sagittal envelope", &m.sagittal), ("frontal envelope", &m.frontal)] {
-        say!("{label:<19} {:>7} mm²  ({} hull vertices)", mm(e.area_mm2), e.hull.len());
+    for (label, e) in [("sagittal hull", &m.sagittal), ("frontal hull", &m.frontal)] {
+        say!("{label:<19} {:>7} mm²  (convex hull; {} vertices)", mm(e.area_mm2), e.hull.len());
     }
 }
 
@@ -157,6 +170,13 @@ fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Re
         let (x_label, y_label) = view.axes();
         let doc = plot::chart(&format!("Convex hull of the path, {}", view.title()), x_label, y_label, &series, true);
         for p in plot::save_svg_and_png(&doc, &out.join(format!("envelope_{}", view.name())))? {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    // Posselt's border as traced, in all three planes.
+    for view in PlaneView::ALL {
+        let doc = jawtrack_report::border_chart(&Border::of(view, path, m), path);
+        for p in plot::save_svg_and_png(&doc, &out.join(format!("border_{}", view.name())))? {
             eprintln!("wrote {}", p.display());
         }
     }

@@ -171,8 +171,16 @@ fn metrics_equal_the_known_motion() {
     assert!(triangle > 50.0 && area >= triangle - 1e-6, "sagittal area {area}, triangle {triangle}");
     check_envelope(&report["envelope_frontal"], &frontal);
 
-    // --out: both envelopes as SVG and PNG, and metrics.json holding what stdout held.
-    for stem in ["envelope_sagittal", "envelope_frontal"] {
+    // The traced borders lie inside the hulls and cover most of them.
+    for (plane, hull) in [("sagittal", "envelope_sagittal"), ("frontal", "envelope_frontal")] {
+        let border = num(&report[format!("border_{plane}")]["area_mm2"]);
+        let hull = num(&report[hull]["area_mm2"]);
+        assert!(border > 0.5 * hull && border <= hull + 1e-6, "{plane}: border {border}, hull {hull}");
+    }
+    assert!(report["border_transverse"]["landmarks"].as_array().is_some_and(|l| l.len() >= 4), "{report}");
+    // --out: both envelopes and the three borders as SVG and PNG, and metrics.json holding what
+    // stdout held.
+    for stem in ["envelope_sagittal", "envelope_frontal", "border_sagittal", "border_frontal", "border_transverse"] {
         for ext in ["svg", "png"] {
             let p = out.join(format!("{stem}.{ext}"));
             assert!(std::fs::metadata(&p).is_ok_and(|m| m.len() > 1000), "{} written", p.display());

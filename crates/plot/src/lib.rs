@@ -6,7 +6,7 @@
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
-use svg::Document;
+pub use svg::Document;
 use svg::node::element::{Circle, Line, Polyline, Rectangle, Text};
 
 /// `v` with `decimals` decimals, as every report shows a number: a value that rounds to zero

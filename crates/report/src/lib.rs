@@ -89,6 +89,34 @@ pub struct Report {
     pub warnings: Vec<String>,
 }
 
+const BLUE: &str = "#1f77b4";
+const RED: &str = "#d62728";
+const GREY: &str = "#b0b0b0";
+const GREEN: &str = "#2ca02c";
+
+/// The incisor's path and its traced border in one view, each landmark marked with its tag:
+/// the plot the report and `jawtrack metrics` draw.
+pub fn border_chart(b: &jawtrack_kinematics::Border, path: &[jawtrack_kinematics::Sample]) -> jawtrack_plot::Document {
+    use jawtrack_kinematics::border::tag;
+    use jawtrack_plot::{Series, Style};
+    let mut closed = b.outline.clone();
+    closed.extend(b.outline.first());
+    let mut series = vec![
+        Series {
+            name: "path",
+            color: GREY,
+            style: Style::Line,
+            points: path.iter().map(|(_, _, d)| b.view.project(d)).collect(),
+        },
+        Series { name: "border (traced)", color: BLUE, style: Style::Line, points: closed },
+    ];
+    for l in &b.landmarks {
+        series.push(Series { name: tag(l.name), color: RED, style: Style::Marked, points: vec![l.at] });
+    }
+    let (x, y) = b.view.axes();
+    jawtrack_plot::chart(&format!("Lower incisor, {}", b.view.title()), x, y, &series, true)
+}
+
 /// Makes the report of `inputs`.
 pub fn render(inputs: &Inputs) -> Report {
     sections::render(inputs)

@@ -2,9 +2,10 @@
 //! lays them out. A section with nothing to show says why, and which flag would fill it.
 
 use crate::html::{esc, facts, figure, not_measured, page, section, table};
-use crate::{Inputs, Report, Window};
+use crate::{BLUE, GREEN, Inputs, Report, Window};
 use jawtrack_kinematics::articulator::name as side_name;
 use jawtrack_kinematics::border::{self, Border, tag};
+
 use jawtrack_kinematics::metrics::{RETRUSION_OPENING_MM, count_openings};
 use jawtrack_kinematics::{
     ArticulatorOptions, ArticulatorValues, Displacement, HingeOptions, Incisor, Metrics, Movements, PlaneView, Sample,
@@ -27,11 +28,6 @@ const SECTIONS: [(&str, &str); 9] = [
     ("co-mi", "CO–MI"),
     ("definitions", "Units, frames and definitions"),
 ];
-
-const BLUE: &str = "#1f77b4";
-const RED: &str = "#d62728";
-const GREY: &str = "#b0b0b0";
-const GREEN: &str = "#2ca02c";
 
 /// `x` mm with `d` decimals, or a dash.
 fn mm(x: Option<f64>, d: usize) -> String {
@@ -295,26 +291,6 @@ fn incisor_section(m: &Metrics, path: &[Sample]) -> String {
     s
 }
 
-/// The path and its traced border in one view, landmarks named.
-fn border_plot(b: &Border, path: &[Sample]) -> String {
-    let mut closed = b.outline.clone();
-    closed.extend(b.outline.first());
-    let mut series = vec![
-        Series {
-            name: "path",
-            color: GREY,
-            style: Style::Line,
-            points: path.iter().map(|(_, _, d)| b.view.project(d)).collect(),
-        },
-        Series { name: "border (traced)", color: BLUE, style: Style::Line, points: closed },
-    ];
-    for l in &b.landmarks {
-        series.push(Series { name: tag(l.name), color: RED, style: Style::Marked, points: vec![l.at] });
-    }
-    let (x, y) = b.view.axes();
-    chart(&format!("Lower incisor, {}", b.view.title()), x, y, &series, true).to_string()
-}
-
 fn border_section(m: &Metrics, path: &[Sample]) -> String {
     let mut s = String::from(
         "<p>The border is the outermost path the lower incisal point traced, seen from inside the region it \
@@ -332,7 +308,7 @@ fn border_section(m: &Metrics, path: &[Sample]) -> String {
             fixed(b.area_mm2, 0),
             if moves.is_empty() { "none on the border".into() } else { moves.join("; ") }
         );
-        s += &figure(&border_plot(&b, path), &caption);
+        s += &figure(&crate::border_chart(&b, path).to_string(), &caption);
         rows.push(vec![view.name().into(), format!("{} mm²", fixed(b.area_mm2, 1)), b.outline.len().to_string()]);
         if view == PlaneView::Sagittal {
             landmarks = b.landmarks.iter().map(|l| (l.name, l.frame, l.t)).collect();
