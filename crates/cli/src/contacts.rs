@@ -13,17 +13,21 @@
 //!
 //! Outputs in `--out`: `contacts.jsonl` (a header line, then one line per frame, flushed as
 //! written), per arch a PLY coloured by contact frequency and one by depth, PNG occlusal
-//! views coloured by frequency, and `summary.json`.
+//! views coloured by frequency, SVG contact maps a clinician reads (depth and frequency: the
+//! patient's side, FDI and Universal tooth numbers, a scale bar, the colour scale in mm or %),
+//! and `summary.json` with per-tooth totals.
 
 use crate::export::{SessionArg, load};
 use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::Mesh;
+use jawtrack_occlusion::contact_map::{self, Annotations, Scale, left_from_teeth};
 use jawtrack_occlusion::contacts::{Arch, ContactSettings, THRESHOLD_RANGE_MM, tooth_name};
 use jawtrack_occlusion::dynamics::{self, DynamicsOptions, StepSummary};
 use jawtrack_occlusion::occlusal_view::{View, render, with_legend};
 use jawtrack_occlusion::session::ContactSession;
+use jawtrack_occlusion::teeth::{Tooth, ToothTotals};
 use jawtrack_pose::Pose;
 use jawtrack_recording::FrameRecord;
 use jawtrack_tracker::registration::Registration;
@@ -73,6 +77,10 @@ pub(crate) struct ContactsArgs {
     /// lower scan's pose in the upper scan's frame.
     #[arg(long, value_name = "FILE")]
     registration: Option<PathBuf>,
+    /// The anatomical points file (`jawtrack points`): says where the patient's left is on the
+    /// maps when the teeth are not named by FDI number.
+    #[arg(long, value_name = "FILE")]
+    points: Option<PathBuf>,
     /// kinematic: the mandible where the recording puts it; dynamic: slid to rest on the teeth.
     #[arg(long, value_enum, default_value_t = Mode::Kinematic)]
     mode: Mode,
@@ -129,6 +137,20 @@ fn load_arch(side: &str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
         parts.push((name, mesh));
     }
     Ok((parts, reports))
+}
+
+/// Each part's name and centroid: where its number goes on the map (none for a whole arch).
+fn tooth_places(parts: &[(String, Mesh)]) -> Vec<(String, nalgebra::Point3<f64>)> {
+    if parts.len() < 2 {
+        return Vec::new();
+    }
+    parts
+        .iter()
+        .map(|(name, m)| {
+            let n = m.vertices.len().max(1) as f64;
+            (name.clone(), nalgebra::Point3::from(m.vertices.iter().map(|v| v.coords).sum::<Vector3<f64>>() / n))
+        })
+        .collect()
 }
 
 /// The dynamic mode: the recorded path resolved by the rigid-body simulation; per frame the
@@ -266,6 +288,11 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     let setup = Instant::now();
     let (upper_parts, upper_reports) = load_arch("maxilla", &a.maxilla, a.quiet)?;
     let (lower_parts, lower_reports) = load_arch("mandible", &a.mandible, a.quiet)?;
+    let teeth = [tooth_places(&upper_parts), tooth_places(&lower_parts)];
+    let upper_left = match &a.points {
+        Some(p) => Some(crate::points::read(p)?.head_from_scan().inverse().rotation() * Vector3::x()),
+        None => None,
+    };
     if !a.quiet {
         say!("indexing both arches for distance queries (a few seconds per 100k triangles)…");
     }
@@ -312,8 +339,11 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     let bar = if a.quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar("contacts", frames.len()) };
     let started = Instant::now();
     let mut session = ContactSession::new(&upper, &lower, settings);
+    let mut per_tooth = ToothTotals::default();
     for (k, (frame, t, pose)) in frames.iter().enumerate() {
-        let mut line = json!(session.check(*frame, *t, pose));
+        let found = session.check(*frame, *t, pose);
+        per_tooth.add(&found.regions);
+        let mut line = json!(found);
         if let Some(extra) = extras.get(k) {
             line["dynamics"] = extra.clone();
         }
@@ -342,6 +372,48 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     }
 
     let s = session.summary();
+    // The maps a clinician reads: each arch's occlusal view with its side, teeth and scales.
+    let lefts = [
+        left_from_teeth(&teeth[0]).or(upper_left),
+        left_from_teeth(&teeth[1]).or_else(|| upper_left.map(|l| first_pose.inverse().rotation() * l)),
+    ];
+    let titles = [
+        "Upper arch, occlusal view (seen from the lower arch)",
+        "Lower arch, occlusal view (seen from the upper arch)",
+    ];
+    for (k, (arch, name)) in arches.into_iter().enumerate() {
+        let maps = [
+            (
+                "depth",
+                session.depth_colours(k),
+                Scale::Depth { threshold_mm: settings.threshold_mm, full_scale_mm: s.depth_colour_full_scale_mm },
+            ),
+            ("frequency", session.frequency_colours(k), Scale::Frequency),
+        ];
+        for (what, colours, scale) in maps {
+            let annotations = Annotations {
+                title: format!(
+                    "{}: {}",
+                    titles[k],
+                    if what == "depth" { "deepest contact" } else { "share of frames in contact" }
+                ),
+                teeth: teeth[k].clone(),
+                patients_left: lefts[k],
+                scale,
+            };
+            let p = a.out.join(format!("{name}_{what}_map.svg"));
+            std::fs::write(&p, contact_map::svg(&render(&arch.mesh, &colours, &views[k]), &views[k], &annotations))
+                .with_context(|| format!("writing {}", p.display()))?;
+            written.push(p);
+        }
+    }
+    if lefts.iter().any(Option::is_none) {
+        eprintln!(
+            "warning: the maps cannot say where the patient's left is: name the per-tooth meshes by FDI number \
+             (FDI=NN in the file name) or give --points"
+        );
+    }
+    let teeth_totals = per_tooth.totals();
     let mut summary = json!({
         "frames": {
             "read": rec.frames.len(),
@@ -355,6 +427,7 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         "settings": run_settings,
         "meshes": { "maxilla": upper_reports, "mandible": lower_reports },
         "contact_area": s.contact_area,
+        "teeth": teeth_totals,
         "dynamics": dynamics_summary,
         "deepest": s.deepest,
         "depth_colour_full_scale_mm": s.depth_colour_full_scale_mm,
@@ -394,6 +467,18 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
                 "warning: the arches never came within {t} mm in any of the {checked} frames checked: a recording \
                  that includes the bite always touches; check that the scans and the poses ({}) belong together",
                 source.describe()
+            );
+        }
+    }
+    if !teeth_totals.is_empty() {
+        say!("tooth          frames in contact   largest area   deepest");
+        for t in &teeth_totals {
+            let label = t.fdi.and_then(Tooth::fdi).map_or_else(|| t.name.clone(), Tooth::label);
+            say!(
+                "{label:<14} {:>17}   {:>9} mm²   {:>7} mm",
+                t.frames_in_contact,
+                fixed(t.max_area_mm2, 2),
+                fixed(t.max_depth_mm, 3)
             );
         }
     }

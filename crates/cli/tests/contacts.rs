@@ -251,7 +251,8 @@ fn per_tooth_meshes_tag_their_regions() {
         write_obj(&scenes::sphere(Point3::new(x, 0.0, 0.2 - 2.0), 2.0, 40), &p);
         p
     };
-    let (t36, t37) = (tooth("lower_FDI=36.obj", -2.5), tooth("lower_FDI=37.obj", 2.5));
+    // The lower left and the lower right first molar (side by side, as far as contacts care).
+    let (t36, t37) = (tooth("lower_FDI=36.obj", -2.5), tooth("lower_FDI=46.obj", 2.5));
     let out = dir.path().join("out");
     ok(&jawtrack(&[
         "contacts",
@@ -270,7 +271,7 @@ fn per_tooth_meshes_tag_their_regions() {
     let ball = regions_on(&l[1], "mandible");
     assert_eq!(ball.len(), 2, "{}", l[1]);
     for r in ball {
-        let want = if f(&r["centroid"][0]) < 0.0 { "36" } else { "37" };
+        let want = if f(&r["centroid"][0]) < 0.0 { "36" } else { "46" };
         assert_eq!(r["tooth"].as_str(), Some(want), "{r}");
         assert!((f(&r["depth_mm"]) - 0.2).abs() < 1e-3, "{r}");
     }
@@ -279,7 +280,29 @@ fn per_tooth_meshes_tag_their_regions() {
     assert!(plane.iter().all(|r| r.get("tooth").is_none()));
     let summary = json_file(&out.join("summary.json"));
     assert_eq!(summary["meshes"]["mandible"][0]["tooth"].as_str(), Some("36"));
-    assert_eq!(summary["meshes"]["mandible"][1]["tooth"].as_str(), Some("37"));
+    assert_eq!(summary["meshes"]["mandible"][1]["tooth"].as_str(), Some("46"));
+    // Per-tooth totals, with both numbers.
+    let teeth = summary["teeth"].as_array().expect("teeth");
+    assert_eq!(teeth.len(), 2, "{summary}");
+    for (t, fdi, universal) in [(&teeth[0], 36, 19), (&teeth[1], 46, 30)] {
+        assert_eq!((t["fdi"].as_u64(), t["universal"].as_u64()), (Some(fdi), Some(universal)), "{t}");
+        assert_eq!(t["frames_in_contact"].as_u64(), Some(1));
+        assert!((f(&t["max_depth_mm"]) - 0.2).abs() < 1e-3 && f(&t["max_area_mm2"]) > 0.0, "{t}");
+    }
+    // The lower depth map names both teeth and puts "patient's left" on 36's side of the image.
+    let map = std::fs::read_to_string(out.join("mandible_depth_map.svg")).expect("the map");
+    let x_of = |needle: &str| {
+        let at = map.find(needle).unwrap_or_else(|| panic!("{needle} on the map"));
+        let tag = &map[map[..at].rfind("<text").expect("a text element")..at];
+        let x = tag.split("x=\"").nth(1).and_then(|v| v.split('"').next()).expect("an x");
+        x.parse::<f64>().expect("a number")
+    };
+    let (x36, x46, x_left) = (x_of(">36 (U19)<"), x_of(">46 (U30)<"), x_of(">patient's left<"));
+    assert!((x_left - x36).abs() < (x_left - x46).abs(), "left at {x_left}, 36 at {x36}, 46 at {x46}");
+    assert!(map.contains("mm deep") && map.contains("10 mm"), "the scales");
+    // The upper arch is one mesh: its side is unknown, and the map says so.
+    let upper_map = std::fs::read_to_string(out.join("maxilla_depth_map.svg")).expect("the map");
+    assert!(upper_map.contains("side is unknown"));
 }
 
 fn write_identity(dir: &Path) -> PathBuf {

@@ -9,11 +9,15 @@
 //!   over all its frames;
 //! - [`occlusal_view`]: an arch rendered in its occlusal view with per-vertex colours, and
 //!   the legend of the contact-frequency colours;
+//! - [`teeth`]: FDI and Universal tooth numbers, each tooth's contacts over a session;
+//! - [`contact_map`]: an occlusal view as an SVG a clinician reads (side, tooth numbers, scale
+//!   bar, colour scale in mm);
 //! - [`dynamics`]: the mandible as a rigid body sliding over the maxillary teeth;
 //! - [`register`]: ICP of the marker's dodecahedron onto a scan of the printed harness.
 //!
 //! Everything is in the upper scan's frame unless a name says otherwise, in mm.
 
+pub mod contact_map;
 pub mod contacts;
 pub mod distance;
 pub mod dynamics;
@@ -21,6 +25,7 @@ pub mod occlusal_view;
 pub mod register;
 pub mod scenes;
 pub mod session;
+pub mod teeth;
 
 pub use distance::{Nearest, Surface, SurfaceIndex, nearest_brute_force};
 pub use jawtrack_mesh as mesh;

@@ -121,6 +121,12 @@ impl View {
         [View::occlusal(upper, &lower_in_upper, long_side_px), View::occlusal(lower, &upper_in_lower, long_side_px)]
     }
 
+    /// Where a mesh point lands in the image (px; (0, 0) the top-left pixel's centre).
+    pub fn pixel(&self, p: &Point3<f64>) -> [f64; 2] {
+        let q = self.project(p);
+        [q[0], q[1]]
+    }
+
     /// A mesh point in pixels (x, y) and its depth along `forward` (mm).
     fn project(&self, p: &Point3<f64>) -> [f64; 3] {
         [
