@@ -8,7 +8,7 @@ use crate::points::{PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::Window;
-use jawtrack_report::{Anatomy, Centric, Inputs, Windows};
+use jawtrack_report::{Anatomy, Centric, ContactsResult, Inputs, Windows};
 use jawtrack_tracker::registration::mean_pose;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -56,8 +56,44 @@ pub(crate) struct ReportArgs {
     /// The jaw held in maximal intercuspation, for --co; default: the closed jaw.
     #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
     mi: Option<Window>,
+    /// The folder `jawtrack contacts` wrote for this session: its maps and per-tooth totals
+    /// go in the report (contacts are computed there, not here: indexing real scans alone takes
+    /// seconds).
+    #[arg(long, value_name = "DIR")]
+    contacts: Option<PathBuf>,
     #[command(flatten)]
     force: ForceArgs,
+}
+
+/// What `jawtrack contacts` wrote into `dir`.
+fn read_contacts(dir: &Path) -> Result<ContactsResult> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!("--contacts {}: reading {} (is it a `jawtrack contacts` folder?)", dir.display(), path.display())
+    })?;
+    let summary = serde_json::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    let mut maps = Vec::new();
+    for (file, what) in [
+        ("maxilla_depth_map.svg", "Upper arch, deepest contact over the session"),
+        ("mandible_depth_map.svg", "Lower arch, deepest contact over the session"),
+        ("maxilla_frequency_map.svg", "Upper arch, share of frames in contact"),
+        ("mandible_frequency_map.svg", "Lower arch, share of frames in contact"),
+    ] {
+        let p = dir.join(file);
+        if p.is_file() {
+            maps.push((
+                what.to_string(),
+                std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?,
+            ));
+        }
+    }
+    if maps.is_empty() {
+        bail!(
+            "--contacts {}: no contact maps in it; run `jawtrack contacts` again with this version to write them",
+            dir.display()
+        );
+    }
+    Ok(ContactsResult { folder: dir.display().to_string(), summary, maps })
 }
 
 /// Runs `jawtrack report`.
@@ -83,6 +119,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
         }),
         None => None,
     };
+    let contacts = a.contacts.as_deref().map(read_contacts).transpose()?;
     let anatomy_of = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
     let file = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
     let inputs = Inputs {
@@ -99,6 +136,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
         rest_words: rest.describe(),
         windows: Windows { opening: a.opening, protrusion: a.protrusion, left: a.left, right: a.right },
         centric,
+        contacts,
         made_unix_s: std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0.0, |d| d.as_secs_f64()),

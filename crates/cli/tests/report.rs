@@ -13,7 +13,7 @@ use std::process::Command;
 mod common;
 use common::{jawtrack, ok, refused, s};
 
-const SECTIONS: &str = "session,quality,incisor,border,condyles,hinge,articulator,co-mi,definitions";
+const SECTIONS: &str = "session,quality,incisor,border,condyles,hinge,articulator,co-mi,contacts,definitions";
 
 /// The session as a recording in `dir`, and its windows as flags.
 fn session(dir: &Path) -> (PathBuf, Vec<String>) {
@@ -55,7 +55,7 @@ fn the_report_is_written_and_chromium_shows_every_section() {
     let mut args = vec!["report", s(&rec), "--out", s(&out)];
     args.extend(flags.iter().map(String::as_str));
     let said = ok(&jawtrack(&args));
-    assert!(said.contains("9 sections"), "{said}");
+    assert!(said.contains("10 sections"), "{said}");
     let html = std::fs::read_to_string(&out).expect("the report");
     assert!(html.starts_with("<!doctype html>") && html.contains("40.0°"), "the programmed inclination");
     assert!(!html.contains("<script") && !html.contains("src=\"http"), "self-contained, no script");
@@ -76,7 +76,7 @@ fn the_report_is_written_and_chromium_shows_every_section() {
         .expect("node runs");
     assert!(check.status.success(), "{}", String::from_utf8_lossy(&check.stderr));
     let summary = String::from_utf8_lossy(&check.stdout);
-    assert!(summary.contains("\"sections\":9") && summary.contains("\"figures\":5"), "{summary}");
+    assert!(summary.contains("\"sections\":10") && summary.contains("\"figures\":5"), "{summary}");
     if let Ok(keep) = std::env::var("JAWTRACK_KEEP_REPORT") {
         std::fs::copy(&shot, Path::new(&keep).join("report.png")).expect("copy the screenshot");
         std::fs::copy(&out, Path::new(&keep).join("report.html")).expect("copy the report");
@@ -106,4 +106,50 @@ fn bad_windows_and_missing_poses_are_refused_by_name() {
     let line = json!({"frame": 0, "t": 0.0, "maxilla": null, "mandible": null, "maxilla_from_mandible": null});
     std::fs::write(&lost, format!("{line}\n")).expect("write");
     refused(&jawtrack(&["report", s(&lost), "--out", s(&out)]), "nothing to report");
+}
+
+#[test]
+fn a_contacts_folder_puts_its_maps_and_teeth_in_the_report() {
+    use jawtrack_occlusion::scenes;
+    use nalgebra::Point3;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (rec, _) = session(dir.path());
+    // Two lower molars, left and right, pressing 0.2 mm into a flat upper patch.
+    let upper = dir.path().join("upper.ply");
+    scenes::patch(10.0, 100, 0.0, true).write_coloured_ply(&upper, &[]).expect("write");
+    let tooth = |name: &str, x: f64| {
+        let p = dir.path().join(name);
+        scenes::sphere(Point3::new(x, 0.0, 0.2 - 2.0), 2.0, 40).write_coloured_ply(&p, &[]).expect("write");
+        p
+    };
+    let (t36, t46) = (tooth("lower_FDI=36.ply", -2.5), tooth("lower_FDI=46.ply", 2.5));
+    let poses = dir.path().join("bite.jsonl");
+    std::fs::write(&poses, "{\"frame\":0,\"t\":0,\"maxilla_from_mandible\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}\n")
+        .expect("write");
+    let found = dir.path().join("contacts");
+    ok(&jawtrack(&[
+        "contacts",
+        "--maxilla",
+        s(&upper),
+        "--mandible",
+        s(&t36),
+        s(&t46),
+        "--poses",
+        s(&poses),
+        "--out",
+        s(&found),
+        "--quiet",
+    ]));
+    let out = dir.path().join("report.html");
+    ok(&jawtrack(&["report", s(&rec), "--out", s(&out), "--contacts", s(&found)]));
+    let html = std::fs::read_to_string(&out).expect("the report");
+    let section = &html[html.find("<section id=\"contacts\">").expect("the section")..];
+    let section = &section[..section.find("</section>").expect("its end")];
+    assert_eq!(section.matches("<figure>").count(), 4, "two maps per arch");
+    assert!(section.contains(">36 (U19)<") && section.contains(">46 (U30)<"), "tooth numbers on the maps");
+    assert!(section.contains("<td>36</td><td>19</td><td>1</td>"), "the per-tooth table");
+    assert!(section.contains("0.200 mm penetration"), "the deepest contact");
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).expect("mkdir");
+    refused(&jawtrack(&["report", s(&rec), "--out", s(&out), "--force", "--contacts", s(&empty)]), "summary.json");
 }

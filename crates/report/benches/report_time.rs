@@ -57,6 +57,7 @@ fn main() {
                 right: w(session.right),
             },
             centric: Some(Centric { co, mi: rest, co_window: Window { from: session.co.0, to: session.co.1 } }),
+            contacts: None,
             made_unix_s: 0.0,
         };
         let report = render(&inputs);

@@ -62,8 +62,22 @@ pub struct Inputs<'a> {
     /// Centric occlusion and maximal intercuspation as held positions (each the mean pose of
     /// its window), and the windows in words, for the CO–MI slide.
     pub centric: Option<Centric>,
+    /// The occlusal contacts found over the session by `jawtrack contacts`, if given.
+    pub contacts: Option<ContactsResult>,
     /// When the report was made (s since the Unix epoch), printed on it.
     pub made_unix_s: f64,
+}
+
+/// What `jawtrack contacts` wrote: its `summary.json` and its contact maps (SVG), which the
+/// report shows as they are.
+#[derive(Debug, Clone)]
+pub struct ContactsResult {
+    /// Where it was read from, as the report names it.
+    pub folder: String,
+    /// `summary.json`.
+    pub summary: serde_json::Value,
+    /// The maps: (what, SVG text), e.g. ("upper arch, deepest contact", "<svg …").
+    pub maps: Vec<(String, String)>,
 }
 
 /// The held positions of the CO–MI slide.

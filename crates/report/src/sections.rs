@@ -17,7 +17,7 @@ use nalgebra::{Point3, Vector3};
 use std::time::{Duration, UNIX_EPOCH};
 
 /// Sections, by id and title, in page order.
-const SECTIONS: [(&str, &str); 9] = [
+const SECTIONS: [(&str, &str); 10] = [
     ("session", "Session and calibration"),
     ("quality", "Quality"),
     ("incisor", "Lower incisor"),
@@ -26,6 +26,7 @@ const SECTIONS: [(&str, &str); 9] = [
     ("hinge", "Kinematic hinge axis"),
     ("articulator", "Articulator values"),
     ("co-mi", "CO–MI"),
+    ("contacts", "Occlusal contacts"),
     ("definitions", "Units, frames and definitions"),
 ];
 
@@ -86,7 +87,8 @@ pub(crate) fn render(inputs: &Inputs) -> Report {
     body += &section("hinge", SECTIONS[5].1, &hinge_section(inputs));
     body += &section("articulator", SECTIONS[6].1, &articulator_section(inputs));
     body += &section("co-mi", SECTIONS[7].1, &co_mi_section(inputs));
-    body += &section("definitions", SECTIONS[8].1, &definitions(inputs));
+    body += &section("contacts", SECTIONS[8].1, &contacts_section(inputs));
+    body += &section("definitions", SECTIONS[9].1, &definitions(inputs));
     let header = format!(
         "<h1>JawTrack session report</h1><p>{} · made {} · JawTrack {}</p>",
         esc(&inputs.recording_name),
@@ -537,6 +539,66 @@ fn co_mi_section(inputs: &Inputs) -> String {
         window_words(&c.co_window)
     );
     out
+}
+
+fn contacts_section(inputs: &Inputs) -> String {
+    let Some(c) = &inputs.contacts else {
+        return not_measured(
+            "occlusal contacts",
+            "Run <code>jawtrack contacts --maxilla UPPER --mandible LOWER --poses session.jsonl --registration reg.json \
+             --out DIR</code> (per-tooth meshes named FDI=NN give tooth numbers), then give <code>--contacts DIR</code>.",
+        );
+    };
+    let sm = &c.summary;
+    let num = |v: &serde_json::Value| v.as_f64();
+    let deepest = match num(&sm["deepest"]["depth_mm"]) {
+        Some(d) if d > 0.0 => format!(
+            "{} mm penetration at {} s",
+            fixed(d, 3),
+            num(&sm["deepest"]["t"]).map_or("—".into(), |t| fixed(t, 2))
+        ),
+        Some(d) => format!("no penetration; smallest gap {} mm", fixed(-d, 3)),
+        None => "no contact".into(),
+    };
+    let mut s = facts(&[
+        ("Results", esc(&c.folder)),
+        ("Mode", esc(sm["settings"]["mode"].as_str().unwrap_or("—"))),
+        ("Contact threshold", mm(num(&sm["settings"]["threshold_mm"]), 2)),
+        (
+            "Frames checked",
+            format!(
+                "{} ({} within the threshold, {} penetrating)",
+                sm["frames"]["checked"], sm["frames"]["with_contact"], sm["frames"]["penetrating"]
+            ),
+        ),
+        ("Deepest", deepest),
+    ]);
+    s += "<div class=\"plots\">";
+    for (what, svg) in &c.maps {
+        s += &figure(svg, &esc(what));
+    }
+    s += "</div>";
+    let rows: Vec<Vec<String>> = sm["teeth"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|t| {
+            vec![
+                esc(t["arch"].as_str().unwrap_or("")),
+                t["fdi"].as_u64().map_or_else(|| esc(t["name"].as_str().unwrap_or("")), |n| n.to_string()),
+                t["universal"].as_u64().map_or("—".into(), |n| n.to_string()),
+                t["frames_in_contact"].to_string(),
+                format!("{} mm²", fixed(num(&t["max_area_mm2"]).unwrap_or(f64::NAN), 2)),
+                mm(num(&t["max_depth_mm"]), 3),
+            ]
+        })
+        .collect();
+    if rows.is_empty() {
+        s += "<p>No per-tooth totals: the arches were given as whole meshes, not one mesh per tooth.</p>";
+    } else {
+        s += &table(&["arch", "FDI", "Universal", "frames in contact", "largest area", "deepest"], &rows);
+    }
+    s
 }
 
 fn definitions(inputs: &Inputs) -> String {

@@ -56,13 +56,25 @@ fn the_report_prints_the_programmed_session() {
             right: window(session.right),
         },
         centric: Some(Centric { co, mi: rest, co_window: Window { from: session.co.0, to: session.co.1 } }),
+        contacts: None,
         made_unix_s: 1.7e9,
     };
     let r = render(&inputs);
-    for id in ["session", "quality", "incisor", "border", "condyles", "hinge", "articulator", "co-mi", "definitions"] {
+    for id in [
+        "session",
+        "quality",
+        "incisor",
+        "border",
+        "condyles",
+        "hinge",
+        "articulator",
+        "co-mi",
+        "contacts",
+        "definitions",
+    ] {
         assert!(r.html.contains(&format!("<section id=\"{id}\">")), "section {id} missing");
     }
-    assert!(!r.html.contains("Not measured"), "every window was given");
+    assert_eq!(r.html.matches("Not measured").count(), 1, "every window was given; contacts were not");
     // The file name is text, not markup.
     assert!(r.html.contains("session &lt;1&gt;.jsonl") && !r.html.contains("session <1>"));
     // Articulator values, as the page prints them (one decimal).
@@ -113,11 +125,12 @@ fn sections_without_their_movement_say_which_flag_fills_them() {
         rest_words: "frame 0".into(),
         windows: Windows::default(),
         centric: None,
+        contacts: None,
         made_unix_s: 1.7e9,
     };
     let r = render(&inputs);
-    for flag in ["--opening FROM:TO", "--protrusion FROM:TO", "--co FROM:TO"] {
+    for flag in ["--opening FROM:TO", "--protrusion FROM:TO", "--co FROM:TO", "--contacts DIR"] {
         assert!(r.html.contains(flag), "{flag}");
     }
-    assert_eq!(r.html.matches("Not measured").count(), 3);
+    assert_eq!(r.html.matches("Not measured").count(), 4);
 }
