@@ -30,6 +30,7 @@ import { STLLoader } from 'three/addons/loaders/STLLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
 import { mergeVertices } from 'three/addons/utils/BufferGeometryUtils.js';
+import { grid, headMatrix, hingeAxis, markerGroup, viewDirections } from './anatomy.js';
 
 const LIVE_TRACE_POINTS = 2000;
 const RECONNECT_MS = 2000;
@@ -40,6 +41,8 @@ const COLOURS = {
   mandible: 0xf0c58a,
   trace: 0xff4fa3,
   tip: 0xffffff,
+  condyleLeft: 0x4fa3ff,
+  condyleRight: 0x7ee081,
 };
 
 const $ = (id) => document.getElementById(id);
@@ -59,6 +62,34 @@ const hook = {
   },
   seek: (i) => {
     if (replay) replay.seek(i);
+  },
+  // What the scene holds besides the meshes, for the headless check.
+  tagLabels: () => {
+    let n = 0;
+    scene.traverse((o) => {
+      if (o.name.startsWith('tag-')) n += 1;
+    });
+    return n;
+  },
+  hasGrid: () => !!scene.getObjectByName('grid'),
+  hasHingeAxis: () => !!scene.getObjectByName('hinge-axis'),
+  condylePoints: () => condyleTraces.map((t) => t.line.geometry.drawRange.count),
+  // The camera's direction (centre to camera) after a view button, in the scene frame.
+  cameraDirection: () => {
+    const target = controls ? controls.target : new THREE.Vector3();
+    return camera.position.clone().sub(target).normalize().toArray();
+  },
+  viewDirections: () => {
+    const d = viewDirections(head);
+    return Object.fromEntries(Object.entries(d).map(([k, v]) => [k, v.toCamera.toArray()]));
+  },
+  coloured: (name) => {
+    let found = false;
+    const o = scene.getObjectByName(`${name}-mesh`);
+    if (o) o.traverse((m) => {
+      if (m.isMesh && m.geometry.getAttribute('color') && m.material.vertexColors) found = true;
+    });
+    return found;
   },
 };
 window.jawtrack = hook;
@@ -220,6 +251,11 @@ class Trace {
 let trace = new Trace(LIVE_TRACE_POINTS);
 scene.add(trace.line);
 
+// The condyles' paths (replay), left and right.
+let condyleTraces = [];
+// The head frame (maxilla from head), from the scene; null until it is known.
+let head = null;
+
 const tip = new THREE.Mesh(
   new THREE.SphereGeometry(1, 16, 12),
   new THREE.MeshBasicMaterial({ color: COLOURS.tip, depthTest: false, transparent: true }),
@@ -277,9 +313,11 @@ function meshMaterial(colour, flat) {
 
 // Keep only positions, weld duplicated vertices (STL/OBJ are triangle soups)
 // so that computed vertex normals shade smoothly.
-function prepareGeometry(source) {
+function prepareGeometry(source, keepColours = false) {
   let g = new THREE.BufferGeometry();
   g.setAttribute('position', source.getAttribute('position'));
+  // A contact map's colours are per vertex: kept, and the mesh drawn in them.
+  if (keepColours && source.getAttribute('color')) g.setAttribute('color', source.getAttribute('color'));
   if (source.index) g.setIndex(source.index);
   else g = mergeVertices(g);
   g.computeVertexNormals();
@@ -312,6 +350,11 @@ async function loadObject(spec, name, colour) {
         const pg = new THREE.BufferGeometry();
         pg.setAttribute('position', g.getAttribute('position'));
         return new THREE.Points(pg, new THREE.PointsMaterial({ color: colour, size }));
+      }
+      if (spec.coloured && g.getAttribute('color')) {
+        const m = meshMaterial(0xffffff, false);
+        m.vertexColors = true;
+        return new THREE.Mesh(prepareGeometry(g, true), m);
       }
       return new THREE.Mesh(prepareGeometry(g), meshMaterial(colour, false));
     }
@@ -419,6 +462,11 @@ function contentOutsideView() {
   return false;
 }
 
+// The oblique view the page opens with: from the tracking camera's side (-z), a little to the
+// right and above (-y), so that both the opening (y) and the hinge arc (z) are visible.
+const OBLIQUE = { toCamera: new THREE.Vector3(1.0, -0.45, -1.0).normalize(), up: new THREE.Vector3(0, -1, 0) };
+let currentView = OBLIQUE;
+
 // margin: fraction of the content's size added on every side.
 function fitView(margin = 0.02) {
   const box = contentBox();
@@ -432,9 +480,8 @@ function fitView(margin = 0.02) {
   const tanHalf = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2);
   const tanV = tanHalf * ((h - top - bottom) / h);
   const tanH = tanHalf * camera.aspect * ((w - left) / w);
-  // From the tracking camera's side (-z), a little to the right and above
-  // (-y), so that both the opening (y) and the hinge arc (z) are visible.
-  const dir = new THREE.Vector3(1.0, -0.45, -1.0).normalize(); // centre -> camera
+  camera.up.copy(currentView.up);
+  const dir = currentView.toCamera.clone(); // centre -> camera
   const forward = dir.clone().negate();
   const right = new THREE.Vector3().crossVectors(forward, camera.up).normalize();
   const up = new THREE.Vector3().crossVectors(right, forward);
@@ -632,6 +679,14 @@ class Replay {
     scene.remove(trace.line);
     trace = new Trace(incisors);
     scene.add(trace.line);
+    for (const t of condyleTraces) scene.remove(t.line);
+    condyleTraces = [COLOURS.condyleLeft, COLOURS.condyleRight].map((colour) => {
+      const t = new Trace(incisors);
+      t.line.material.color.setHex(colour);
+      scene.add(t.line);
+      return t;
+    });
+    this.condyleCount = new Int32Array(n);
 
     const t0 = frames.map((f) => f && f.t).find(isFiniteNumber) ?? 0;
     let lp = -1;
@@ -647,6 +702,10 @@ class Replay {
         trace.push(f.incisor);
         li = i;
       }
+      if (Array.isArray(f.condyles) && f.condyles.length === 2 && f.condyles.every(isVec3)) {
+        condyleTraces.forEach((t, k) => t.push(f.condyles[k]));
+      }
+      this.condyleCount[i] = condyleTraces[0].count;
       this.lastPose[i] = lp;
       this.lastIncisor[i] = li;
       this.traceCount[i] = trace.count;
@@ -669,6 +728,7 @@ class Replay {
     if (p >= 0) applyPose(this.frames[p].maxilla_from_mandible);
     else applyMatrix(restMatrix);
     trace.setVisibleCount(this.traceCount[i]);
+    for (const t of condyleTraces) t.setVisibleCount(this.condyleCount[i]);
     const li = this.lastIncisor[i];
     setTip(li >= 0 ? this.frames[li].incisor : null);
     const hasPose = isMatrix16(f.maxilla_from_mandible);
@@ -772,6 +832,40 @@ function animate(now) {
   }
 }
 
+// Orbit controls about the current view's up: made again when a view button changes it, since
+// the controls take the camera's up when made.
+function makeControls() {
+  if (controls) controls.dispose();
+  camera.up.copy(currentView.up);
+  controls = new OrbitControls(camera, renderer.domElement);
+  controls.enableDamping = true;
+  controls.dampingFactor = 0.12;
+  controls.addEventListener('change', () => {
+    dirty = true;
+  });
+  controls.addEventListener('start', () => {
+    userMovedCamera = true; // stop auto-framing once the user takes the camera
+  });
+}
+
+// The markers with their tags on both jaws, the grid in the occlusal plane, the hinge axis.
+function addAnatomy(spec) {
+  const tags = spec.tags || {};
+  for (const [root, name] of [
+    [maxillaRoot, 'maxilla'],
+    [mandibleRoot, 'mandible'],
+  ]) {
+    // With a scan, the marker is drawn see-through beside it; without, the mesh is the marker.
+    const scan = spec[name] && spec[name].format !== 'mesh';
+    const solid = scan ? spec.marker_solid : null;
+    root.add(markerGroup(solid, tags[name], COLOURS[name], { seeThrough: scan }));
+  }
+  scene.add(grid(head || new THREE.Matrix4()));
+  const axis = hingeAxis(spec.hinge_axis);
+  if (axis) scene.add(axis);
+  $('legend-axis').hidden = !axis;
+}
+
 async function main() {
   if (!renderer) return;
   let sceneSpec;
@@ -810,19 +904,24 @@ async function main() {
   mandibleLocalBox = new THREE.Box3().expandByObject(mandibleRoot);
   applyMatrix(restMatrix);
 
-  controls = new OrbitControls(camera, renderer.domElement);
-  controls.enableDamping = true;
-  controls.dampingFactor = 0.12;
-  controls.addEventListener('change', () => {
-    dirty = true;
-  });
-  controls.addEventListener('start', () => {
-    userMovedCamera = true; // stop auto-framing once the user takes the camera
-  });
+  head = headMatrix(sceneSpec.maxilla_from_head);
+  addAnatomy(sceneSpec);
+  makeControls();
   $('fit-view').addEventListener('click', () => {
     userMovedCamera = false;
+    currentView = OBLIQUE;
+    makeControls();
     fitView();
   });
+  const dirs = viewDirections(head);
+  for (const name of ['front', 'side', 'occlusal']) {
+    $(`view-${name}`).addEventListener('click', () => {
+      userMovedCamera = true; // a chosen view stays until the user asks to fit again
+      currentView = dirs[name];
+      makeControls();
+      fitView();
+    });
+  }
 
   if (mode === 'replay') {
     try {

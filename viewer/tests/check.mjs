@@ -3,7 +3,12 @@
 // `jawtrack receive --serve` (live) or `jawtrack view` (replay) server.
 //
 //   node viewer/tests/check.mjs --url http://127.0.0.1:PORT/ --mode live|replay \
-//        --screenshot out.png [--chromium /usr/bin/chromium] [--timeout 30]
+//        --screenshot out.png [--chromium /usr/bin/chromium] [--timeout 30] \
+//        [--expect-hinge-axis] [--expect-coloured]
+//
+// Besides the poses: both markers show their 24 tag ids, the grid is there, a replay draws
+// both condyles' paths, the view buttons turn the camera to their head-frame directions, and
+// a hinge axis or contact colours are there exactly when expected.
 //
 // Exit 0 and a one-line JSON summary on stdout on success; exit 1 with the
 // reasons on stderr on any failed check, console error, page error or
@@ -31,6 +36,8 @@ function parseArgs(argv) {
     else if (a === '--screenshot') out.screenshot = next();
     else if (a === '--chromium') out.chromium = next();
     else if (a === '--timeout') out.timeout = Number(next());
+    else if (a === '--expect-hinge-axis') out.expectHingeAxis = true;
+    else if (a === '--expect-coloured') out.expectColoured = true;
     else if (a === '--help' || a === '-h') {
       console.log(USAGE);
       process.exit(0);
@@ -252,6 +259,34 @@ try {
       const off = Math.max(...want.map((v, i) => Math.abs(v - got[i])));
       if (!(off < 1e-9)) fail(`the ${name} scan is not drawn where its registration places it (off by ${off})`);
     }
+    // The markers with their tags, the grid, and (replayed) both condyles' paths.
+    const tagLabels = await page.evaluate(() => window.jawtrack.tagLabels());
+    if (tagLabels !== 24) fail(`the markers show ${tagLabels} tag ids, not 24 (12 per marker)`);
+    if (!(await page.evaluate(() => window.jawtrack.hasGrid()))) fail('no grid in the scene');
+    if (opts.mode === 'replay') {
+      const points = await page.evaluate(() => {
+        window.jawtrack.seek(window.jawtrack.frameCount - 1);
+        return window.jawtrack.condylePoints();
+      });
+      if (!(points.length === 2 && points.every((n) => n >= 2))) fail(`the condyle paths have ${points} points`);
+    }
+    const axis = await page.evaluate(() => window.jawtrack.hasHingeAxis());
+    if (axis !== !!opts.expectHingeAxis) fail(`hinge axis drawn: ${axis}, expected ${!!opts.expectHingeAxis}`);
+    if (opts.expectColoured) {
+      for (const name of ['maxilla', 'mandible']) {
+        if (!(await page.evaluate((n) => window.jawtrack.coloured(n), name))) fail(`the ${name} is not drawn in its contact colours`);
+      }
+    }
+    // Each view button turns the camera to its direction in the head frame.
+    const want = await page.evaluate(() => window.jawtrack.viewDirections());
+    for (const name of ['front', 'side', 'occlusal']) {
+      await page.click(`#view-${name}`);
+      await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(() => r()))));
+      const got = await page.evaluate(() => window.jawtrack.cameraDirection());
+      const dot = got.reduce((acc, v, i) => acc + v * want[name][i], 0);
+      if (!(dot > 0.99)) fail(`the ${name} view looks from ${got.map((v) => v.toFixed(2))}, not ${want[name].map((v) => v.toFixed(2))}`);
+    }
+    await page.click('#fit-view');
     posesApplied = await page.evaluate(() => window.jawtrack.posesApplied);
 
     // Let at least two frames render after the last pose/seek.

@@ -57,11 +57,12 @@ fn spawn(args: &[&str]) -> Child {
     child
 }
 
-fn check(url: &str, mode: &str, screenshot: &Path) -> Output {
+fn check(url: &str, mode: &str, screenshot: &Path, expect: &[&str]) -> Output {
     Command::new("node")
         .arg(viewer_dir().join("tests/check.mjs"))
         .args(["--url", url, "--mode", mode, "--timeout", "60", "--screenshot"])
         .arg(screenshot)
+        .args(expect)
         .output()
         .expect("node runs")
 }
@@ -107,7 +108,7 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
         .stderr(Stdio::null())
         .spawn()
         .expect("send starts");
-    let live = check(&format!("http://127.0.0.1:{http}/"), "live", &dir.path().join("live.png"));
+    let live = check(&format!("http://127.0.0.1:{http}/"), "live", &dir.path().join("live.png"), &[]);
     sender.kill().ok();
     sender.wait().ok();
     receiver.kill().ok();
@@ -121,6 +122,10 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
     let stl = concat!(env!("CARGO_MANIFEST_DIR"), "/../../harness-cad/dodecahedron-with-post.stl");
     let registration = dir.path().join("registration.json");
     std::fs::write(&registration, REGISTRATION).expect("write");
+    // A hinge axis as `jawtrack hinge-axis --json` prints it.
+    let axis = dir.path().join("axis.json");
+    std::fs::write(&axis, r#"{"point": [0, 2, -133], "direction": [-1, 0, 0], "frame": "maxilla marker"}"#)
+        .expect("write");
     let mut viewer = spawn(&[
         "view",
         recording_str,
@@ -134,12 +139,66 @@ fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
         stl,
         "--registration",
         s(&registration),
+        "--hinge-axis",
+        s(&axis),
     ]);
-    let replay = check(&format!("http://127.0.0.1:{http}/"), "replay", &dir.path().join("replay.png"));
+    let replay =
+        check(&format!("http://127.0.0.1:{http}/"), "replay", &dir.path().join("replay.png"), &["--expect-hinge-axis"]);
     viewer.kill().ok();
     viewer.wait().ok();
     assert!(replay.status.success(), "replay check failed:\n{}", String::from_utf8_lossy(&replay.stderr));
     eprintln!("replay: {}", String::from_utf8_lossy(&replay.stdout).trim());
+    if let Ok(keep) = std::env::var("JAWTRACK_KEEP_REPORT") {
+        std::fs::copy(dir.path().join("replay.png"), Path::new(&keep).join("viewer-replay.png")).expect("copy");
+    }
+
+    // The arches `jawtrack contacts` coloured by their deepest contact.
+    let found = contacts_folder(dir.path());
+    let http = free_port();
+    let mut viewer = spawn(&[
+        "view",
+        recording_str,
+        "--serve",
+        &format!("127.0.0.1:{http}"),
+        "--duration",
+        "120",
+        "--contacts",
+        s(&found),
+        "--registration",
+        s(&registration),
+    ]);
+    let coloured =
+        check(&format!("http://127.0.0.1:{http}/"), "replay", &dir.path().join("contacts.png"), &["--expect-coloured"]);
+    viewer.kill().ok();
+    viewer.wait().ok();
+    assert!(coloured.status.success(), "contacts check failed:\n{}", String::from_utf8_lossy(&coloured.stderr));
+}
+
+/// A `jawtrack contacts` folder: a ball pressed 0.2 mm into a flat patch.
+fn contacts_folder(dir: &Path) -> PathBuf {
+    use jawtrack_occlusion::scenes;
+    let upper = dir.join("upper.ply");
+    scenes::patch(10.0, 60, 0.0, true).write_coloured_ply(&upper, &[]).expect("write");
+    let lower = dir.join("lower.ply");
+    scenes::sphere(nalgebra::Point3::new(0.0, 0.0, -1.8), 2.0, 30).write_coloured_ply(&lower, &[]).expect("write");
+    let poses = dir.join("bite.jsonl");
+    std::fs::write(&poses, "{\"frame\":0,\"t\":0,\"maxilla_from_mandible\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}\n")
+        .expect("write");
+    let out = dir.join("contacts");
+    let o = jawtrack(&[
+        "contacts",
+        "--maxilla",
+        s(&upper),
+        "--mandible",
+        s(&lower),
+        "--poses",
+        s(&poses),
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
 }
 
 /// A short recording of a still jaw, enough for `view` to serve.

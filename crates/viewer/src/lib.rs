@@ -1,7 +1,9 @@
 //! The web viewer's server: the page (`viewer/` in the repository, embedded in this library at
 //! build time with the three.js modules it imports), the scene (the two meshes, or the two
-//! marker dodecahedrons when no scan is given), live poses over a WebSocket for
-//! `jawtrack receive --serve`, and a whole recording for `jawtrack view`.
+//! marker dodecahedrons when no scan is given; the markers' tags; the head frame for the
+//! grid and the view buttons; a hinge axis), live poses over a WebSocket for
+//! `jawtrack receive --serve`, and a whole recording for `jawtrack view` (with each frame's
+//! incisor and condyles).
 //!
 //! The readouts (opening, lateral and protrusive displacement of the lower incisor) are
 //! computed here, not in the browser (`jawtrack_kinematics`), from the rest position, which
@@ -17,8 +19,8 @@ use axum::extract::{Path as UrlPath, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Json, Response};
 use axum::routing::get;
-use jawtrack_kinematics::Incisor;
-use jawtrack_marker::{DEFAULT_EDGE_MM, Dodecahedron};
+use jawtrack_kinematics::{AnatomicalPoints, Incisor, Mounting, Side};
+use jawtrack_marker::{BodyKind, DEFAULT_EDGE_MM, Dodecahedron, Marker};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{BiteRecord, FrameRecord, SessionId};
 use jawtrack_tracker::{BiteRule, BiteWindow, Registration};
@@ -87,6 +89,17 @@ pub struct ViewerOptions {
     /// Serve the page from this folder (with three.js installed by `npm ci`) instead of the
     /// copy built into the program: for working on the page.
     pub page_dir: Option<PathBuf>,
+    /// The anatomical points (`jawtrack points`), with `registration`: the head frame, the
+    /// condyles and the incisal point of a replay. Default: the standard harness mounting.
+    pub points: Option<AnatomicalPoints>,
+    /// A hinge axis to draw (`jawtrack hinge-axis`): a point and a unit direction in the
+    /// maxilla marker's frame (mm).
+    pub hinge_axis: Option<([f64; 3], [f64; 3])>,
+    /// The marker whose tags are drawn on the two dodecahedrons; default: the nominal one.
+    pub marker: Option<Marker>,
+    /// The meshes carry per-vertex colours to show as they are (the contact maps `jawtrack
+    /// contacts` writes), not the viewer's own.
+    pub coloured: bool,
 }
 
 /// What the viewer shows, and the poses it moves by.
@@ -99,7 +112,15 @@ pub struct LiveState {
     tx: tokio::sync::broadcast::Sender<Arc<str>>,
     inner: Mutex<Inner>,
     recording: Option<Value>,
+    /// The head frame, condyles and incisal point the readouts and paths use.
+    mounting: Mounting,
     incisor: Incisor,
+    /// The condyles, carried like the incisor, left then right.
+    condyles: [Incisor; 2],
+    /// What the scene adds to the meshes: tags, hinge axis, colours.
+    marker: Marker,
+    hinge_axis: Option<([f64; 3], [f64; 3])>,
+    coloured: bool,
 }
 
 struct Inner {
@@ -159,7 +180,12 @@ impl LiveState {
                 last_status: None,
             }),
             recording: None,
+            mounting: Mounting::default(),
             incisor: Incisor::standard(),
+            condyles: condyles_of(Mounting::default()),
+            marker: options.marker.clone().unwrap_or_default(),
+            hinge_axis: options.hinge_axis,
+            coloured: options.coloured,
         })
     }
 
@@ -173,6 +199,12 @@ impl LiveState {
     ) -> Result<Self, ViewerError> {
         let mut state = LiveState::new(options, "replay")?;
         let rest = rest.or_else(|| frames.iter().find_map(|f| f.maxilla_from_mandible));
+        // The patient's anatomy needs the closed jaw, known only when replaying.
+        if let (Some(points), Some(reg), Some(r)) = (&options.points, &options.registration, rest) {
+            state.mounting = points.mounting(&reg.maxilla_scan_from_maxilla_marker, &r);
+            state.incisor = Incisor::of(state.mounting);
+            state.condyles = condyles_of(state.mounting);
+        }
         state.inner.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner).rest = rest;
         let list: Vec<Value> = frames.iter().map(|f| state.frame_message(f, f.seq, rest.as_ref())).collect();
         state.recording = Some(json!({ "header": header, "frames": list }));
@@ -198,6 +230,12 @@ impl LiveState {
             Some(m) => self.readouts(m, rest),
             None => (Value::Null, [None; 3]),
         };
+        let condyles = f.maxilla_from_mandible.map(|m| {
+            self.condyles.map(|c| {
+                let p = c.in_maxilla(&m);
+                [p.x, p.y, p.z]
+            })
+        });
         json!({
             "type": "pose",
             "frame": f.frame,
@@ -205,6 +243,7 @@ impl LiveState {
             "t": f.t,
             "maxilla_from_mandible": f.maxilla_from_mandible,
             "incisor": incisor,
+            "condyles": condyles,
             "opening_mm": opening,
             "lateral_mm": lateral,
             "protrusive_mm": protrusive,
@@ -286,18 +325,43 @@ impl LiveState {
 
     fn scene(&self) -> Value {
         let mesh = |i: usize, name: &str| match &self.meshes[i] {
-            Some((_, format)) => {
-                json!({"format": format, "url": format!("/api/mesh/{name}"), "marker_from_mesh": self.marker_from_scan[i]})
-            }
+            Some((_, format)) => json!({
+                "format": format, "url": format!("/api/mesh/{name}"), "marker_from_mesh": self.marker_from_scan[i],
+                "coloured": self.coloured,
+            }),
             None => dodecahedron_mesh(),
+        };
+        let tags = |kind: BodyKind| -> Vec<Value> {
+            self.marker
+                .tags()
+                .filter(|(k, _)| *k == kind)
+                .map(|(_, t)| {
+                    let n = t.face_normal();
+                    json!({
+                        "id": t.id,
+                        "corners": t.corners.iter().map(|c| [c.x, c.y, c.z]).collect::<Vec<_>>(),
+                        "centre": [t.center.x, t.center.y, t.center.z],
+                        "normal": [n.x, n.y, n.z],
+                    })
+                })
+                .collect()
         };
         json!({
             "mode": self.mode,
             "maxilla": mesh(0, "maxilla"),
             "mandible": mesh(1, "mandible"),
             "maxilla_from_mandible_rest": self.lock().rest,
+            "marker_solid": dodecahedron_mesh(),
+            "tags": {"maxilla": tags(BodyKind::Maxilla), "mandible": tags(BodyKind::Mandible)},
+            "maxilla_from_head": self.mounting.head_from_maxilla.inverse(),
+            "hinge_axis": self.hinge_axis.map(|(p, d)| json!({"point": p, "direction": d})),
         })
     }
+}
+
+/// The condyles of `m` as points of the mandible, left then right.
+fn condyles_of(m: Mounting) -> [Incisor; 2] {
+    [Side::Left, Side::Right].map(|side| Incisor::fixed_at(m, &m.condyle(side)))
 }
 
 /// The marker solid as inline triangles (body frame, mm).
@@ -325,7 +389,9 @@ impl LiveServer {
         let mut app = Router::new();
         match &state.page_dir {
             Some(dir) => {
-                for needed in ["index.html", "viewer.js", "style.css", "node_modules/three/build/three.module.js"] {
+                for needed in
+                    ["index.html", "viewer.js", "anatomy.js", "style.css", "node_modules/three/build/three.module.js"]
+                {
                     if !dir.join(needed).is_file() {
                         return Err(ViewerError::PageDirIncomplete {
                             dir: dir.display().to_string(),
@@ -336,6 +402,7 @@ impl LiveServer {
                 app = app
                     .route_service("/", ServeFile::new(dir.join("index.html")))
                     .route_service("/viewer.js", ServeFile::new(dir.join("viewer.js")))
+                    .route_service("/anatomy.js", ServeFile::new(dir.join("anatomy.js")))
                     .route_service("/style.css", ServeFile::new(dir.join("style.css")))
                     .nest_service("/vendor/three", ServeDir::new(dir.join("node_modules/three")));
             }
@@ -576,20 +643,29 @@ mod tests {
             status.contains("200") && content_type.starts_with("text/html") && len > 100,
             "{status} {content_type}"
         );
-        for path in
-            ["/viewer.js", "/style.css", "/vendor/three/build/three.module.js", "/vendor/three/build/three.core.js"]
-        {
+        for path in [
+            "/viewer.js",
+            "/anatomy.js",
+            "/style.css",
+            "/vendor/three/build/three.module.js",
+            "/vendor/three/build/three.core.js",
+        ] {
             let (status, _, len) = get(addr, path);
             assert!(status.contains("200") && len > 100, "{path}: {status}");
         }
         assert!(get(addr, "/vendor/three/package.json").0.contains("404"), "only what the page imports");
         // Every module the page imports is in the program.
-        let page = String::from_utf8_lossy(page::FILES.iter().find(|f| f.0 == "/viewer.js").expect("viewer.js").2);
-        for line in page.lines().filter(|l| l.starts_with("import ")) {
-            let Some(module) = line.split('\'').nth(1) else { continue };
-            let url = module.replace("three/addons/", "/vendor/three/examples/jsm/");
-            let url = if url == "three" { "/vendor/three/build/three.module.js".to_owned() } else { url };
-            assert!(page::FILES.iter().any(|f| f.0 == url), "{module} is imported but not embedded");
+        for script in ["/viewer.js", "/anatomy.js"] {
+            let page = String::from_utf8_lossy(page::FILES.iter().find(|f| f.0 == script).expect("the script").2);
+            for line in page.lines().filter(|l| l.starts_with("import ")) {
+                let Some(module) = line.split('\'').nth(1) else { continue };
+                let url = module.replace("three/addons/", "/vendor/three/examples/jsm/");
+                let url = match url.as_str() {
+                    "three" => "/vendor/three/build/three.module.js".to_owned(),
+                    local => local.strip_prefix('.').unwrap_or(local).to_owned(),
+                };
+                assert!(page::FILES.iter().any(|f| f.0 == url), "{module} is imported by {script} but not embedded");
+            }
         }
     }
 }
