@@ -40,8 +40,9 @@ pub(crate) struct ExportArgs {
     #[arg(long)]
     transforms_json: bool,
     /// For OpenSim: the lower incisal point's and both condyles' trajectories (mm), in
-    /// OpenSim's axes (X anterior, Y up, Z right; origin the upper incisal point), the points
-    /// the standard mounting's. Frames without a jaw pose have blank markers.
+    /// OpenSim's axes (X anterior, Y up, Z right; origin the head frame's), the points the
+    /// points file's (--points) or else the standard mounting's. Frames without a jaw pose have
+    /// blank markers.
     #[arg(long)]
     trc: bool,
     /// For OpenSim: the jaw's coordinates over time from the rest position: body-fixed X–Y–Z
@@ -52,6 +53,8 @@ pub(crate) struct ExportArgs {
     /// it, the recording's own `maxilla_scan_from_mandible_scan` (tracked with a registration).
     #[arg(long)]
     registration: Option<PathBuf>,
+    #[command(flatten)]
+    points: crate::points::PointsArg,
     /// Output file; `-` for standard output.
     #[arg(long, default_value = "-")]
     out: PathBuf,
@@ -263,7 +266,8 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
         let Some(rest) = rest else {
             bail!("{}: no frame has a jaw pose (both markers tracked), nothing to export", a.recording.display());
         };
-        let mounting = jawtrack_kinematics::Mounting::default();
+        let reg = crate::points::registration(a.registration.as_deref())?;
+        let mounting = crate::points::anatomy(a.points.points.as_deref(), reg.as_ref(), &rest)?.mounting;
         let frames: Vec<(f64, Option<Pose>)> = rec.frames.iter().map(|f| (f.t, f.maxilla_from_mandible)).collect();
         let named = if a.out.as_os_str() == "-" { &a.recording } else { &a.out };
         let name = named.file_name().map_or_else(|| "jawtrack".into(), |n| n.to_string_lossy().into_owned());

@@ -260,4 +260,7 @@ fn opensim_files_carry_every_frame_in_opensim_s_axes() {
         mot.lines().skip(7).map(|l| l.split('\t').map(|v| v.parse().expect("a number")).collect()).collect();
     let widest = rows.iter().max_by(|a, b| a[3].abs().total_cmp(&b[3].abs())).expect("rows");
     assert!(widest[3] < -5.0 && widest[1].abs() < 1.0 && widest[2].abs() < 1.0, "{widest:?}");
+    // The patient's points need the registration that places them.
+    let o = jawtrack(&["export", &poses, "--trc", "--points", "points.json"]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--registration"));
 }

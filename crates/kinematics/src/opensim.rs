@@ -51,8 +51,6 @@ fn jaw_in_head(mounting: &Mounting, rest: &Pose, m: &Pose) -> Pose {
 /// The `.trc` text of `frames` at `rate` (frames/s), the points being `mounting`'s with the
 /// jaw at `rest`; `name` goes in its first line.
 pub fn trc(mounting: &Mounting, rest: &Pose, frames: &[Frame], rate: f64, name: &str) -> String {
-    let c = opensim_from_head();
-    let points = [mounting.lower_incisal_point, mounting.condyle(Side::Left), mounting.condyle(Side::Right)];
     let mut out = String::new();
     let n = frames.len();
     let _ = writeln!(out, "PathFileType\t4\t(X/Y/Z)\t{name}");
@@ -64,20 +62,33 @@ pub fn trc(mounting: &Mounting, rest: &Pose, frames: &[Frame], rate: f64, name: 
     let _ = writeln!(out, "Frame#\tTime\t{}", TRC_MARKERS.map(|m| format!("{m}\t\t")).join(""));
     let axes: Vec<String> = (1..=TRC_MARKERS.len()).map(|k| format!("X{k}\tY{k}\tZ{k}")).collect();
     let _ = writeln!(out, "\t\t{}", axes.join("\t"));
-    for (i, (t, pose)) in frames.iter().enumerate() {
+    for (i, ((t, _), at)) in frames.iter().zip(marker_positions(mounting, rest, frames)).enumerate() {
         let _ = write!(out, "{}\t{t:.6}", i + 1);
-        for p in &points {
-            match pose {
-                Some(m) => {
-                    let q = c * jaw_in_head(mounting, rest, m).transform_point(&Point3::from(*p)).coords;
+        match at {
+            Some(qs) => {
+                for q in qs {
                     let _ = write!(out, "\t{}\t{}\t{}", num(q.x, 6), num(q.y, 6), num(q.z, 6));
                 }
-                None => out.push_str("\t\t\t"),
             }
+            None => out.push_str(&"\t\t\t".repeat(TRC_MARKERS.len())),
         }
         out.push('\n');
     }
     out
+}
+
+/// The markers' positions ([`TRC_MARKERS`], mm, OpenSim's axes) in each frame, `None` in a
+/// frame without a jaw pose: what the `.trc` and a C3D file hold.
+pub fn marker_positions(mounting: &Mounting, rest: &Pose, frames: &[Frame]) -> Vec<Option<[Vector3<f64>; 3]>> {
+    let c = opensim_from_head();
+    let points = [mounting.lower_incisal_point, mounting.condyle(Side::Left), mounting.condyle(Side::Right)];
+    frames
+        .iter()
+        .map(|(_, pose)| {
+            let jaw = jaw_in_head(mounting, rest, pose.as_ref()?);
+            Some(points.map(|p| c * jaw.transform_point(&Point3::from(p)).coords))
+        })
+        .collect()
 }
 
 /// The `.mot` columns after `time`.
