@@ -22,7 +22,7 @@ use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::Mesh;
-use jawtrack_occlusion::contact_map::{self, Annotations, Scale, left_from_teeth};
+use jawtrack_occlusion::contact_map;
 use jawtrack_occlusion::contacts::{Arch, ContactSettings, THRESHOLD_RANGE_MM, tooth_name};
 use jawtrack_occlusion::dynamics::{self, DynamicsOptions, StepSummary};
 use jawtrack_occlusion::occlusal_view::{View, render, with_legend};
@@ -123,7 +123,7 @@ type ArchInput = (Vec<(String, Mesh)>, Vec<Value>);
 
 /// Reads one arch's files (`side`: "maxilla" or "mandible"), printing a line per mesh unless
 /// `quiet`.
-fn load_arch(side: &str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
+pub(crate) fn load_arch(side: &str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
     let (mut parts, mut reports) = (Vec::new(), Vec::new());
     for file in files {
         let mesh = Mesh::load(file).with_context(|| format!("--{side}"))?;
@@ -139,8 +139,12 @@ fn load_arch(side: &str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
     Ok((parts, reports))
 }
 
+/// Why a map cannot say where the patient's left is, and what to give.
+pub(crate) const UNSIDED: &str = "the maps cannot say where the patient's left is: name the per-tooth meshes by FDI \
+     number (FDI=NN in the file name) or give --points";
+
 /// Each part's name and centroid: where its number goes on the map (none for a whole arch).
-fn tooth_places(parts: &[(String, Mesh)]) -> Vec<(String, nalgebra::Point3<f64>)> {
+pub(crate) fn tooth_places(parts: &[(String, Mesh)]) -> Vec<(String, nalgebra::Point3<f64>)> {
     if parts.len() < 2 {
         return Vec::new();
     }
@@ -373,45 +377,14 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
 
     let s = session.summary();
     // The maps a clinician reads: each arch's occlusal view with its side, teeth and scales.
-    let lefts = [
-        left_from_teeth(&teeth[0]).or(upper_left),
-        left_from_teeth(&teeth[1]).or_else(|| upper_left.map(|l| first_pose.inverse().rotation() * l)),
-    ];
-    let titles = [
-        "Upper arch, occlusal view (seen from the lower arch)",
-        "Lower arch, occlusal view (seen from the upper arch)",
-    ];
-    for (k, (arch, name)) in arches.into_iter().enumerate() {
-        let maps = [
-            (
-                "depth",
-                session.depth_colours(k),
-                Scale::Depth { threshold_mm: settings.threshold_mm, full_scale_mm: s.depth_colour_full_scale_mm },
-            ),
-            ("frequency", session.frequency_colours(k), Scale::Frequency),
-        ];
-        for (what, colours, scale) in maps {
-            let annotations = Annotations {
-                title: format!(
-                    "{}: {}",
-                    titles[k],
-                    if what == "depth" { "deepest contact" } else { "share of frames in contact" }
-                ),
-                teeth: teeth[k].clone(),
-                patients_left: lefts[k],
-                scale,
-            };
-            let p = a.out.join(format!("{name}_{what}_map.svg"));
-            std::fs::write(&p, contact_map::svg(&render(&arch.mesh, &colours, &views[k]), &views[k], &annotations))
-                .with_context(|| format!("writing {}", p.display()))?;
-            written.push(p);
-        }
+    let maps = contact_map::session_maps(&session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left);
+    for m in &maps {
+        let p = a.out.join(format!("{}_{}_map.svg", m.arch, m.what));
+        std::fs::write(&p, &m.svg).with_context(|| format!("writing {}", p.display()))?;
+        written.push(p);
     }
-    if lefts.iter().any(Option::is_none) {
-        eprintln!(
-            "warning: the maps cannot say where the patient's left is: name the per-tooth meshes by FDI number \
-             (FDI=NN in the file name) or give --points"
-        );
+    if maps.iter().any(|m| !m.sided) {
+        eprintln!("warning: {UNSIDED}");
     }
     let teeth_totals = per_tooth.totals();
     let mut summary = json!({

@@ -2,12 +2,18 @@
 //! of it through headless Chromium when asked.
 
 use crate::articulator::{parse_window, poses_in};
+use crate::contacts::{UNSIDED, load_arch, tooth_places};
 use crate::export::{SessionArg, load, rest_of};
 use crate::output::ForceArgs;
 use crate::points::{PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
-use clap::Args;
+use clap::{ArgAction, Args};
 use jawtrack_kinematics::Window;
+use jawtrack_occlusion::contact_map;
+use jawtrack_occlusion::contacts::{Arch, ContactSettings};
+use jawtrack_occlusion::session::ContactSession;
+use jawtrack_occlusion::teeth::ToothTotals;
+use jawtrack_pose::Pose;
 use jawtrack_report::{Anatomy, Centric, ContactsResult, Inputs, Windows};
 use jawtrack_tracker::registration::mean_pose;
 use std::path::{Path, PathBuf};
@@ -56,9 +62,20 @@ pub(crate) struct ReportArgs {
     /// The jaw held in maximal intercuspation, for --co; default: the closed jaw.
     #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
     mi: Option<Window>,
-    /// The folder `jawtrack contacts` wrote for this session: its maps and per-tooth totals
-    /// go in the report (contacts are computed there, not here: indexing real scans alone takes
-    /// seconds).
+    /// The upper arch's scan (STL, PLY or OBJ, mm), or one file per tooth (`FDI=NN` in the
+    /// names gives the tooth numbers): the report checks the occlusal contacts of
+    /// --contact-frames frames through --registration, and shows their maps and per-tooth
+    /// totals. Indexing real scans takes seconds.
+    #[arg(long, num_args = 1.., action = ArgAction::Append, value_name = "MESH", requires = "mandible", conflicts_with = "contacts")]
+    maxilla: Vec<PathBuf>,
+    /// The lower arch's scan, or one file per tooth, as for --maxilla.
+    #[arg(long, num_args = 1.., action = ArgAction::Append, value_name = "MESH", requires = "maxilla")]
+    mandible: Vec<PathBuf>,
+    /// How many frames, evenly spread over the session, --maxilla and --mandible check.
+    #[arg(long, default_value_t = 120, value_name = "N")]
+    contact_frames: usize,
+    /// Instead of --maxilla and --mandible: the folder `jawtrack contacts` wrote for this
+    /// session (every frame checked, in any mode).
     #[arg(long, value_name = "DIR")]
     contacts: Option<PathBuf>,
     #[command(flatten)]
@@ -119,7 +136,11 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
         }),
         None => None,
     };
-    let contacts = a.contacts.as_deref().map(read_contacts).transpose()?;
+    let contacts = match &a.contacts {
+        Some(dir) => Some(read_contacts(dir)?),
+        None if !a.maxilla.is_empty() => Some(survey_contacts(a, &rec, reg.as_ref())?),
+        None => None,
+    };
     let anatomy_of = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
     let file = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
     let inputs = Inputs {
@@ -152,6 +173,71 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
         say!("wrote {}", pdf.display());
     }
     Ok(())
+}
+
+/// Checks the occlusal contacts of up to `--contact-frames` frames spread over the session.
+fn survey_contacts(
+    a: &ReportArgs,
+    rec: &jawtrack_recording::Recording,
+    reg: Option<&jawtrack_tracker::Registration>,
+) -> Result<ContactsResult> {
+    if a.contact_frames == 0 {
+        bail!("--contact-frames must be 1 or more");
+    }
+    // The lower scan in the upper scan's frame: through the registration, else as recorded.
+    let posed: Vec<(u64, f64, Pose)> = rec
+        .frames
+        .iter()
+        .filter_map(|f| {
+            let p = match reg {
+                Some(r) => f.maxilla_from_mandible.map(|m| r.maxilla_scan_from_mandible_scan(&m)),
+                None => f.maxilla_scan_from_mandible_scan,
+            }?;
+            Some((f.frame, f.t, p))
+        })
+        .collect();
+    let Some(&(_, _, first_pose)) = posed.first() else {
+        bail!(
+            "--maxilla and --mandible need the scans' poses: give --registration (`jawtrack register`), or a \
+             recording tracked with one"
+        );
+    };
+    let stride = posed.len().div_ceil(a.contact_frames);
+    let settings = ContactSettings::default();
+    let (upper_parts, _) = load_arch("maxilla", &a.maxilla, true)?;
+    let (lower_parts, _) = load_arch("mandible", &a.mandible, true)?;
+    let teeth = [tooth_places(&upper_parts), tooth_places(&lower_parts)];
+    eprintln!("indexing both arches for the contacts (a few seconds per 100k triangles)…");
+    let (upper, lower) = (Arch::new(upper_parts, &settings), Arch::new(lower_parts, &settings));
+    let mut session = ContactSession::new(&upper, &lower, settings);
+    let mut per_tooth = ToothTotals::default();
+    let checked: Vec<&(u64, f64, Pose)> = posed.iter().step_by(stride).collect();
+    let bar = crate::progress_bar("contacts", checked.len());
+    for (frame, t, pose) in checked {
+        per_tooth.add(&session.check(*frame, *t, pose).regions);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let upper_left = match &a.points.points {
+        Some(p) => Some(crate::points::read(p)?.head_from_scan().inverse().rotation() * nalgebra::Vector3::x()),
+        None => None,
+    };
+    let maps = contact_map::session_maps(&session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left);
+    if maps.iter().any(|m| !m.sided) {
+        eprintln!("warning: {UNSIDED}");
+    }
+    let s = session.summary();
+    let summary = serde_json::json!({
+        "settings": {"mode": "kinematic", "threshold_mm": settings.threshold_mm},
+        "frames": {"checked": s.frames, "with_contact": s.with_contact, "penetrating": s.penetrating},
+        "deepest": s.deepest,
+        "teeth": per_tooth.totals(),
+    });
+    Ok(ContactsResult {
+        folder: format!("checked here: {} of {} frames with a scan pose, every {stride}", s.frames, posed.len()),
+        summary,
+        maps: maps.into_iter().map(|m| (m.caption, m.svg)).collect(),
+    })
 }
 
 /// The Chromium to print with: `CHROMIUM`, else the first of the usual names on the PATH.

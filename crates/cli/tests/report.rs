@@ -149,6 +149,44 @@ fn a_contacts_folder_puts_its_maps_and_teeth_in_the_report() {
     assert!(section.contains(">36 (U19)<") && section.contains(">46 (U30)<"), "tooth numbers on the maps");
     assert!(section.contains("<td>36</td><td>19</td><td>1</td>"), "the per-tooth table");
     assert!(section.contains("0.200 mm penetration"), "the deepest contact");
+    // The same contacts checked by the report itself, the scans placed through a registration
+    // that puts the lower scan in its bite at the closed jaw.
+    let rest = Rig::default().mounting.maxilla_from_mandible_rest();
+    let reg = jawtrack_tracker::Registration {
+        mandible_scan_from_mandible_marker: rest,
+        ..jawtrack_tracker::Registration::identity()
+    };
+    let reg_file = dir.path().join("registration.json");
+    std::fs::write(&reg_file, reg.to_json()).expect("write");
+    let said = ok(&jawtrack(&[
+        "report",
+        s(&rec),
+        "--out",
+        s(&out),
+        "--force",
+        "--registration",
+        s(&reg_file),
+        "--maxilla",
+        s(&upper),
+        "--mandible",
+        s(&t36),
+        s(&t46),
+        "--contact-frames",
+        "50",
+    ]));
+    assert!(said.contains("wrote"), "{said}");
+    let html = std::fs::read_to_string(&out).expect("the report");
+    let section = &html[html.find("<section id=\"contacts\">").expect("the section")..];
+    let section = &section[..section.find("</section>").expect("its end")];
+    assert_eq!(section.matches("<figure>").count(), 4, "two maps per arch");
+    assert!(section.contains("checked here: 50 of 400 frames"), "every 8th of the session's frames");
+    assert!(section.contains("<td>36</td><td>19</td>") && section.contains("<td>46</td><td>30</td>"), "both teeth");
+    // The bite presses 0.2 mm at the closed jaw; moving, the ball rolls deeper into the patch.
+    assert!(section.contains("mm penetration at") && !section.contains("<td>0 ("), "{:.1000}", section);
+    refused(
+        &jawtrack(&["report", s(&rec), "--out", s(&out), "--force", "--maxilla", s(&upper), "--mandible", s(&t36)]),
+        "--registration",
+    );
     let empty = dir.path().join("empty");
     std::fs::create_dir(&empty).expect("mkdir");
     refused(&jawtrack(&["report", s(&rec), "--out", s(&out), "--force", "--contacts", s(&empty)]), "summary.json");

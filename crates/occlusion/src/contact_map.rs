@@ -4,10 +4,13 @@
 //! scale in millimetres of depth or in percent of frames. The rendering is embedded as a PNG, so
 //! the file stands alone (a report inlines it, a browser opens it).
 
-use crate::occlusal_view::View;
+use crate::contacts::Arch;
+use crate::occlusal_view::{View, render};
+use crate::session::ContactSession;
 use crate::teeth::Tooth;
 use base64::Engine as _;
 use image::RgbImage;
+use jawtrack_pose::Pose;
 use nalgebra::{Point3, Vector3};
 use std::fmt::Write as _;
 
@@ -179,6 +182,68 @@ fn colour_scale(scale: Scale, x: f64, y: f64) -> String {
 
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// One of a session's maps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Map {
+    /// `maxilla` or `mandible`.
+    pub arch: &'static str,
+    /// `depth` or `frequency`.
+    pub what: &'static str,
+    /// What it shows, in words.
+    pub caption: String,
+    /// The SVG document.
+    pub svg: String,
+    /// Whether it says where the patient's left is.
+    pub sided: bool,
+}
+
+/// The four maps of a session (each arch by deepest contact and by share of frames), each arch
+/// seen from the other at `first_pose` (`maxilla_scan_from_mandible_scan`). The patient's left
+/// comes from the teeth's FDI numbers, else from `upper_left` (the upper scan's frame).
+pub fn session_maps(
+    session: &ContactSession,
+    arches: [&Arch; 2],
+    first_pose: &Pose,
+    teeth: [&[(String, Point3<f64>)]; 2],
+    upper_left: Option<Vector3<f64>>,
+) -> Vec<Map> {
+    let views = View::occlusal_pair(&arches[0].mesh, &arches[1].mesh, first_pose, 800);
+    let lefts = [
+        left_from_teeth(teeth[0]).or(upper_left),
+        left_from_teeth(teeth[1]).or_else(|| upper_left.map(|l| first_pose.inverse().rotation() * l)),
+    ];
+    let s = session.summary();
+    let titles = [
+        "Upper arch, occlusal view (seen from the lower arch)",
+        "Lower arch, occlusal view (seen from the upper arch)",
+    ];
+    let mut maps = Vec::new();
+    for (k, arch) in ["maxilla", "mandible"].into_iter().enumerate() {
+        let depth =
+            Scale::Depth { threshold_mm: session.settings().threshold_mm, full_scale_mm: s.depth_colour_full_scale_mm };
+        for (what, colours, scale, words) in [
+            ("depth", session.depth_colours(k), depth, "deepest contact"),
+            ("frequency", session.frequency_colours(k), Scale::Frequency, "share of frames in contact"),
+        ] {
+            let a = Annotations {
+                title: format!("{}: {words}", titles[k]),
+                teeth: teeth[k].to_vec(),
+                patients_left: lefts[k],
+                scale,
+            };
+            let image = render(&arches[k].mesh, &colours, &views[k]);
+            maps.push(Map {
+                arch,
+                what,
+                caption: a.title.clone(),
+                svg: svg(&image, &views[k], &a),
+                sided: lefts[k].is_some(),
+            });
+        }
+    }
+    maps
 }
 
 #[cfg(test)]

@@ -140,6 +140,11 @@ impl<'a> ContactSession<'a> {
         }
     }
 
+    /// What counts as a contact.
+    pub fn settings(&self) -> &ContactSettings {
+        &self.settings
+    }
+
     /// How often and how deep each vertex was in contact over the frames checked.
     pub fn map(&self) -> &ContactMap {
         &self.map
