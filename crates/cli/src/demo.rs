@@ -4,12 +4,13 @@
 //! the mandible-in-maxilla error and the motion in plain words, and plots the incisor's path.
 
 use crate::synth::render_with_progress;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_calibration::{CalibrationOptions, Finding, calibrate};
 use jawtrack_kinematics::Mounting;
 use jawtrack_marker::Marker;
+use jawtrack_pose::Pose;
 use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_tracker::{Tracker, TrackerConfig};
 
@@ -177,7 +178,46 @@ fn track_and_compare(dir: &Path, calibrated: Marker) -> Result<()> {
     say!(
         "Calibrating the marker (`jawtrack calibrate-marker`) closed most of the gap between the nominal marker and the marker as printed."
     );
+    say!("Session report (open it in a browser): {}", write_report(dir)?.display());
     Ok(())
+}
+
+/// The session report of the calibrated marker's tracking, with the hinge axis of its
+/// openings (`jawtrack report` on the same file does the same).
+fn write_report(dir: &Path) -> Result<PathBuf> {
+    let poses = dir.join("poses_calibrated.jsonl");
+    let rec = jawtrack_recording::open(&poses)?;
+    let posed: Vec<(f64, Pose)> = rec.frames.iter().filter_map(|f| Some((f.t, f.maxilla_from_mandible?))).collect();
+    let (Some(&(from, rest)), Some(&(to, _))) = (posed.first(), posed.last()) else {
+        bail!("{}: no frame has a jaw pose", poses.display());
+    };
+    let standard = crate::points::anatomy(None, None, &rest)?;
+    let inputs = jawtrack_report::Inputs {
+        recording: &rec,
+        recording_name: "poses_calibrated.jsonl".into(),
+        anatomy: jawtrack_report::Anatomy {
+            mounting: standard.mounting,
+            reference_plane: standard.reference_plane.into(),
+            landmarks: standard.landmarks.into(),
+            points_file: None,
+            registration_file: None,
+        },
+        rest,
+        rest_words: "the first frame (the jaw closed)".into(),
+        windows: jawtrack_report::Windows {
+            opening: Some(jawtrack_kinematics::Window { from, to }),
+            ..jawtrack_report::Windows::default()
+        },
+        centric: None,
+        contacts: None,
+        made_unix_s: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64()),
+    };
+    let path = dir.join("report.html");
+    std::fs::write(&path, jawtrack_report::render(&inputs).html)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
 }
 
 /// The lower incisor's position (head frame, mm) at a time (s).
