@@ -122,8 +122,8 @@ enum Command {
     /// and immediate side shift per condyle, protrusive and lateral incisal guidance.
     Articulator(articulator::ArticulatorArgs),
     /// One self-contained HTML report of a session (and a PDF through headless Chromium): session
-    /// and calibration, quality, incisor metrics, Posselt's border movements, condylar paths, and
-    /// the hinge axis, articulator values and CO–MI of the windows given.
+    /// and calibration, quality, incisor metrics, Posselt's border movements, condylar paths, the
+    /// hinge axis, articulator values and CO–MI of the windows given, and occlusal contacts.
     Report(report::ReportArgs),
     /// Occlusal contacts over a recording: places the lower scan by each frame's pose, finds
     /// where the arches penetrate or come within a threshold, groups them into regions

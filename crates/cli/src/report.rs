@@ -35,7 +35,8 @@ pub(crate) struct ReportArgs {
     /// `chromium-browser` or `google-chrome` on the PATH).
     #[arg(long, value_name = "FILE")]
     pdf: Option<PathBuf>,
-    /// The registration file (`jawtrack register`), for --points.
+    /// The registration file (`jawtrack register`): places the scans, for --points and for
+    /// --maxilla/--mandible.
     #[arg(long, value_name = "FILE")]
     registration: Option<PathBuf>,
     #[command(flatten)]
