@@ -27,6 +27,74 @@ pub(crate) fn parse_window(s: &str) -> Result<Window, String> {
     Ok(Window { from, to })
 }
 
+/// Where each movement was made in a recording, FROM:TO in seconds of the frames' `t`: the
+/// flags `articulator` and `report` share.
+#[derive(Args, Clone, Copy, Debug)]
+pub(crate) struct MovementArgs {
+    /// The protrusion's window, FROM:TO (s): the condylar inclination per side and the
+    /// protrusive incisal guidance.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    pub(crate) protrusion: Option<Window>,
+    /// The laterotrusion toward the patient's left (s): the right condyle's Bennett angle and
+    /// side shift, the lateral guidance toward the left.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    pub(crate) left: Option<Window>,
+    /// The laterotrusion toward the patient's right (s): the left condyle's Bennett angle and
+    /// side shift, the lateral guidance toward the right.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    pub(crate) right: Option<Window>,
+    /// The jaw held in centric occlusion (s): guided back into centric relation and closed to
+    /// the first tooth contact. With it, the CO–MI slide into the bite is measured.
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    pub(crate) co: Option<Window>,
+    /// The jaw held in maximal intercuspation (s), for --co; default: the closed jaw (--rest-frame,
+    /// else the bite accepted while recording, else the first frame with a jaw pose).
+    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
+    pub(crate) mi: Option<Window>,
+}
+
+/// The poses of each movement given.
+pub(crate) struct MovementPoses {
+    /// The protrusion, the laterotrusions toward the left and the right.
+    pub(crate) border: [Option<Vec<Pose>>; 3],
+    /// Centric occlusion and maximal intercuspation as held positions: each the mean pose of
+    /// its window (`None` for MI without --mi: the closed jaw).
+    pub(crate) co: Option<Pose>,
+    pub(crate) mi: Option<Pose>,
+}
+
+impl MovementArgs {
+    /// Whether a border movement is given.
+    pub(crate) fn any_border(&self) -> bool {
+        self.protrusion.is_some() || self.left.is_some() || self.right.is_some()
+    }
+
+    /// The poses of each window given in `rec` (named `name`), refusing a window without one.
+    pub(crate) fn poses(&self, rec: &Recording, name: &str) -> Result<MovementPoses> {
+        let windows = [
+            ("--protrusion", self.protrusion),
+            ("--left", self.left),
+            ("--right", self.right),
+            ("--co", self.co),
+            ("--mi", self.mi),
+        ];
+        let mut poses: Vec<Option<Vec<Pose>>> = Vec::new();
+        for (flag, w) in windows {
+            let p = w.map(|w| poses_in(rec, w));
+            if let (Some(w), Some(p)) = (w, &p)
+                && p.is_empty()
+            {
+                bail!("{flag} {}:{}: no frame of {name} in that window has a jaw pose", w.from, w.to);
+            }
+            poses.push(p);
+        }
+        let held = |k: usize| poses[k].as_deref().and_then(mean_pose);
+        let (co, mi) = (held(3), held(4));
+        let mut it = poses.into_iter();
+        Ok(MovementPoses { border: [it.next().flatten(), it.next().flatten(), it.next().flatten()], co, mi })
+    }
+}
+
 /// Arguments of `jawtrack articulator`.
 #[derive(Args)]
 pub(crate) struct ArticulatorArgs {
@@ -35,26 +103,8 @@ pub(crate) struct ArticulatorArgs {
     recording: PathBuf,
     #[command(flatten)]
     session: SessionArg,
-    /// The protrusion's window, FROM:TO (s): the condylar inclination per side and the
-    /// protrusive incisal guidance.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    protrusion: Option<Window>,
-    /// The laterotrusion toward the patient's left (s): the right condyle's Bennett angle and
-    /// side shift, the lateral guidance toward the left.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    left: Option<Window>,
-    /// The laterotrusion toward the patient's right (s): the left condyle's Bennett angle and
-    /// side shift, the lateral guidance toward the right.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    right: Option<Window>,
-    /// The jaw held in centric occlusion (s): guided back into centric relation and closed to
-    /// the first tooth contact. With it, the CO–MI slide into the bite is measured.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    co: Option<Window>,
-    /// The jaw held in maximal intercuspation (s), for --co; default: the closed jaw (--rest-frame,
-    /// else the bite accepted while recording, else the first frame with a jaw pose).
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
-    mi: Option<Window>,
+    #[command(flatten)]
+    moves: MovementArgs,
     /// The frame (its `frame` number) of the closed jaw every movement is measured from;
     /// default: the bite accepted while recording, else the first frame with a jaw pose.
     #[arg(long)]
@@ -89,14 +139,14 @@ pub(crate) fn warn_if_nominal(rec: &Recording, what: &str) {
 }
 
 /// The poses in `w`.
-pub(crate) fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
+fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
     rec.frames.iter().filter(|f| w.holds(f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
 }
 
 /// Runs `jawtrack articulator`.
 pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     let name_of = a.recording.display();
-    if a.protrusion.is_none() && a.left.is_none() && a.right.is_none() && a.co.is_none() {
+    if !a.moves.any_border() && a.moves.co.is_none() {
         bail!(
             "give the window of at least one movement: --protrusion FROM:TO, --left FROM:TO or --right FROM:TO (s), \
              or of centric occlusion: --co FROM:TO"
@@ -110,28 +160,17 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     warn_if_nominal(&rec, "the condylar inclinations moved 7–22° and the side shifts 1–1.5 mm");
     let rest = rest_of(&rec, a.rest_frame)?
         .with_context(|| format!("{name_of}: no frame has a jaw pose (both markers tracked)"))?;
-    let windows =
-        [("--protrusion", a.protrusion), ("--left", a.left), ("--right", a.right), ("--co", a.co), ("--mi", a.mi)];
-    let poses: Vec<Option<Vec<Pose>>> = windows.iter().map(|(_, w)| w.map(|w| poses_in(&rec, w))).collect();
-    for ((flag, w), p) in windows.iter().zip(&poses) {
-        if let (Some(w), Some(p)) = (w, p)
-            && p.is_empty()
-        {
-            bail!("{flag} {}:{}: no frame of {name_of} in that window has a jaw pose", w.from, w.to);
-        }
-    }
+    let moved = a.moves.poses(&rec, &name_of.to_string())?;
     let movements = Movements {
-        protrusion: poses[0].as_deref(),
-        toward_left: poses[1].as_deref(),
-        toward_right: poses[2].as_deref(),
+        protrusion: moved.border[0].as_deref(),
+        toward_left: moved.border[1].as_deref(),
+        toward_right: moved.border[2].as_deref(),
     };
     let options = ArticulatorOptions { over_mm: a.over_mm, ..ArticulatorOptions::default() };
     let anatomy = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
     let v = ArticulatorValues::measure(&anatomy.mounting, &rest.pose(), &movements, &options)
         .with_context(|| format!("{name_of}"))?;
-    // Each held position is the mean of its window's poses.
-    let held = |k: usize| poses[k].as_deref().and_then(mean_pose);
-    let slide = held(3).map(|co| co_mi(&anatomy.mounting, &co, &held(4).unwrap_or_else(|| rest.pose())));
+    let slide = moved.co.map(|co| co_mi(&anatomy.mounting, &co, &moved.mi.unwrap_or_else(|| rest.pose())));
     let mut report = to_json(&v, a, &options, &anatomy, rest.to_json());
     if let (Some(s), Value::Object(o)) = (slide, &mut report) {
         o.insert("co_mi".into(), co_mi_json(&s));
@@ -140,11 +179,11 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     if a.json {
         say!("{report}");
     } else {
-        if a.protrusion.is_some() || a.left.is_some() || a.right.is_some() {
+        if a.moves.any_border() {
             print_summary(&v, &options, &anatomy, &rest.describe());
         }
         if let Some(s) = slide {
-            let mi = if a.mi.is_some() { "the --mi window".to_string() } else { rest.describe() };
+            let mi = if a.moves.mi.is_some() { "the --mi window".to_string() } else { rest.describe() };
             print_co_mi(&s, &mi);
         }
     }
@@ -200,8 +239,8 @@ fn to_json(
         "protrusive_incisal_guidance_deg": v.protrusive_guidance_deg,
         "lateral_incisal_guidance_deg": {"toward_left": v.lateral_guidance_deg[0], "toward_right": v.lateral_guidance_deg[1]},
         "windows_s": {
-            "protrusion": window(a.protrusion), "left": window(a.left), "right": window(a.right),
-            "co": window(a.co), "mi": window(a.mi),
+            "protrusion": window(a.moves.protrusion), "left": window(a.moves.left), "right": window(a.moves.right),
+            "co": window(a.moves.co), "mi": window(a.moves.mi),
         },
         "rest": rest,
         "recording": a.recording.to_string_lossy(),

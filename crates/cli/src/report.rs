@@ -1,7 +1,7 @@
 //! `jawtrack report`: one self-contained HTML report of a session (`jawtrack_report`), and a PDF
 //! of it through headless Chromium when asked.
 
-use crate::articulator::{parse_window, poses_in};
+use crate::articulator::{MovementArgs, parse_window};
 use crate::contacts::{UNSIDED, load_arch, tooth_places};
 use crate::export::{SessionArg, load, rest_of};
 use crate::output::ForceArgs;
@@ -15,7 +15,6 @@ use jawtrack_occlusion::session::ContactSession;
 use jawtrack_occlusion::teeth::ToothTotals;
 use jawtrack_pose::Pose;
 use jawtrack_report::{Anatomy, Centric, ContactsResult, Inputs, Windows};
-use jawtrack_tracker::registration::mean_pose;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -48,21 +47,8 @@ pub(crate) struct ReportArgs {
     /// A slow opening from the closed jaw: the hinge axis.
     #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
     opening: Option<Window>,
-    /// A protrusion from the closed jaw: condylar inclination, protrusive guidance.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    protrusion: Option<Window>,
-    /// A laterotrusion toward the patient's left.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    left: Option<Window>,
-    /// A laterotrusion toward the patient's right.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    right: Option<Window>,
-    /// The jaw held in centric occlusion: the CO–MI slide.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    co: Option<Window>,
-    /// The jaw held in maximal intercuspation, for --co; default: the closed jaw.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
-    mi: Option<Window>,
+    #[command(flatten)]
+    moves: MovementArgs,
     /// The upper arch's scan (STL, PLY or OBJ, mm), or one file per tooth (`FDI=NN` in the
     /// names gives the tooth numbers): the report checks the occlusal contacts of
     /// --contact-frames frames through --registration, and shows their maps and per-tooth
@@ -125,17 +111,10 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
     let rec = load(&a.recording, a.session)?;
     let rest = rest_of(&rec, a.rest_frame)?
         .with_context(|| format!("{name}: no frame has a jaw pose (both markers tracked): nothing to report"))?;
-    let held = |flag: &str, w: Window| {
-        mean_pose(&poses_in(&rec, w))
-            .with_context(|| format!("{flag} {}:{}: no frame of {name} in that window has a jaw pose", w.from, w.to))
-    };
-    let centric = match a.co {
-        Some(w) => Some(Centric {
-            co: held("--co", w)?,
-            mi: a.mi.map(|m| held("--mi", m)).transpose()?.unwrap_or_else(|| rest.pose()),
-            co_window: w,
-        }),
-        None => None,
+    let moved = a.moves.poses(&rec, &name.to_string())?;
+    let centric = match (a.moves.co, moved.co) {
+        (Some(co_window), Some(co)) => Some(Centric { co, mi: moved.mi.unwrap_or_else(|| rest.pose()), co_window }),
+        _ => None,
     };
     let contacts = match &a.contacts {
         Some(dir) => Some(read_contacts(dir)?),
@@ -156,7 +135,12 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
         },
         rest: rest.pose(),
         rest_words: rest.describe(),
-        windows: Windows { opening: a.opening, protrusion: a.protrusion, left: a.left, right: a.right },
+        windows: Windows {
+            opening: a.opening,
+            protrusion: a.moves.protrusion,
+            left: a.moves.left,
+            right: a.moves.right,
+        },
         centric,
         contacts,
         made_unix_s: std::time::SystemTime::now()
