@@ -31,6 +31,7 @@ import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
 import { mergeVertices } from 'three/addons/utils/BufferGeometryUtils.js';
 import { grid, headMatrix, hingeAxis, markerGroup, viewDirections } from './anatomy.js';
+import { PointPicker } from './pick.js';
 
 const LIVE_TRACE_POINTS = 2000;
 const RECONNECT_MS = 2000;
@@ -83,6 +84,29 @@ const hook = {
     const d = viewDirections(head);
     return Object.fromEntries(Object.entries(d).map(([k, v]) => [k, v.toCamera.toArray()]));
   },
+  // Picks on the scans where the middle of triangle `k` (modulo their number) of scan `name`
+  // shows, as a click there would; returns the hit in the scene and in the upper scan's frame.
+  pickTriangle: (name, k) => {
+    const o = scene.getObjectByName(`${name}-mesh`);
+    if (!o || !picker) return null;
+    let mesh = null;
+    o.traverse((m) => {
+      if (!mesh && m.isMesh) mesh = m;
+    });
+    if (!mesh) return null;
+    scene.updateMatrixWorld(true);
+    const g = mesh.geometry;
+    const positions = g.getAttribute('position');
+    const triangles = g.index ? g.index.count / 3 : positions.count / 3;
+    const t = k % triangles;
+    const corner = (i) => (g.index ? g.index.getX(3 * t + i) : 3 * t + i);
+    const p = new THREE.Vector3();
+    for (let i = 0; i < 3; i++) p.add(new THREE.Vector3().fromBufferAttribute(positions, corner(i)));
+    const ndc = p.divideScalar(3).applyMatrix4(mesh.matrixWorld).project(camera);
+    return picker.pickAt(ndc.x, ndc.y);
+  },
+  startPicking: () => picker && picker.start(),
+  pickCommand: () => (picker ? picker.command() : null),
   coloured: (name) => {
     let found = false;
     const o = scene.getObjectByName(`${name}-mesh`);
@@ -250,6 +274,9 @@ class Trace {
 
 let trace = new Trace(LIVE_TRACE_POINTS);
 scene.add(trace.line);
+
+// Picking the anatomical points on the scans (null without scans).
+let picker = null;
 
 // The condyles' paths (replay), left and right.
 let condyleTraces = [];
@@ -848,6 +875,50 @@ function makeControls() {
   });
 }
 
+// Picking the points of `jawtrack points` on the scans: a click (not a drag) picks.
+function setupPicking(spec) {
+  const isScan = (name) => spec[name] && spec[name].format !== 'mesh';
+  if (!isScan('maxilla')) return;
+  const scans = () => ['maxilla', 'mandible'].map((n) => scene.getObjectByName(`${n}-mesh`)).filter(Boolean);
+  picker = new PointPicker({
+    camera,
+    targets: scans,
+    upper: () => scene.getObjectByName('maxilla-mesh'),
+    onChange: showPicking,
+  });
+  $('pick-section').hidden = false;
+  $('pick').addEventListener('click', () => (picker.active ? picker.stop() : picker.start()));
+  const canvas = renderer.domElement;
+  let down = null;
+  canvas.addEventListener('pointerdown', (e) => {
+    down = [e.clientX, e.clientY];
+  });
+  canvas.addEventListener('pointerup', (e) => {
+    if (!picker.active || !down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
+    const r = canvas.getBoundingClientRect();
+    const x = ((e.clientX - r.left) / r.width) * 2 - 1;
+    const y = -((e.clientY - r.top) / r.height) * 2 + 1;
+    if (!picker.pickAt(x, y)) showToast('Nothing there: click on a scan.', 'warn');
+  });
+  showPicking(picker);
+}
+
+function showPicking(p) {
+  $('pick').textContent = p.active ? 'Stop picking' : 'Pick points on the scans';
+  const next = p.next();
+  $('pick-step').textContent = p.active && next ? `Click ${next}.` : '';
+  $('pick-list').replaceChildren(
+    ...p.points.map((q) => {
+      const li = document.createElement('li');
+      li.textContent = q.toArray().map((c) => c.toFixed(2)).join(', ');
+      return li;
+    }),
+  );
+  const command = p.command();
+  $('pick-command').hidden = !command;
+  $('pick-command').textContent = command || '';
+}
+
 // The markers with their tags on both jaws, the grid in the occlusal plane, the hinge axis.
 function addAnatomy(spec) {
   const tags = spec.tags || {};
@@ -906,6 +977,7 @@ async function main() {
 
   head = headMatrix(sceneSpec.maxilla_from_head);
   addAnatomy(sceneSpec);
+  setupPicking(sceneSpec);
   makeControls();
   $('fit-view').addEventListener('click', () => {
     userMovedCamera = false;

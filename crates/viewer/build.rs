@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The page's own files, served at `/NAME`.
-const PAGE: [&str; 4] = ["index.html", "viewer.js", "anatomy.js", "style.css"];
+const PAGE: [&str; 5] = ["index.html", "viewer.js", "anatomy.js", "pick.js", "style.css"];
 /// The three.js files the page imports (its import map and their own imports), under
 /// `node_modules/three`, served at `/vendor/three/…`.
 const THREE: [&str; 7] = [

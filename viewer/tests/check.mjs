@@ -287,6 +287,27 @@ try {
       if (!(dot > 0.99)) fail(`the ${name} view looks from ${got.map((v) => v.toFixed(2))}, not ${want[name].map((v) => v.toFixed(2))}`);
     }
     await page.click('#fit-view');
+    // With scans: the four points of `jawtrack points` picked where scan triangles show, each
+    // read back in the upper scan's frame (the registration's placement maps it to the hit).
+    const scanSpec = await page.evaluate(async () => (await (await fetch('/api/scene')).json()).maxilla);
+    if (scanSpec && scanSpec.format !== 'mesh' && Array.isArray(scanSpec.marker_from_mesh)) {
+      const picks = await page.evaluate(() => {
+        window.jawtrack.startPicking();
+        return [0, 40, 80, 120].map((k, i) => window.jawtrack.pickTriangle(i < 3 ? 'maxilla' : 'mandible', k));
+      });
+      const m = scanSpec.marker_from_mesh;
+      picks.forEach((p, i) => {
+        if (!p) fail(`pick ${i + 1} hit no scan`);
+        const w = [0, 1, 2].map((r) => m[4 * r] * p.scan[0] + m[4 * r + 1] * p.scan[1] + m[4 * r + 2] * p.scan[2] + m[4 * r + 3]);
+        const off = Math.max(...w.map((v, k) => Math.abs(v - p.world[k])));
+        if (!(off < 1e-3)) fail(`pick ${i + 1} is not in the upper scan's frame (off by ${off} mm): ${JSON.stringify(p)}`);
+      });
+      const command = await page.evaluate(() => window.jawtrack.pickCommand());
+      const numbers = (command || '').match(/-?\d+(\.\d+)?/g) || [];
+      if (!command || !command.startsWith('jawtrack points --occlusal ') || numbers.length !== 12) {
+        fail(`the picked points give no command: ${command}`);
+      }
+    }
     posesApplied = await page.evaluate(() => window.jawtrack.posesApplied);
 
     // Let at least two frames render after the last pose/seek.

@@ -403,6 +403,7 @@ impl LiveServer {
                     .route_service("/", ServeFile::new(dir.join("index.html")))
                     .route_service("/viewer.js", ServeFile::new(dir.join("viewer.js")))
                     .route_service("/anatomy.js", ServeFile::new(dir.join("anatomy.js")))
+                    .route_service("/pick.js", ServeFile::new(dir.join("pick.js")))
                     .route_service("/style.css", ServeFile::new(dir.join("style.css")))
                     .nest_service("/vendor/three", ServeDir::new(dir.join("node_modules/three")));
             }
@@ -646,6 +647,7 @@ mod tests {
         for path in [
             "/viewer.js",
             "/anatomy.js",
+            "/pick.js",
             "/style.css",
             "/vendor/three/build/three.module.js",
             "/vendor/three/build/three.core.js",
@@ -655,7 +657,7 @@ mod tests {
         }
         assert!(get(addr, "/vendor/three/package.json").0.contains("404"), "only what the page imports");
         // Every module the page imports is in the program.
-        for script in ["/viewer.js", "/anatomy.js"] {
+        for script in ["/viewer.js", "/anatomy.js", "/pick.js"] {
             let page = String::from_utf8_lossy(page::FILES.iter().find(|f| f.0 == script).expect("the script").2);
             for line in page.lines().filter(|l| l.starts_with("import ")) {
                 let Some(module) = line.split('\'').nth(1) else { continue };
