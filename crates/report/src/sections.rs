@@ -4,7 +4,7 @@
 use crate::html::{esc, facts, figure, not_measured, page, section, table};
 use crate::{BLUE, GREEN, Inputs, Report, Window};
 use jawtrack_kinematics::articulator::name as side_name;
-use jawtrack_kinematics::border::{self, Border, tag};
+use jawtrack_kinematics::border::{Border, LANDMARK_MIN_MM, tag};
 
 use jawtrack_kinematics::metrics::{RETRUSION_OPENING_MM, count_openings};
 use jawtrack_kinematics::{
@@ -294,10 +294,12 @@ fn incisor_section(m: &Metrics, path: &[Sample]) -> String {
 }
 
 fn border_section(m: &Metrics, path: &[Sample]) -> String {
-    let mut s = String::from(
+    let mut s = format!(
         "<p>The border is the outermost path the lower incisal point traced, seen from inside the region it \
-         covers (not a convex hull): it follows the path into concave parts. Landmarks are the extremes; \
-         the movements between neighbouring landmarks are named below each plot.</p><div class=\"plots\">",
+         covers (not a convex hull): it follows the path into concave parts. Landmarks are the extremes of \
+         {} mm or more; the movements between neighbouring landmarks are named below each plot.</p>\
+         <div class=\"plots\">",
+        fixed(LANDMARK_MIN_MM, 1)
     );
     let mut rows = Vec::new();
     let mut landmarks = Vec::new();
@@ -312,19 +314,17 @@ fn border_section(m: &Metrics, path: &[Sample]) -> String {
         );
         s += &figure(&crate::border_chart(&b, path).to_string(), &caption);
         rows.push(vec![view.name().into(), format!("{} mm²", fixed(b.area_mm2, 1)), b.outline.len().to_string()]);
-        if view == PlaneView::Sagittal {
-            landmarks = b.landmarks.iter().map(|l| (l.name, l.frame, l.t)).collect();
+        for l in &b.landmarks {
+            if !landmarks.iter().any(|(n, _, _)| *n == l.name) {
+                landmarks.push((l.name, l.frame, l.t));
+            }
         }
     }
     s += "</div>";
     s += &table(&["plane", "area inside the border", "border points"], &rows);
     // Where each landmark is, in all three coordinates.
     let d_at = |frame: u64| path.iter().find(|(_, f, _)| *f == frame).map(|(_, _, d)| *d);
-    let mut all = landmarks;
-    for extra in [(border::MAX_LEFT, m.max_left), (border::MAX_RIGHT, m.max_right)] {
-        all.push((extra.0, extra.1.frame, extra.1.t));
-    }
-    let rows: Vec<Vec<String>> = all
+    let rows: Vec<Vec<String>> = landmarks
         .iter()
         .map(|&(name, frame, t)| {
             let d = if t.is_finite() {
