@@ -223,11 +223,10 @@ fn quality(inputs: &Inputs, with_pose: usize, warnings: &[String]) -> String {
     let rms = |body: fn(&jawtrack_recording::FrameRecord) -> Option<f64>| {
         let mut v: Vec<f64> = rec.frames.iter().filter_map(body).collect();
         v.sort_by(f64::total_cmp);
-        if v.is_empty() {
-            return "—".into();
-        }
+        let Some(mid) = median(v.iter().copied()) else { return "—".into() };
+        // The nearest rank.
         let p95 = v[((v.len() - 1) as f64 * 0.95).round() as usize];
-        format!("median {} px, 95th percentile {} px", fixed(v[v.len() / 2], 3), fixed(p95, 3))
+        format!("median {} px, 95th percentile {} px", fixed(mid, 3), fixed(p95, 3))
     };
     let mut flags: Vec<(String, usize)> = Vec::new();
     for f in rec.frames.iter().flat_map(|f| &f.flags) {

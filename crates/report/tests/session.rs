@@ -6,7 +6,7 @@ use jawtrack_recording::{Recording, RecordingHeader, read_recording};
 use jawtrack_report::{Anatomy, Centric, Inputs, Windows, render};
 use jawtrack_synth::scenes::guided::ClinicalSession;
 use jawtrack_synth::scenes::{Guidance, Rig};
-use serde_json::json;
+use serde_json::{Value, json};
 
 const GUIDANCE: Guidance = Guidance {
     condylar_inclination_deg: 37.0,
@@ -133,4 +133,58 @@ fn sections_without_their_movement_say_which_flag_fills_them() {
         assert!(r.html.contains(flag), "{flag}");
     }
     assert_eq!(r.html.matches("Not measured").count(), 4);
+}
+
+#[test]
+fn quality_numbers_are_the_recording_s() {
+    // 20 frames at 20 frames/s; frames 8–18 lose the mandible (a 0.60 s pause, 9 of 20 with a
+    // jaw pose); the maxilla's reprojection error is 0.01 px × (frame + 1); the nominal marker.
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 20.0, 0.0);
+    let mut header = RecordingHeader::new("quality test");
+    header.marker = serde_json::from_str(&jawtrack_marker::Marker::default().to_json()).ok();
+    let mut lines = vec![header.to_line()];
+    for k in 0..20usize {
+        let (t, pose) = session.poses[k];
+        let body = json!({"camera_from_body": pose, "tags": [0, 1], "rms_px": 0.01 * (k + 1) as f64});
+        let lost = (8..=18).contains(&k);
+        lines.push(
+            json!({"frame": k, "t": t, "maxilla": body, "mandible": if lost { Value::Null } else { body.clone() },
+                "maxilla_from_mandible": if lost { Value::Null } else { json!(pose) },
+                "flags": if lost { vec!["mandible:lost"] } else { vec![] }})
+            .to_string(),
+        );
+    }
+    let rec = read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording");
+    let rest = session.poses[0].1;
+    let inputs = Inputs {
+        recording: &rec,
+        recording_name: "q.jsonl".into(),
+        anatomy: Anatomy {
+            mounting: Mounting::default(),
+            reference_plane: "p".into(),
+            landmarks: "l".into(),
+            points_file: Some("points.json".into()),
+            registration_file: Some("reg.json".into()),
+        },
+        rest,
+        rest_words: "frame 0".into(),
+        windows: Windows::default(),
+        centric: None,
+        contacts: None,
+        made_unix_s: 1.7e9,
+    };
+    let r = render(&inputs);
+    assert_eq!(r.warnings.len(), 3, "{:?}", r.warnings);
+    assert!(r.warnings[0].contains("only 9 of 20 frames (45 %)"), "{:?}", r.warnings);
+    assert!(r.warnings[1].contains("paused for 0.60 s"), "{:?}", r.warnings);
+    assert!(r.warnings[2].contains("nominal marker"), "{:?}", r.warnings);
+    assert!(r.html.contains("<td>9 of 20 (45.0 %)</td>"));
+    assert!(r.html.contains("<td>0.600 s</td>"), "the longest pause");
+    // Sorted errors 0.01…0.20: the upper middle value and the nearest-rank 95th percentile.
+    assert!(r.html.contains("<td>median 0.110 px, 95th percentile 0.190 px</td>"));
+    // The mandible's, over the 9 frames it was seen: 0.01–0.08 and 0.20.
+    assert!(r.html.contains("<td>median 0.050 px, 95th percentile 0.200 px</td>"));
+    assert!(r.html.contains("<td>mandible:lost</td><td>11</td>"));
+    assert!(r.html.contains("nominal (the ideal solid"), "the marker named");
 }
