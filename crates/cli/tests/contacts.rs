@@ -10,7 +10,7 @@ use serde_json::{Value, json};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 mod common;
-use common::{jawtrack, ok, refused, s};
+use common::{identity_bite, jawtrack, ok, refused, s};
 
 /// The height of the legend strip under each occlusal view (the binary's `LEGEND_PX`).
 const LEGEND_PX: u32 = 36;
@@ -262,7 +262,7 @@ fn per_tooth_meshes_tag_their_regions() {
         s(&t36),
         s(&t37),
         "--poses",
-        s(&write_identity(dir.path())),
+        s(&identity_bite(dir.path())),
         "--out",
         s(&out),
     ]));
@@ -305,18 +305,12 @@ fn per_tooth_meshes_tag_their_regions() {
     assert!(upper_map.contains("side is unknown"));
 }
 
-fn write_identity(dir: &Path) -> PathBuf {
-    let p = dir.join("identity.jsonl");
-    std::fs::write(&p, frame(0, 0.0, Some(0.0)) + "\n").expect("write poses");
-    p
-}
-
 #[test]
 fn bad_input_is_refused_with_a_message_saying_what_is_wrong() {
     let dir = tempfile::tempdir().expect("temp dir");
     let upper = upper_stl(dir.path(), 20);
     let lower = lower_obj(dir.path(), 0.2, 16);
-    let poses = write_identity(dir.path());
+    let poses = identity_bite(dir.path());
     let out = dir.path().join("out");
     let run = |upper: &Path, lower: &Path, poses: &Path, extra: &[&str]| {
         let mut args = vec!["contacts", "--maxilla", s(upper), "--mandible", s(lower), "--poses", s(poses)];

@@ -11,7 +11,7 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 mod common;
-use common::{jawtrack, ok, refused, s};
+use common::{identity_bite, jawtrack, ok, refused, s};
 
 const SECTIONS: &str = "session,quality,incisor,border,condyles,hinge,articulator,co-mi,contacts,definitions";
 
@@ -123,9 +123,7 @@ fn a_contacts_folder_puts_its_maps_and_teeth_in_the_report() {
         p
     };
     let (t36, t46) = (tooth("lower_FDI=36.ply", -2.5), tooth("lower_FDI=46.ply", 2.5));
-    let poses = dir.path().join("bite.jsonl");
-    std::fs::write(&poses, "{\"frame\":0,\"t\":0,\"maxilla_from_mandible\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}\n")
-        .expect("write");
+    let poses = identity_bite(dir.path());
     let found = dir.path().join("contacts");
     ok(&jawtrack(&[
         "contacts",

@@ -10,7 +10,7 @@ use std::net::{TcpListener, UdpSocket};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 mod common;
-use common::{jawtrack, refused, s};
+use common::{identity_bite, jawtrack, refused, s};
 
 /// Each scan a few millimetres and degrees off its marker (row-major 4x4 poses).
 const REGISTRATION: &str = r#"{"version": 1, "units": "mm",
@@ -181,9 +181,7 @@ fn contacts_folder(dir: &Path) -> PathBuf {
     scenes::patch(10.0, 60, 0.0, true).write_coloured_ply(&upper, &[]).expect("write");
     let lower = dir.join("lower.ply");
     scenes::sphere(nalgebra::Point3::new(0.0, 0.0, -1.8), 2.0, 30).write_coloured_ply(&lower, &[]).expect("write");
-    let poses = dir.join("bite.jsonl");
-    std::fs::write(&poses, "{\"frame\":0,\"t\":0,\"maxilla_from_mandible\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}\n")
-        .expect("write");
+    let poses = identity_bite(dir);
     let out = dir.join("contacts");
     let o = jawtrack(&[
         "contacts",

@@ -26,6 +26,28 @@ fn recording(s: &ClinicalSession) -> Recording {
     read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording")
 }
 
+/// The inputs of `rec` with the standard mounting, the jaw closed at `rest`, nothing else
+/// given.
+fn inputs<'a>(rec: &'a Recording, name: &str, rest: jawtrack_pose::Pose) -> Inputs<'a> {
+    Inputs {
+        recording: rec,
+        recording_name: name.into(),
+        anatomy: Anatomy {
+            mounting: Mounting::default(),
+            reference_plane: "the standard plane".into(),
+            landmarks: "the standard landmarks".into(),
+            points_file: None,
+            registration_file: None,
+        },
+        rest,
+        rest_words: "frame 0".into(),
+        windows: Windows::default(),
+        centric: None,
+        contacts: None,
+        made_unix_s: 1.7e9,
+    }
+}
+
 fn window((from, to): (f64, f64)) -> Option<Window> {
     Some(Window { from, to })
 }
@@ -38,17 +60,6 @@ fn the_report_prints_the_programmed_session() {
     let rest = rec.frames[0].maxilla_from_mandible.expect("a pose");
     let co = session.poses.iter().find(|(t, _)| *t > session.co.0).expect("held").1;
     let inputs = Inputs {
-        recording: &rec,
-        recording_name: "session <1>.jsonl".into(),
-        anatomy: Anatomy {
-            mounting: Mounting::default(),
-            reference_plane: "the standard plane".into(),
-            landmarks: "the standard landmarks".into(),
-            points_file: None,
-            registration_file: None,
-        },
-        rest,
-        rest_words: "frame 0".into(),
         windows: Windows {
             opening: window(session.opening),
             protrusion: window(session.protrusion),
@@ -56,8 +67,7 @@ fn the_report_prints_the_programmed_session() {
             right: window(session.right),
         },
         centric: Some(Centric { co, mi: rest, co_window: Window { from: session.co.0, to: session.co.1 } }),
-        contacts: None,
-        made_unix_s: 1.7e9,
+        ..inputs(&rec, "session <1>.jsonl", rest)
     };
     let r = render(&inputs);
     for id in [
@@ -111,23 +121,7 @@ fn sections_without_their_movement_say_which_flag_fills_them() {
     let session = rig.clinical_session(&GUIDANCE, 10.0, 1.0);
     let rec = recording(&session);
     let rest = rec.frames[0].maxilla_from_mandible.expect("a pose");
-    let inputs = Inputs {
-        recording: &rec,
-        recording_name: "s.jsonl".into(),
-        anatomy: Anatomy {
-            mounting: Mounting::default(),
-            reference_plane: "p".into(),
-            landmarks: "l".into(),
-            points_file: None,
-            registration_file: None,
-        },
-        rest,
-        rest_words: "frame 0".into(),
-        windows: Windows::default(),
-        centric: None,
-        contacts: None,
-        made_unix_s: 1.7e9,
-    };
+    let inputs = inputs(&rec, "s.jsonl", rest);
     let r = render(&inputs);
     for flag in ["--opening FROM:TO", "--protrusion FROM:TO", "--co FROM:TO", "--contacts DIR"] {
         assert!(r.html.contains(flag), "{flag}");
@@ -157,23 +151,9 @@ fn quality_numbers_are_the_recording_s() {
     }
     let rec = read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording");
     let rest = session.poses[0].1;
-    let inputs = Inputs {
-        recording: &rec,
-        recording_name: "q.jsonl".into(),
-        anatomy: Anatomy {
-            mounting: Mounting::default(),
-            reference_plane: "p".into(),
-            landmarks: "l".into(),
-            points_file: Some("points.json".into()),
-            registration_file: Some("reg.json".into()),
-        },
-        rest,
-        rest_words: "frame 0".into(),
-        windows: Windows::default(),
-        centric: None,
-        contacts: None,
-        made_unix_s: 1.7e9,
-    };
+    let mut inputs = inputs(&rec, "q.jsonl", rest);
+    inputs.anatomy.points_file = Some("points.json".into());
+    inputs.anatomy.registration_file = Some("reg.json".into());
     let r = render(&inputs);
     assert_eq!(r.warnings.len(), 3, "{:?}", r.warnings);
     assert!(r.warnings[0].contains("only 9 of 20 frames (45 %)"), "{:?}", r.warnings);

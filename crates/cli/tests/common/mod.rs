@@ -30,3 +30,12 @@ pub fn refused(o: &Output, needle: &str) {
 pub fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
 }
+
+/// A one-frame poses file in `dir` whose lower scan sits where the upper scan's frame puts it
+/// (the identity pose): scans exported in occlusion, for `contacts`.
+pub fn identity_bite(dir: &Path) -> std::path::PathBuf {
+    let p = dir.join("identity.jsonl");
+    std::fs::write(&p, "{\"frame\":0,\"t\":0,\"maxilla_from_mandible\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}\n")
+        .expect("write poses");
+    p
+}
