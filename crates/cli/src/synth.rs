@@ -51,6 +51,11 @@ pub(crate) struct SynthArgs {
     /// upright, both markers in the same rows).
     #[arg(long)]
     landscape: bool,
+    /// Where the phone stands (mm from the markers): the static scene's one distance instead of
+    /// its 80/100/120 mm, the chew scene's instead of 120 mm (current Pro iPhones focus from
+    /// 15–20 cm).
+    #[arg(long, value_name = "MM")]
+    distance_mm: Option<f64>,
     /// Frames per camera view (static scene).
     #[arg(long, default_value_t = 2)]
     frames_per_view: usize,
@@ -120,6 +125,17 @@ pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfi
     if a.landscape && scene != SceneKind::Chew {
         bail!("--landscape applies to the chew scene only (the {} scene is filmed upright)", scene.name());
     }
+    if let Some(d) = a.distance_mm {
+        if !matches!(scene, SceneKind::Static | SceneKind::Chew) {
+            bail!(
+                "--distance-mm applies to the static and chew scenes only (the {} scene films from its own)",
+                scene.name()
+            );
+        }
+        if !(d.is_finite() && (30.0..=1000.0).contains(&d)) {
+            bail!("--distance-mm must be between 30 and 1000 mm, got {d}");
+        }
+    }
     let marker = match &a.marker {
         Some(p) => Marker::load(p)?,
         None => Marker::default(),
@@ -135,6 +151,7 @@ pub(crate) fn synth_config(a: &SynthArgs, scene: SceneKind) -> Result<SynthConfi
             cycles: a.cycles,
             fps: a.fps,
             orientation: if a.landscape { Orientation::Landscape } else { Orientation::Upright },
+            distance_mm: a.distance_mm,
         },
         marker,
         stride: a.stride,

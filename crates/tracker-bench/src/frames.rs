@@ -78,6 +78,7 @@ impl Request {
                 cycles: self.cycles,
                 fps: self.fps,
                 orientation: self.orientation,
+                distance_mm: None,
             },
             marker: Marker::default(),
             max_frames: self.max_frames,

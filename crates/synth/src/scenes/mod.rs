@@ -27,16 +27,18 @@ use std::f64::consts::TAU;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SceneKind {
-    /// Jaw at rest; camera at 80/100/120 mm, azimuth 0/30/60°, on a tripod and hand-held.
+    /// Jaw at rest; camera at 80/100/120 mm (or [`SceneOptions::distance_mm`]), azimuth
+    /// 0/30/60°, on a tripod and hand-held.
     Static,
     /// Hinge opening about the condylar axis to 10/20/30/40 mm at the incisors, in rounds of
     /// the four openings.
     Hinge,
     /// Left, right and protrusive glides of 4–6 mm.
     Excursion,
-    /// Fast chewing on a tripod 120 mm straight in front of the markers: cycles of 0.6–0.8 s
-    /// opening 15–25 mm with a 3–6 mm sideways swing, the first one fast enough that the
-    /// incisor passes 100 mm/s; phone upright or landscape ([`SceneOptions::orientation`]).
+    /// Fast chewing on a tripod 120 mm (or [`SceneOptions::distance_mm`]) straight in front of
+    /// the markers: cycles of 0.6–0.8 s opening 15–25 mm with a 3–6 mm sideways swing, the first
+    /// one fast enough that the incisor passes 100 mm/s; phone upright or landscape
+    /// ([`SceneOptions::orientation`]).
     /// At 1080p (1080 rows, row 539.5 read at the frame's time), with the jaw closed, the
     /// markers' centres fall in these rows:
     /// - upright: both in row 539.5, read together; the swing moves the mandible marker
@@ -441,13 +443,22 @@ pub struct SceneOptions {
     pub fps: f64,
     /// How the phone is held in the chew scene (the others are filmed upright).
     pub orientation: Orientation,
+    /// Where the phone stands (mm from the markers): the static scene's one distance in place
+    /// of its 80/100/120 mm, the chew scene's in place of 120 mm; `None` keeps the scenes' own.
+    /// A phone that cannot focus closer than 15–20 cm films from there.
+    pub distance_mm: Option<f64>,
 }
 
 impl Default for SceneOptions {
     fn default() -> Self {
-        SceneOptions { frames_per_view: 2, cycles: 2, fps: 30.0, orientation: Orientation::Upright }
+        SceneOptions { frames_per_view: 2, cycles: 2, fps: 30.0, orientation: Orientation::Upright, distance_mm: None }
     }
 }
+
+/// The static scene's distances (mm) when [`SceneOptions::distance_mm`] does not set one.
+const STATIC_DISTANCES_MM: [f64; 3] = [80.0, 100.0, 120.0];
+/// The chew scene's distance (mm) when [`SceneOptions::distance_mm`] does not set one.
+const CHEW_DISTANCE_MM: f64 = 120.0;
 
 /// The frames of one movement cycle of `period` seconds from `start`, `dt` apart.
 fn one_cycle(start: f64, period: f64, dt: f64, view: View, motion: JawMotion) -> impl Iterator<Item = FrameSpec> {
@@ -484,8 +495,9 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
     match kind {
         SceneKind::Static => {
             let mut t = 0.0;
+            let distances = opts.distance_mm.map_or(STATIC_DISTANCES_MM.to_vec(), |d| vec![d]);
             for hand in [false, true] {
-                for distance in [80.0, 100.0, 120.0] {
+                for &distance in &distances {
                     for azimuth in [0.0, 30.0, 60.0] {
                         let view = View {
                             distance_mm: distance,
@@ -541,7 +553,7 @@ pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<Fram
         }
         SceneKind::Chew => {
             let view = View {
-                distance_mm: 120.0,
+                distance_mm: opts.distance_mm.unwrap_or(CHEW_DISTANCE_MM),
                 azimuth_deg: 0.0,
                 elevation_deg: 0.0,
                 target: CHEW_TARGET,

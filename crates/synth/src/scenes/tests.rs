@@ -244,3 +244,19 @@ fn the_border_scene_runs_each_guided_movement_out_and_back() {
         assert!(rig.jaw(&f.motion, f.t).translation().norm() < 1e-9);
     }
 }
+
+#[test]
+fn a_distance_puts_the_static_grid_and_the_chew_camera_there() {
+    let at = |d| SceneOptions { frames_per_view: 1, distance_mm: d, ..SceneOptions::default() };
+    let grid = scene_frames(SceneKind::Static, &at(Some(220.0)), 1);
+    // Azimuth 0/30/60°, tripod and hand: six views, all at 220 mm.
+    assert_eq!(grid.len(), 6);
+    assert!(grid.iter().all(|f| f.view.distance_mm == 220.0));
+    let azimuths: Vec<f64> = grid.iter().map(|f| f.view.azimuth_deg).collect();
+    assert_eq!(azimuths, [0.0, 30.0, 60.0, 0.0, 30.0, 60.0]);
+    assert_eq!(scene_frames(SceneKind::Static, &at(None), 1).len(), 18, "80/100/120 mm without one");
+    let chew = scene_frames(SceneKind::Chew, &SceneOptions { distance_mm: Some(250.0), ..SceneOptions::default() }, 1);
+    assert!(!chew.is_empty() && chew.iter().all(|f| f.view.distance_mm == 250.0));
+    let chew = scene_frames(SceneKind::Chew, &SceneOptions::default(), 1);
+    assert!(chew.iter().all(|f| f.view.distance_mm == 120.0));
+}
