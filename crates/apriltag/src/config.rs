@@ -100,6 +100,13 @@ pub struct DetectorConfig {
     /// tripod 4K frame's jaw moved 0.04 mm). The tracker turns it on for the frames in which
     /// it predicts a smear ([`crate::Detector::detect_in_with`]).
     pub smeared_edges: bool,
+    /// With `linear_edges`, re-fit each decoded tag's border by a model of its known pattern
+    /// under a Gaussian blur (the data cells one cell inside the border and the quiet zone's
+    /// edge one cell outside it, whose ramps overlap the border's once the blur nears a fifth
+    /// of a cell), and measure that blur ([`crate::Detection::blur_px`]): a small, steeply
+    /// tilted or defocused tag's corners then stay put. Costs a few Levenberg–Marquardt
+    /// iterations per side.
+    pub blur_aware_edges: bool,
     /// Sharpening of the decoded bit samples: helps small, blurred tags decode.
     pub decode_sharpening: f64,
     /// Bit errors corrected when decoding, 0–2. More recovers damaged tags and raises the
@@ -124,6 +131,7 @@ impl Default for DetectorConfig {
             refine_edges: true,
             linear_edges: true,
             smeared_edges: false,
+            blur_aware_edges: true,
             decode_sharpening: 0.25,
             max_hamming: 2,
             quad: QuadThreshold::default(),

@@ -404,7 +404,15 @@ mod tests {
                 });
                 let center =
                     [corners.iter().map(|c| c[0]).sum::<f64>() / 4.0, corners.iter().map(|c| c[1]).sum::<f64>() / 4.0];
-                Detection { id, hamming: 0, decision_margin: 100.0, center, corners, homography: [0.0; 9] }
+                Detection {
+                    id,
+                    hamming: 0,
+                    decision_margin: 100.0,
+                    center,
+                    corners,
+                    homography: [0.0; 9],
+                    blur_px: None,
+                }
             })
             .collect()
     }

@@ -19,7 +19,10 @@ use crate::workers::Workers;
 use edges::refine_edges;
 use std::sync::{Arc, Mutex, TryLockError};
 
+mod border;
 mod edges;
+
+pub use border::PIXEL_SIGMA_PX;
 
 /// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
 /// (0, 0); the C library reports 0.5 more).
@@ -38,6 +41,11 @@ pub struct Detection {
     pub corners: [[f64; 2]; 4],
     /// Homography from tag coordinates ([−1, 1]², y down) to pixels, row-major 3×3.
     pub homography: [f64; 9],
+    /// How blurred the tag's edges are (σ of a Gaussian, px), what the lens and motion add to
+    /// the pixel's own spread, read from its second-sharpest side (a side along the motion is
+    /// not smeared, so this is the lens's defocus); `None` when it was not measured
+    /// ([`DetectorConfig::blur_aware_edges`] off, or a side could not be fitted).
+    pub blur_px: Option<f64>,
 }
 
 /// A tag36h11 detector.
@@ -213,7 +221,7 @@ impl Detector {
             if c.refine_edges {
                 refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges, c.linear_edges && smeared);
             }
-            decode(&q).or_else(|| {
+            let d = decode(&q).or_else(|| {
                 // Our fit can be pulled off by a bright edge near a small tag (linear light
                 // weighs bright gradients most); C's fit may still read it, and then we
                 // report what C would: never fewer tags than C.
@@ -223,7 +231,8 @@ impl Detector {
                 let mut q = *q0;
                 refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false, false);
                 decode(&q)
-            })
+            })?;
+            Some(if c.linear_edges && c.blur_aware_edges { with_border_fit(im, lut, d, !smeared) } else { d })
         });
         let mut dets = reconcile(dets);
         // C sorts by id; ties keep a deterministic order here (by position).
@@ -254,6 +263,65 @@ impl Detector {
     }
 }
 
+/// A side is taken from the model fit of the border ([`border`]) where its blur (σ, the pixel's
+/// own spread included) exceeds this fraction of its cell: below it the gradient fit's line
+/// is as good or better (drawn tags: 0.005 against 0.01 px at 0.15 of a cell), above it the
+/// neighbouring cells' ramps pull the gradient fit off (0.07 px at 0.23, 0.46–0.72 px at 0.37;
+/// the model fit stays within 0.07 px; `border::tests`).
+const MODEL_SIDE_BLUR_PER_CELL: f64 = 0.17;
+/// … and where the model explains the image: its RMS residual within this fraction of the
+/// paper–ink contrast. Drawn tags under a Gaussian blur are fitted within 0.015 and sensor
+/// noise adds about as much; a tag smeared by motion (a ramp, not a Gaussian) or seen so
+/// steeply that its cells are a few pixels wide and deep misses by 0.1–4 there, and its model
+/// sides land 0.3–5 px off (`fixtures/hinge-1080p`).
+const MODEL_SIDE_MAX_MISFIT: f64 = 0.05;
+
+/// `d` with its blur measured, and (with `sides`) its sides from the model fit of its border
+/// where they are blurred enough for the neighbouring cells to pull the gradient fit off
+/// ([`MODEL_SIDE_BLUR_PER_CELL`]), when the fit succeeds and lands near the gradient fit
+/// (within a third of a cell: farther is not the same tag's border); else `d` as it was. A
+/// smeared frame keeps the ramp fit's sides: motion smears an edge into a ramp, not the
+/// Gaussian the model assumes (a tag smeared 8 px over 12 px cells: 0.065 px off with the
+/// model's sides, within 0.02 px with the ramp's).
+fn with_border_fit(im: &ImageView<'_>, lut: &[f64; 256], d: Detection, sides: bool) -> Detection {
+    let Some(fit) = border::fit_border(im, lut, d.id, &d.homography) else { return d };
+    let measured = Detection { blur_px: Some(fit.blur_px), ..d };
+    if !sides {
+        return measured;
+    }
+    let c = d.corners;
+    // The gradient fit's sides, as the border fit orders them: top, right, bottom, left.
+    let gradient = [[c[3], c[2]], [c[2], c[1]], [c[1], c[0]], [c[0], c[3]]];
+    let mut lines = gradient;
+    for (line, side) in lines.iter_mut().zip(&fit.sides) {
+        if side.sigma_px > MODEL_SIDE_BLUR_PER_CELL * side.cell_px && side.misfit < MODEL_SIDE_MAX_MISFIT {
+            *line = side.line;
+        }
+    }
+    if lines == gradient {
+        return measured;
+    }
+    let [top, right, bottom, left] = lines;
+    let corners = [
+        border::intersect(&bottom, &left),
+        border::intersect(&bottom, &right),
+        border::intersect(&top, &right),
+        border::intersect(&top, &left),
+    ];
+    let Some(corners) = corners.into_iter().collect::<Option<Vec<_>>>() else { return measured };
+    let corners: [[f64; 2]; 4] = [corners[0], corners[1], corners[2], corners[3]];
+    let distance = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let smallest_cell = (0..4).map(|i| distance(c[i], c[(i + 1) % 4])).fold(f64::INFINITY, f64::min) / 8.0;
+    let moved = c.iter().zip(&corners).map(|(a, b)| distance(*a, *b)).fold(0.0, f64::max);
+    if moved.is_nan() || moved > smallest_cell / 3.0 {
+        return measured;
+    }
+    let [bl, br, tr, tl] = corners;
+    let Some(homography) = homography_of([tl, tr, br, bl]) else { return measured };
+    let (cx, cy) = project(&homography, 0.0, 0.0);
+    Detection { corners, center: [cx, cy], homography, ..measured }
+}
+
 /// Pixel values as they are (what C uses).
 static IDENTITY: [f64; 256] = {
     let mut t = [0.0; 256];
@@ -277,11 +345,16 @@ static SRGB_TO_LINEAR: std::sync::LazyLock<[f64; 256]> = std::sync::LazyLock::ne
 /// (−1,1) to the quad's corners, by Gaussian elimination with partial pivoting. `None` when
 /// singular (as C's also gives up when the inverse does not exist).
 fn homography(q: &Quad) -> Option<[f64; 9]> {
+    homography_of(q.p.map(|p| p.map(f64::from)))
+}
+
+/// The homography taking tag coordinates (−1,−1), (1,−1), (1,1), (−1,1) to `p`'s four points.
+fn homography_of(p: [[f64; 2]; 4]) -> Option<[f64; 9]> {
     let tag = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
     let mut a = [0.0f64; 72];
     for i in 0..4 {
         let (x, y) = tag[i];
-        let (u, v) = (f64::from(q.p[i][0]), f64::from(q.p[i][1]));
+        let (u, v) = (p[i][0], p[i][1]);
         a[(2 * i) * 9..(2 * i) * 9 + 9].copy_from_slice(&[x, y, 1.0, 0.0, 0.0, 0.0, -x * u, -y * u, u]);
         a[(2 * i + 1) * 9..(2 * i + 1) * 9 + 9].copy_from_slice(&[0.0, 0.0, 0.0, x, y, 1.0, -x * v, -y * v, v]);
     }
@@ -485,6 +558,7 @@ fn decode_quad(im: &ImageView<'_>, h: &[f64; 9], table: &CodeTable, sharpening: 
         center: [center.0, center.1],
         corners,
         homography: hr,
+        blur_px: None,
     })
 }
 
