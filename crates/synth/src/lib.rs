@@ -19,7 +19,7 @@ mod shutter;
 mod synthesizer;
 mod write;
 
-pub use realism::Realism;
+pub use realism::{Pupil, Realism};
 pub use render::{Camera, INK_ALBEDO, LinearImage, PAPER_ALBEDO, RenderScene};
 pub use scenes::{Orientation, SceneKind, SceneOptions};
 pub use synthesizer::{Frame, Resolution, SynthConfig, Synthesizer, to_bgra};

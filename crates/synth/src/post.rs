@@ -19,16 +19,21 @@ pub struct Glare {
     pub peak: f64,
 }
 
-/// Depth-dependent Gaussian blur of a thin lens: a point at depth d with the lens focused at
-/// d_f spreads into a disc of diameter c = fx·A·|d − d_f| / (d·(d_f − f)) px (A = f/N the
-/// aperture); the Gaussian with the disc's variance has σ = c/4.
-pub fn defocus_sigma_px(k: &CameraIntrinsics, f_number: f64, focal_mm: f64, focus_mm: f64, depth_mm: f64) -> f64 {
+/// The blur circle of a thin lens (its diameter, px): a point at depth d with the lens focused
+/// at d_f spreads into a disc of diameter c = fx·A·|d − d_f| / (d·(d_f − f)) px, A = f/N the
+/// entrance pupil and fx the focal length in pixels of the lens focused at infinity.
+pub fn blur_circle_px(k: &CameraIntrinsics, f_number: f64, focal_mm: f64, focus_mm: f64, depth_mm: f64) -> f64 {
     if f_number <= 0.0 || !depth_mm.is_finite() || depth_mm <= 0.0 {
         return 0.0;
     }
     let aperture = focal_mm / f_number;
-    let c = k.fx * aperture * (depth_mm - focus_mm).abs() / (depth_mm * (focus_mm - focal_mm));
-    c / 4.0
+    k.fx * aperture * (depth_mm - focus_mm).abs() / (depth_mm * (focus_mm - focal_mm))
+}
+
+/// Depth-dependent Gaussian blur of a thin lens: the Gaussian with the variance of the blur
+/// circle ([`blur_circle_px`]), σ = c/4.
+pub fn defocus_sigma_px(k: &CameraIntrinsics, f_number: f64, focal_mm: f64, focus_mm: f64, depth_mm: f64) -> f64 {
+    blur_circle_px(k, f_number, focal_mm, focus_mm, depth_mm) / 4.0
 }
 
 /// Blur levels (px): geometric from 0.3 px; a pixel blends the two levels around its σ.
@@ -93,8 +98,13 @@ fn blur_window(img: &[f32], w: usize, h: usize, win: [usize; 4], sigma: f64) -> 
 /// Blurs each pixel by the σ its own depth calls for (a gather approximation of defocus: exact
 /// for surfaces at one depth, approximate at depth discontinuities).
 pub fn defocus(img: &mut LinearImage, sigma_of_depth: impl Fn(f64) -> f64 + Sync) {
-    let (w, h) = (img.width as usize, img.height as usize);
     let sig: Vec<f64> = img.depth.par_iter().map(|&d| sigma_of_depth(f64::from(d)).min(12.0)).collect();
+    defocus_sigmas(img, &sig);
+}
+
+/// Blurs each pixel by its own σ (px), by blending Gaussian blurs at geometric levels.
+fn defocus_sigmas(img: &mut LinearImage, sig: &[f64]) {
+    let (w, h) = (img.width as usize, img.height as usize);
     let max_sigma = sig.iter().copied().fold(0.0, f64::max);
     if max_sigma < 0.15 {
         return;
@@ -133,6 +143,125 @@ pub fn defocus(img: &mut LinearImage, sigma_of_depth: impl Fn(f64) -> f64 + Sync
         }
     }
     img.radiance = out;
+}
+
+/// A disc blur of radius `radius` (px) over the window [x0, x1) × [y0, y1) of `img` (edges
+/// clamped): each row of the disc, as wide as the disc is at its centre line, summed from row
+/// prefix sums of the box-filtered pixels (so a fraction of a pixel counts by its fraction).
+fn disc_window(img: &[f32], w: usize, h: usize, win: [usize; 4], radius: f64) -> Vec<f32> {
+    let [x0, y0, x1, y1] = win;
+    let reach = radius.ceil() as isize;
+    let halves: Vec<(isize, f64)> =
+        (-reach..=reach).map(|dy| (dy, (radius * radius - (dy * dy) as f64).max(0.0).sqrt())).collect();
+    let total: f64 = halves.iter().map(|(_, half)| 2.0 * half).sum();
+    // Prefix sums of the rows the disc reaches, over the whole width (clamped at the edges).
+    let gy0 = y0.saturating_sub(reach as usize);
+    let gy1 = (y1 + reach as usize).min(h);
+    let pad = reach as usize + 1;
+    let prefix: Vec<Vec<f64>> = (gy0..gy1)
+        .into_par_iter()
+        .map(|y| {
+            let row = &img[y * w..(y + 1) * w];
+            let mut p = Vec::with_capacity(w + 2 * pad + 1);
+            p.push(0.0);
+            let mut acc = 0.0;
+            for i in 0..w + 2 * pad {
+                let x = (i as isize - pad as isize).clamp(0, w as isize - 1) as usize;
+                acc += f64::from(row[x]);
+                p.push(acc);
+            }
+            p
+        })
+        .collect();
+    // ∫ of the row (box pixels) from its pixel-edge coordinate 0 to `at` (px), `at` within
+    // the padded row: pixel i covers [i − 0.5, i + 0.5] of the image's coordinates.
+    let integral = |p: &[f64], at: f64| {
+        let u = at + 0.5 + pad as f64;
+        let i = (u.floor() as usize).min(p.len() - 2);
+        let f = u - i as f64;
+        p[i] + f * (p[i + 1] - p[i])
+    };
+    (y0..y1)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let (prefix, halves) = (&prefix, &halves);
+            (x0..x1).map(move |x| {
+                let mut acc = 0.0;
+                for &(dy, half) in halves {
+                    if half <= 0.0 {
+                        continue;
+                    }
+                    let yy = (y as isize + dy).clamp(gy0 as isize, gy1 as isize - 1) as usize;
+                    let p = &prefix[yy - gy0];
+                    acc += integral(p, x as f64 + half) - integral(p, x as f64 - half);
+                }
+                (acc / total) as f32
+            })
+        })
+        .collect()
+}
+
+/// Blurs each pixel by the disc its own depth calls for (radius px; a gather approximation of
+/// defocus, like [`defocus`]); radii under a pixel, which a disc of whole rows cannot draw,
+/// get the Gaussian of the same variance (σ = radius/2).
+pub fn defocus_disc(img: &mut LinearImage, radius_of_depth: impl Fn(f64) -> f64 + Sync) {
+    let (w, h) = (img.width as usize, img.height as usize);
+    let radius: Vec<f64> = img.depth.par_iter().map(|&d| radius_of_depth(f64::from(d)).min(24.0)).collect();
+    let largest = radius.iter().copied().fold(0.0, f64::max);
+    if largest < 0.3 {
+        return;
+    }
+    // Below a pixel: the Gaussian.
+    let mut small =
+        LinearImage { width: img.width, height: img.height, radiance: img.radiance.clone(), depth: img.depth.clone() };
+    let sigma: Vec<f64> = radius.iter().map(|&r| if r < 1.0 { r / 2.0 } else { 0.0 }).collect();
+    defocus_sigmas(&mut small, &sigma);
+    let mut out = small.radiance;
+    // From a pixel up: discs at radii 1, 1.2, 1.44, …, each pixel blending the two around its own.
+    let mut levels = vec![1.0];
+    while *levels.last().unwrap_or(&1.0) < largest {
+        let next = levels.last().unwrap_or(&1.0) * 1.2;
+        levels.push(next);
+    }
+    for pair in levels.windows(2) {
+        let (lo, hi) = (pair[0], pair[1]);
+        let inside = |r: f64| r >= lo && r < hi;
+        let mut bb = [usize::MAX, usize::MAX, 0, 0];
+        for y in 0..h {
+            for x in 0..w {
+                if inside(radius[y * w + x]) {
+                    bb = [bb[0].min(x), bb[1].min(y), bb[2].max(x + 1), bb[3].max(y + 1)];
+                }
+            }
+        }
+        if bb[0] == usize::MAX {
+            continue;
+        }
+        let a = disc_window(&img.radiance, w, h, bb, lo);
+        let b = disc_window(&img.radiance, w, h, bb, hi);
+        let ww = bb[2] - bb[0];
+        for y in bb[1]..bb[3] {
+            for x in bb[0]..bb[2] {
+                let r = radius[y * w + x];
+                if !inside(r) {
+                    continue;
+                }
+                let i = (y - bb[1]) * ww + (x - bb[0]);
+                let t = ((r - lo) / (hi - lo)) as f32;
+                out[y * w + x] = a[i] * (1.0 - t) + b[i] * t;
+            }
+        }
+    }
+    img.radiance = out;
+}
+
+/// A Gaussian blur of σ (px) over the whole image (the lens's own blur, the same everywhere).
+pub fn gaussian_blur(img: &mut LinearImage, sigma: f64) {
+    if sigma < 0.1 {
+        return;
+    }
+    let (w, h) = (img.width as usize, img.height as usize);
+    img.radiance = blur_window(&img.radiance, w, h, [0, 0, w, h], sigma);
 }
 
 /// Adds glare patches.
@@ -243,5 +372,35 @@ mod tests {
         assert!((img.radiance[5] - 0.1).abs() < 1e-6);
         let mid = 0.5 * (img.radiance[16 * w + 31] + img.radiance[16 * w + 32]);
         assert!((mid - 0.45).abs() < 1e-3, "{mid}");
+    }
+
+    #[test]
+    fn a_disc_blur_makes_a_straight_ramp_as_wide_as_the_disc() {
+        let (w, h) = (80, 40);
+        let mut img = LinearImage {
+            width: w as u32,
+            height: h as u32,
+            radiance: (0..w * h).map(|i| if i % w < 40 { 0.1 } else { 0.8 }).collect(),
+            depth: vec![150.0; w * h],
+        };
+        let before: f32 = img.radiance.iter().sum();
+        defocus_disc(&mut img, |_| 5.0);
+        let after: f32 = img.radiance.iter().sum();
+        assert!((before - after).abs() / before < 1e-3, "energy kept");
+        let row = |x: usize| img.radiance[20 * w + x];
+        // The edge lies between pixels 39 and 40 (x = 39.5): its halfway point stays there.
+        let mid = 0.5 * (row(39) + row(40));
+        assert!((mid - 0.45).abs() < 2e-3, "{mid}");
+        // A disc of radius 5 reaches 5 px either side and no further (a Gaussian of the same
+        // variance, σ = 2.5, would still be 2 % short of the plateau 5 px out).
+        assert!((row(33) - 0.1).abs() < 1e-6 && (row(46) - 0.8).abs() < 1e-6, "{} {}", row(33), row(46));
+        assert!(row(35) > 0.1 + 1e-4 && row(44) < 0.8 - 1e-4);
+        // Between, the ramp: the edge-spread function of a disc (a circular segment's area).
+        let quarter = row(37) - 0.1;
+        let expected = 0.7 * {
+            let d: f64 = 2.5 / 5.0;
+            ((d.acos() - d * (1.0 - d * d).sqrt()) / std::f64::consts::PI) as f32
+        };
+        assert!((quarter - expected).abs() < 0.02, "{quarter} against {expected}");
     }
 }

@@ -4,8 +4,23 @@
 use jawtrack_pose::RollingShutter;
 use serde::{Deserialize, Serialize};
 
+/// The shape a point out of focus spreads into.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Pupil {
+    /// A Gaussian with the disc's variance (σ = a quarter of the blur circle's diameter): smooth,
+    /// kind to edge fits.
+    #[default]
+    Gaussian,
+    /// The uniform disc a real circular aperture makes, as wide as the blur circle: edges
+    /// blurred into straight ramps with hard ends.
+    Disc,
+}
+
 /// How a frame departs from the ideal pinhole image. `Realism::default()` is a plausible iPhone
-/// frame of the rig at 80–120 mm; `Realism::clean()` switches every effect off.
+/// frame of the rig at 80–120 mm; `Realism::clean()` switches every effect off;
+/// [`Realism::phone_wide`] is a current Pro iPhone's wide camera as it really is (a disc pupil
+/// of 3.8 mm, focus that breathes, a lens that cannot focus nearer than 20 cm).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Realism {
@@ -13,9 +28,27 @@ pub struct Realism {
     pub f_number: f64,
     /// Physical focal length (mm); with the f-number it sets the aperture.
     pub focal_length_mm: f64,
-    /// Distance the lens is focused at (mm along the optical axis); `None` focuses on the
-    /// median depth of the tags facing the camera, as autofocus would.
+    /// Distance the lens is focused at (mm along the optical axis): a lens locked there whatever
+    /// the subject; `None` focuses on the median depth of the tags facing the camera, as
+    /// autofocus would (no nearer than [`Realism::min_focus_distance_mm`]).
     pub focus_distance_mm: Option<f64>,
+    /// The nearest the autofocus can focus (mm): a subject nearer than this is rendered with the
+    /// lens stuck here, as on a phone held too close. `None`: no limit.
+    pub min_focus_distance_mm: Option<f64>,
+    /// The shape of the defocus blur.
+    pub pupil: Pupil,
+    /// Focus breathing: focusing at u moves the lens f²/(u − f) from the sensor, enlarging the
+    /// image by u/(u − f) (3.5 % at 200 mm for 6.8 mm). The intrinsics given are then those of
+    /// the lens focused at infinity, and the frames' (the truth's) are scaled by that factor.
+    /// Needs a locked focus ([`Realism::focus_distance_mm`]).
+    pub focus_breathing: bool,
+    /// A centred crop of the sensor delivered at the frame's size (2 is the 48 MP sensors'
+    /// native 2× crop): the focal lengths in pixels are multiplied by it and each pixel gathers
+    /// 1/zoom² of the light, so [`Realism::full_well_e`] is per pixel at zoom 1.
+    pub zoom: f64,
+    /// The lens's own blur in focus (diffraction, aberrations): σ of a Gaussian on the sensor
+    /// (µm), in pixels σ · fx / (1000 · focal length). 0: none.
+    pub optics_sigma_um: f64,
     /// Exposure time (s) for motion blur; 0 renders an instant.
     pub exposure_s: f64,
     /// Most sub-frames averaged for motion blur with a global shutter (enough for ≤ 1 px
@@ -69,6 +102,11 @@ impl Default for Realism {
             occluder_probability: 0.1,
             glare_probability: 0.15,
             clutter: 40,
+            min_focus_distance_mm: None,
+            pupil: Pupil::Gaussian,
+            focus_breathing: false,
+            zoom: 1.0,
+            optics_sigma_um: 0.0,
         }
     }
 }
@@ -91,6 +129,34 @@ impl Realism {
             glare_probability: 0.0,
             clutter: 0,
             ..Realism::default()
+        }
+    }
+
+    /// A current Pro iPhone's wide camera (iPhone 14 Pro to 16 Pro: 6.8 mm f/1.78, a 3.8 mm
+    /// entrance pupil): a disc pupil, focus that breathes, locked at `focus_mm`, and `zoom` (1,
+    /// or 2 for the native crop); the lens's own blur 0.7 µm (diffraction at f/1.78 is 0.4 µm,
+    /// aberrations add to it). Everything else as [`Realism::default`]. Give it the intrinsics
+    /// of the lens focused at infinity, at zoom 1.
+    pub fn phone_wide(focus_mm: f64, zoom: f64) -> Self {
+        Realism {
+            f_number: 1.78,
+            focal_length_mm: 6.8,
+            focus_distance_mm: Some(focus_mm),
+            pupil: Pupil::Disc,
+            focus_breathing: true,
+            zoom,
+            optics_sigma_um: 0.7,
+            ..Realism::default()
+        }
+    }
+
+    /// The factor the image is enlarged by with the lens focused at `focus_mm` rather than at
+    /// infinity: the lens sits f²/(u − f) further from the sensor, so u/(u − f) (1 without
+    /// focus breathing, or without a focus distance).
+    pub fn breathing(&self, focus_mm: Option<f64>) -> f64 {
+        match focus_mm {
+            Some(u) if self.focus_breathing && u > self.focal_length_mm => u / (u - self.focal_length_mm),
+            _ => 1.0,
         }
     }
 
@@ -118,6 +184,7 @@ impl Realism {
             ("print_error_deg", self.print_error_deg),
             ("occluder_probability", self.occluder_probability),
             ("glare_probability", self.glare_probability),
+            ("optics_sigma_um", self.optics_sigma_um),
         ];
         for (name, v) in fields {
             if !v.is_finite() || v < 0.0 {
@@ -140,6 +207,17 @@ impl Realism {
             && (!d.is_finite() || d <= self.focal_length_mm)
         {
             return Err(format!("realism.focus_distance_mm must exceed the focal length, got {d}"));
+        }
+        if let Some(d) = self.min_focus_distance_mm
+            && (!d.is_finite() || d <= self.focal_length_mm)
+        {
+            return Err(format!("realism.min_focus_distance_mm must exceed the focal length, got {d}"));
+        }
+        if self.focus_breathing && self.focus_distance_mm.is_none() {
+            return Err("realism.focus_breathing needs a locked focus: set realism.focus_distance_mm".into());
+        }
+        if !(self.zoom.is_finite() && (1.0..=10.0).contains(&self.zoom)) {
+            return Err(format!("realism.zoom is a sensor crop from 1 to 10, got {}", self.zoom));
         }
         if self.readout_s >= 1.0 {
             return Err(format!("realism.readout_s must be under 1 s, got {}", self.readout_s));

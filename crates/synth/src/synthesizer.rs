@@ -2,7 +2,7 @@
 
 use crate::SynthError;
 use crate::post::{self, Glare};
-use crate::realism::Realism;
+use crate::realism::{Pupil, Realism};
 use crate::render::{self, Camera, LinearImage, PlacedBody, Plane, RenderScene, Shape, render_linear, sees_body_many};
 use crate::scenes::{FrameSpec, Rig, SceneKind, SceneOptions, scene_frames};
 use crate::shutter;
@@ -114,7 +114,12 @@ pub fn to_bgra(luma: &[u8]) -> Vec<u8> {
 /// Renders the frames of a scene.
 pub struct Synthesizer {
     config: SynthConfig,
+    /// The frames' camera: the intrinsics given, zoomed and (with focus breathing) enlarged as
+    /// the focused lens makes them.
     camera: Camera,
+    /// The focal length (px) of the lens focused at infinity, zoomed: what its blur circles
+    /// scale with.
+    optics_fx: f64,
     rig: Rig,
     true_marker: Marker,
     print_errors: Vec<PrintErrorTruth>,
@@ -141,8 +146,12 @@ impl Synthesizer {
             return Err(SynthError::Config("fps must be positive".into()));
         }
         let (width, height) = config.resolution.size();
-        let intrinsics = config.intrinsics.unwrap_or_else(|| config.resolution.default_intrinsics());
-        intrinsics.validate().map_err(|e| SynthError::Config(e.to_string()))?;
+        let given = config.intrinsics.unwrap_or_else(|| config.resolution.default_intrinsics());
+        given.validate().map_err(|e| SynthError::Config(e.to_string()))?;
+        let realism = &config.realism;
+        let optics_fx = given.fx * realism.zoom;
+        let scale = realism.zoom * realism.breathing(realism.focus_distance_mm);
+        let intrinsics = CameraIntrinsics { fx: given.fx * scale, fy: given.fy * scale, ..given };
         let camera = Camera { intrinsics, width, height };
         let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
 
@@ -177,6 +186,7 @@ impl Synthesizer {
         Ok(Synthesizer {
             config,
             camera,
+            optics_fx,
             rig: Rig::default(),
             true_marker,
             print_errors,
@@ -299,21 +309,39 @@ impl Synthesizer {
             self.render_global(&spec, &extra, &cam_head)
         };
 
-        // Autofocus locks on what has contrast: the tags facing the camera (median depth).
+        // Autofocus locks on what has contrast: the tags facing the camera (median depth), but
+        // no nearer than the lens can focus.
         let focus_mm = (realism.f_number > 0.0).then(|| {
             realism.focus_distance_mm.unwrap_or_else(|| {
-                median(tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z))
-                    .unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z))
+                let subject = median(tags_mid.iter().filter(|t| t.2 < 60.0).map(|t| t.1.z))
+                    .unwrap_or(0.5 * (cam_max.translation().z + cam_man.translation().z));
+                subject.max(realism.min_focus_distance_mm.unwrap_or(0.0))
             })
         });
-        if let Some(focus) = focus_mm {
-            post::defocus(&mut img, |d| {
-                post::defocus_sigma_px(&k, realism.f_number, realism.focal_length_mm, focus, d)
-            });
+        // The lens's own blur (px).
+        let optics_px = if realism.focal_length_mm > 0.0 {
+            realism.optics_sigma_um * self.optics_fx / (1000.0 * realism.focal_length_mm)
+        } else {
+            0.0
+        };
+        let lens = CameraIntrinsics { fx: self.optics_fx, ..k };
+        let circle =
+            |focus: f64, d: f64| post::blur_circle_px(&lens, realism.f_number, realism.focal_length_mm, focus, d);
+        match (focus_mm, realism.pupil) {
+            (Some(focus), Pupil::Gaussian) => {
+                post::defocus(&mut img, |d| (circle(focus, d) / 4.0).hypot(optics_px));
+            }
+            (Some(focus), Pupil::Disc) => {
+                post::defocus_disc(&mut img, |d| circle(focus, d) / 2.0);
+                post::gaussian_blur(&mut img, optics_px);
+            }
+            (None, _) => post::gaussian_blur(&mut img, optics_px),
         }
         post::add_glare(&mut img, &glare);
         post::illumination(&mut img, realism.vignetting, realism.lighting_gradient, self.gradient_dir);
-        post::sensor_noise(&mut img, realism.full_well_e, realism.read_noise_e, &mut rng);
+        // A crop gathers 1/zoom² of the light per pixel.
+        let full_well = realism.full_well_e / (realism.zoom * realism.zoom);
+        post::sensor_noise(&mut img, full_well, realism.read_noise_e, &mut rng);
         let luma = post::encode_u8(&img, realism.gamma);
 
         let scene_mid = self.scene_at(&cam_head, cam_max, cam_man, &extra);
@@ -726,5 +754,34 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A phone's wide camera held at 120 mm with its lens unable to focus nearer than 200 mm:
+    /// the focus is stuck there, the frame's focal length breathes by u/(u − f) and zooms.
+    #[test]
+    fn a_lens_that_cannot_focus_near_enough_stays_at_its_limit_and_breathes() {
+        let base = Resolution::P1080.default_intrinsics();
+        let mut c = SynthConfig::new(SceneKind::Static);
+        c.options = SceneOptions { frames_per_view: 1, distance_mm: Some(120.0), ..SceneOptions::default() };
+        c.realism = Realism {
+            focus_distance_mm: None,
+            focus_breathing: false,
+            min_focus_distance_mm: Some(200.0),
+            ..Realism::phone_wide(200.0, 2.0)
+        };
+        c.max_frames = Some(1);
+        let synth = Synthesizer::new(c.clone()).expect("valid");
+        assert_eq!(synth.camera().intrinsics.fx, 2.0 * base.fx, "zoomed");
+        let frame = synth.render(0).expect("renders");
+        assert_eq!(frame.truth.focus_mm, Some(200.0), "stuck at the nearest focus");
+        // Locked at 200 mm with breathing: 200 / (200 − 6.8) = 1.0352.
+        c.realism = Realism::phone_wide(200.0, 1.0);
+        let synth = Synthesizer::new(c.clone()).expect("valid");
+        let k = synth.header().intrinsics;
+        assert!((k.fx / base.fx - 200.0 / 193.2).abs() < 1e-12 && k.cx == base.cx, "{k:?}");
+        // Breathing needs a locked focus.
+        c.realism.focus_distance_mm = None;
+        let e = Synthesizer::new(c).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("focus_breathing"), "{e}");
     }
 }
