@@ -30,6 +30,11 @@ pub struct BodyPose {
     pub rejected_tags: Vec<u32>,
     /// RMS reprojection error (px).
     pub rms_px: f64,
+    /// How blurred its tags' edges are (σ, px), when measured: the lens's defocus.
+    pub blur_px: Option<f64>,
+    /// The width (px) of its tags' cells, what its blur is judged against (`defocused` beyond a
+    /// fifth of it).
+    pub cell_px: f64,
 }
 
 /// A detected tag for the overlay.
@@ -262,6 +267,8 @@ impl Engine {
             tags: b.tags.clone(),
             rejected_tags: b.rejected_tags.clone(),
             rms_px: b.rms_px,
+            blur_px: b.blur_px,
+            cell_px: b.cell_px,
         };
         let result = FrameResult {
             frame: self.frame,
@@ -321,6 +328,8 @@ pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
             rejected_tags: b.rejected_tags.clone(),
             rms_px: b.rms_px,
             cov: Some(b.covariance.clone()),
+            blur_px: b.blur_px,
+            cell_px: Some(b.cell_px),
         }))
     };
     Ok(FrameRecord {

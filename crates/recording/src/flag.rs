@@ -24,12 +24,16 @@ pub enum Flag {
     /// A body's pose rests on a tag that the marker's calibration left at its nominal place
     /// (raised only with a calibrated marker: with a nominal one every tag is nominal alike).
     UncalibratedTag(BodyKind),
+    /// A body's tags are out of focus: their edges are blurred beyond what its pose can stand
+    /// (the phone is nearer than its lens can focus, or far from where focus was locked). The
+    /// frame gives no jaw pose.
+    Defocused(BodyKind),
 }
 
 impl Flag {
     /// Every flag, in the order of their datagram bits (`docs/wire.md`): a flag added later
     /// goes at the end.
-    pub const ALL: [Flag; 14] = [
+    pub const ALL: [Flag; 16] = [
         Flag::NoTags,
         Flag::Lost(BodyKind::Maxilla),
         Flag::Lost(BodyKind::Mandible),
@@ -44,6 +48,8 @@ impl Flag {
         Flag::Unreadable,
         Flag::UncalibratedTag(BodyKind::Maxilla),
         Flag::UncalibratedTag(BodyKind::Mandible),
+        Flag::Defocused(BodyKind::Maxilla),
+        Flag::Defocused(BodyKind::Mandible),
     ];
 
     /// A short machine-readable name, e.g. `mandible:lost`.
@@ -57,6 +63,7 @@ impl Flag {
             Flag::RejectedTags(b) => format!("{b}:rejected_tags"),
             Flag::Unreadable => "unreadable".into(),
             Flag::UncalibratedTag(b) => format!("{b}:uncalibrated_tag"),
+            Flag::Defocused(b) => format!("{b}:defocused"),
         }
     }
 
@@ -96,6 +103,8 @@ mod tests {
         assert_eq!(Flag::UncalibratedTag(BodyKind::Mandible).name(), "mandible:uncalibrated_tag");
         // Bits are never renumbered: the newest flags come last.
         assert_eq!(Flag::ALL[11], Flag::Unreadable);
-        assert_eq!(Flag::ALL[12..], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::UncalibratedTag));
+        assert_eq!(Flag::ALL[12..14], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::UncalibratedTag));
+        assert_eq!(Flag::ALL[14..], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::Defocused));
+        assert_eq!(Flag::Defocused(BodyKind::Maxilla).name(), "maxilla:defocused");
     }
 }

@@ -135,6 +135,13 @@ pub struct BodyRecord {
     /// frame came over the link (packets do not carry it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cov: Option<Vec<f64>>,
+    /// How blurred its tags' edges were (σ, px): the lens's defocus (a body blurred beyond a
+    /// fifth of its cells is flagged `defocused`); absent when not measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blur_px: Option<f64>,
+    /// The width (px) of its tags' cells, what its blur is judged against.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell_px: Option<f64>,
 }
 
 /// Time spent on a frame (s).

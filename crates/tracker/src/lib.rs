@@ -40,7 +40,7 @@ use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageV
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::motion::to_frame_time;
 use jawtrack_pose::{
-    BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, solve_pnp,
+    BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, median, solve_pnp,
 };
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use nalgebra::{Matrix6, Point2, Point3};
@@ -96,7 +96,16 @@ pub struct TrackerConfig {
     /// smear; where that is 3 px or more the edges are fitted as motion ramps
     /// (`DetectorConfig::smeared_edges`). Default 1/120 s, a phone's indoor exposure.
     pub exposure_s: f64,
+    /// A body whose edges are blurred (the detector's [`Detection::blur_px`], the median over
+    /// its tags) by more than this fraction of its tags' cell is flagged `defocused`, and the
+    /// frame gives no jaw pose: the lens was not focused on it (a phone held nearer than it
+    /// can focus, or far from where its focus was locked). See [`DEFOCUSED_BLUR_PER_CELL`].
+    pub max_blur_per_cell: f64,
 }
+
+/// The default [`TrackerConfig::max_blur_per_cell`]: measured on renders with a phone's optics
+/// (`docs/accuracy.md`, "Capture"), a blur of this much of a cell leaves the jaw within TBD.
+pub const DEFOCUSED_BLUR_PER_CELL: f64 = 0.2;
 
 impl Default for TrackerConfig {
     fn default() -> Self {
@@ -111,6 +120,7 @@ impl Default for TrackerConfig {
             bite: BiteRule::default(),
             readout_s: 0.0,
             exposure_s: 1.0 / 120.0,
+            max_blur_per_cell: DEFOCUSED_BLUR_PER_CELL,
         }
     }
 }
@@ -129,6 +139,19 @@ pub struct BodyResult {
     /// Covariance of (rotation vector [rad], translation [mm]) of a left perturbation in the
     /// camera frame.
     pub covariance: Matrix6<f64>,
+    /// How blurred its tags' edges are (σ, px; the median of their [`Detection::blur_px`]),
+    /// when measured.
+    pub blur_px: Option<f64>,
+    /// The width (px) of its tags' cells (the median, each tag's along its longest side: its
+    /// scale at its distance, however steeply it is seen).
+    pub cell_px: f64,
+}
+
+impl BodyResult {
+    /// Whether its blur exceeds `max_blur_per_cell` of its cells ([`Flag::Defocused`]).
+    pub fn defocused(&self, max_blur_per_cell: f64) -> bool {
+        self.blur_px.is_some_and(|b| b > max_blur_per_cell * self.cell_px)
+    }
 }
 
 /// Time spent on a frame's stages (s).
@@ -182,6 +205,8 @@ impl FrameResult {
             rejected_tags: b.rejected_tags.clone(),
             rms_px: b.rms_px,
             cov: Some(b.covariance.transpose().iter().copied().collect()),
+            blur_px: b.blur_px,
+            cell_px: Some(b.cell_px),
         };
         FrameRecord {
             frame: index as u64,
@@ -504,6 +529,17 @@ impl Tracker {
             };
             bodies[slot(kind)] = self.accept(kind, pose, rejected, other.or(own).as_ref(), &mut flags);
         }
+        let mut defocused = false;
+        for (kind, body) in BodyKind::ALL.iter().zip(bodies.iter_mut()) {
+            let Some(b) = body else { continue };
+            let used: Vec<&Detection> = detections.iter().filter(|d| b.tags.contains(&d.id)).collect();
+            b.blur_px = median(used.iter().filter_map(|d| d.blur_px));
+            b.cell_px = median(used.iter().map(|d| longest_cell_px(d))).unwrap_or(0.0);
+            if b.defocused(self.config.max_blur_per_cell) {
+                flags.push(Flag::Defocused(*kind));
+                defocused = true;
+            }
+        }
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
                 Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
@@ -525,8 +561,11 @@ impl Tracker {
             }
         }
         let [maxilla, mandible] = bodies;
+        // A defocused body's pose may be millimetres off: the frame gives no jaw pose.
         let raw = match (&maxilla, &mandible) {
-            (Some(a), Some(b)) => Some(a.camera_from_body.inverse() * b.camera_from_body).filter(Pose::is_finite),
+            (Some(a), Some(b)) if !defocused => {
+                Some(a.camera_from_body.inverse() * b.camera_from_body).filter(Pose::is_finite)
+            }
             _ => None,
         };
         if let Some(r) = raw {
@@ -559,12 +598,17 @@ impl Tracker {
     }
 
     /// Every corner of `kind`'s tags among the detections: the correspondences its PnP
-    /// solves (for benchmarks and diagnostics).
+    /// solves (for benchmarks and diagnostics). A tag seen so steeply that its cells are under
+    /// [`THIN_CELL_PX`] across is left out while the body has two others.
     pub fn observations(&self, kind: BodyKind, detections: &[Detection]) -> Vec<Observation> {
+        let mine: Vec<&Detection> =
+            detections.iter().filter(|d| self.marker.find_tag(d.id).is_some_and(|(b, _)| b == kind)).collect();
+        let thin = |d: &Detection| cell_px(d) < THIN_CELL_PX;
+        let skip_thin = mine.iter().filter(|d| !thin(d)).count() >= 2;
         let mut out = Vec::new();
-        for d in detections {
-            let Some((body, tag)) = self.marker.find_tag(d.id) else { continue };
-            if body != kind {
+        for d in mine {
+            let Some((_, tag)) = self.marker.find_tag(d.id) else { continue };
+            if skip_thin && thin(d) {
                 continue;
             }
             for (corner, pixel) in tag.corners.iter().zip(&d.corners) {
@@ -669,14 +713,43 @@ impl Tracker {
             rejected_tags,
             rms_px: rms,
             covariance,
+            blur_px: None,
+            cell_px: 0.0,
         })
     }
+}
+
+/// A tag whose cells are narrower than this (px, across its shortest side) is seen too
+/// steeply to place its corners: its border and its data cells blur into one another (at 200
+/// mm on a 1080p phone frame, a tag seen 83° from face-on has cells of 1 px across and its
+/// corners land up to 1.25 px off, moving the jaw 0.19 mm; `docs/accuracy.md`, "Capture").
+pub const THIN_CELL_PX: f64 = 2.0;
+
+/// The lengths (px) of a detected tag's four sides.
+fn sides_px(d: &Detection) -> [f64; 4] {
+    let c = &d.corners;
+    std::array::from_fn(|i| (c[i][0] - c[(i + 1) % 4][0]).hypot(c[i][1] - c[(i + 1) % 4][1]))
+}
+
+/// The width (px) of a detected tag's cells across its shortest side.
+fn cell_px(d: &Detection) -> f64 {
+    sides_px(d).into_iter().fold(f64::INFINITY, f64::min) / 8.0
+}
+
+/// The width (px) of a detected tag's cells along its longest side.
+fn longest_cell_px(d: &Detection) -> f64 {
+    sides_px(d).into_iter().fold(0.0, f64::max) / 8.0
 }
 
 /// Refuses settings out of range.
 fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
     c.bite.validate().map_err(TrackError::BadConfig)?;
-    let positive = [("max_rms_px", c.max_rms_px), ("flicker_px", c.flicker_px), ("prior_max_age_s", c.prior_max_age_s)];
+    let positive = [
+        ("max_rms_px", c.max_rms_px),
+        ("flicker_px", c.flicker_px),
+        ("prior_max_age_s", c.prior_max_age_s),
+        ("max_blur_per_cell", c.max_blur_per_cell),
+    ];
     for (name, v) in positive {
         if !(v.is_finite() && v > 0.0) {
             return Err(TrackError::BadConfig(format!("{name} must be a positive number, got {v}")));
@@ -711,11 +784,34 @@ fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageView<'_>, di
     })
 }
 
-/// The RMS reprojection error (px) of the observations of tags `ids` under `camera_from_body`.
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::Vector3;
+
+    /// A detection of `id` whose quad is `w` × `h` px at (100, 100).
+    fn quad(id: u32, w: f64, h: f64) -> Detection {
+        let corners = [[100.0, 100.0 + h], [100.0 + w, 100.0 + h], [100.0 + w, 100.0], [100.0, 100.0]];
+        let center = [100.0 + w / 2.0, 100.0 + h / 2.0];
+        Detection { id, hamming: 0, decision_margin: 50.0, center, corners, homography: [0.0; 9], blur_px: None }
+    }
+
+    #[test]
+    fn a_tag_seen_edge_on_is_left_out_while_two_others_remain() {
+        let tracker = Tracker::new(Marker::default(), TrackerConfig::default()).expect("valid");
+        let tags = |d: &[Detection]| {
+            let mut ids: Vec<u32> = tracker.observations(BodyKind::Maxilla, d).iter().map(|o| o.tag).collect();
+            ids.dedup();
+            ids
+        };
+        // Tag 2's cells are 1 px across (an 8 px short side): seen at ~83°.
+        let seen = [quad(0, 60.0, 60.0), quad(1, 60.0, 40.0), quad(2, 60.0, 8.0), quad(12, 60.0, 8.0)];
+        assert_eq!(tags(&seen), [0, 1]);
+        // With one other tag only, it is kept: four more points beat a lone tag's mirror.
+        assert_eq!(tags(&seen[1..3]), [1, 2]);
+        // 16 px is two pixels a cell: kept.
+        assert_eq!(tags(&[quad(0, 60.0, 60.0), quad(1, 60.0, 40.0), quad(2, 60.0, 16.0)]), [0, 1, 2]);
+    }
 
     #[test]
     fn a_record_carries_every_field_in_row_major_order() {
@@ -730,6 +826,8 @@ mod tests {
                 rejected_tags: vec![5],
                 rms_px: 0.3,
                 covariance: cov,
+                blur_px: Some(0.4),
+                cell_px: 9.5,
             }),
             mandible: None,
             maxilla_from_mandible: None,

@@ -293,8 +293,8 @@ impl PosePacket {
         }
     }
 
-    /// The frame's line in a recording. Packets carry no covariance, rejected tags or timings,
-    /// and list tags only below id 32.
+    /// The frame's line in a recording. Packets carry no covariance, rejected tags, blur or
+    /// timings (a `defocused` body is a flag), and list tags only below id 32.
     pub fn to_record(&self, header: &Header, received_unix_s: f64) -> FrameRecord {
         let body = |b: &BodyPose| BodyRecord {
             camera_from_body: b.camera_from_body,
@@ -302,6 +302,8 @@ impl PosePacket {
             rejected_tags: Vec::new(),
             rms_px: f64::from(b.rms_px),
             cov: None,
+            blur_px: None,
+            cell_px: None,
         };
         FrameRecord {
             frame: self.frame,

@@ -28,11 +28,11 @@ final class LinkTests: XCTestCase {
             frame: 375, t: 12.5, exposureS: nil,
             maxilla: BodyPose(
                 cameraFromBody: pose(axisAngle: (0, 0.5, 0), translation: (-20, 10, 100)),
-                covariance: covariance, tags: [0, 1, 2], rejectedTags: [], rmsPx: 0.25
+                covariance: covariance, tags: [0, 1, 2], rejectedTags: [], rmsPx: 0.25, blurPx: nil, cellPx: 0
             ),
             mandible: BodyPose(
                 cameraFromBody: pose(axisAngle: (0.25, 0.5, 0), translation: (-20, 50, 100)),
-                covariance: covariance, tags: [12, 13], rejectedTags: [], rmsPx: 0.5
+                covariance: covariance, tags: [12, 13], rejectedTags: [], rmsPx: 0.5, blurPx: nil, cellPx: 0
             ),
             maxillaFromMandible: pose(axisAngle: (0.25, 0, 0), translation: (0, 40, 0)),
             maxillaScanFromMandibleScan: nil,
