@@ -1,12 +1,25 @@
-//! What is known about phone cameras that no API reports. AVFoundation gives each frame's
-//! exposure but not how long the sensor takes to read its rows (the rolling-shutter readout,
-//! first row to last), which the tracker needs to solve both jaws at the same instant
-//! (`jawtrack_tracker::TrackerConfig::readout_s`). This table holds the published figures, each
-//! with its source; a readout measured with `jawtrack calibrate-camera` beats any of them.
+//! What is known about phone cameras that no API reports, and what follows from it for
+//! filming the markers: each model's sensor readout ([`readout`]), its lenses' optics — focal
+//! length, f-number, the nearest they focus, whether the sensor gives a native 2× crop
+//! ([`optics`]) — the capture plan those facts call for: camera, format, zoom and the distance
+//! to hold the phone at, beyond where it can focus ([`plan`]), and the guidance that keeps the
+//! phone there while it films ([`guidance`]).
 //!
 //! Models are keyed by their hardware identifier (`uname().machine`, e.g. `iPhone16,2`), which
-//! names the exact phone, where marketing names are ambiguous. Only phones measured are listed:
-//! a sibling with the same sensor is likely to read out alike, but nobody has measured it.
+//! names the exact phone, where marketing names are ambiguous. Every figure carries its source;
+//! a model not listed gets conservative defaults and says so. What the phone reports at run
+//! time (AVFoundation's `minimumFocusDistance`, a format's field of view and native zoom
+//! factors) beats the table.
+
+pub mod guidance;
+pub mod optics;
+pub mod plan;
+pub mod readout;
+
+pub use guidance::{Guidance, GuidanceKind, guide};
+pub use optics::{LensOptics, optics};
+pub use plan::{CameraFacts, CapturePlan, FormatFacts, PlanRequest, plan};
+pub use readout::{Readout, readout};
 
 /// A phone's camera, by lens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,74 +34,13 @@ pub enum Lens {
     Front,
 }
 
-/// A published readout time.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Readout {
-    /// First row to last (s).
-    pub readout_s: f64,
-    /// The phone, in words.
-    pub phone: &'static str,
-    /// Where the figure comes from, and how far to trust it.
-    pub source: &'static str,
-}
-
-/// Where the figures were gathered (2026-11-25); the project's notes keep the details.
-const SENSOR_TESTS: &str = "published sensor readout tests, gathered in the project's shared/NOTES.md (2026-11-25)";
-const INCONSISTENT: &str = "published sensor readout tests, repeats inconsistent (shared/NOTES.md, 2026-11-25)";
-const VIDEO_720P30: &str = "published sensor readout test, 720p30 video (shared/NOTES.md, 2026-11-25)";
-const VIDEO_1080P30: &str = "published sensor readout test, 1080p30 video (shared/NOTES.md, 2026-11-25)";
-
-/// (identifiers, lens, readout in ms, phone, source).
-const TABLE: &[(&[&str], Lens, f64, &str, &str)] = &[
-    (&["iPhone17,2"], Lens::Wide, 2.4, "iPhone 16 Pro Max", SENSOR_TESTS),
-    (&["iPhone17,2"], Lens::UltraWide, 5.8, "iPhone 16 Pro Max", SENSOR_TESTS),
-    (&["iPhone17,2"], Lens::Tele, 5.5, "iPhone 16 Pro Max", SENSOR_TESTS),
-    (&["iPhone17,2"], Lens::Front, 10.5, "iPhone 16 Pro Max", SENSOR_TESTS),
-    (&["iPhone16,2"], Lens::Wide, 5.1, "iPhone 15 Pro Max", SENSOR_TESTS),
-    (&["iPhone16,2"], Lens::UltraWide, 5.1, "iPhone 15 Pro Max", SENSOR_TESTS),
-    (&["iPhone16,2"], Lens::Tele, 5.1, "iPhone 15 Pro Max", SENSOR_TESTS),
-    (&["iPhone15,2"], Lens::Wide, 9.0, "iPhone 14 Pro", INCONSISTENT),
-    (&["iPhone8,1"], Lens::Wide, 15.0, "iPhone 6s", VIDEO_720P30),
-    (&["iPhone5,1", "iPhone5,2"], Lens::Wide, 27.4, "iPhone 5", VIDEO_1080P30),
-    (&["iPhone4,1"], Lens::Wide, 26.0, "iPhone 4S", VIDEO_1080P30),
-];
-
-/// The published readout of `model`'s `lens`, if any.
-pub fn readout(model: &str, lens: Lens) -> Option<Readout> {
-    let model = model.trim();
-    TABLE.iter().find(|(ids, l, ..)| *l == lens && ids.contains(&model)).map(|&(_, _, ms, phone, source)| Readout {
-        readout_s: ms / 1e3,
-        phone,
-        source,
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn listed_phones_give_their_figure_in_seconds() {
-        let r = readout("iPhone16,2", Lens::Wide).expect("15 Pro Max listed");
-        assert!((r.readout_s - 0.0051).abs() < 1e-12, "{}", r.readout_s);
-        assert_eq!(r.phone, "iPhone 15 Pro Max");
-        let ms = |model: &str| readout(model, Lens::Wide).map(|r| (r.readout_s * 1e3 * 10.0).round() / 10.0);
-        assert_eq!(ms(" iPhone17,2 "), Some(2.4));
-        assert_eq!(ms("iPhone5,2"), Some(27.4));
-    }
-
-    #[test]
-    fn unmeasured_phones_and_lenses_have_none() {
-        assert_eq!(readout("iPhone14,2", Lens::Wide), None, "no figure for the iPhone 13 Pro");
-        assert_eq!(readout("iPhone15,2", Lens::Front), None, "only the 14 Pro's main camera was measured");
-        assert_eq!(readout("", Lens::Wide), None);
-    }
-
-    #[test]
-    fn every_entry_is_a_plausible_readout() {
-        for &(ids, _, ms, phone, source) in TABLE {
-            assert!(!ids.is_empty() && !phone.is_empty() && !source.is_empty());
-            assert!((1.0..40.0).contains(&ms), "{phone}: {ms} ms");
-        }
-    }
+/// Why no capture plan could be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeviceError {
+    /// A number given is out of range.
+    #[error("{0}")]
+    Invalid(String),
+    /// No format of the camera can film what is asked.
+    #[error("{0}")]
+    NoFormat(String),
 }
