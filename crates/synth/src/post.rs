@@ -145,65 +145,11 @@ fn defocus_sigmas(img: &mut LinearImage, sig: &[f64]) {
     img.radiance = out;
 }
 
-/// A disc blur of radius `radius` (px) over the window [x0, x1) × [y0, y1) of `img` (edges
-/// clamped): each row of the disc, as wide as the disc is at its centre line, summed from row
-/// prefix sums of the box-filtered pixels (so a fraction of a pixel counts by its fraction).
-fn disc_window(img: &[f32], w: usize, h: usize, win: [usize; 4], radius: f64) -> Vec<f32> {
-    let [x0, y0, x1, y1] = win;
-    let reach = radius.ceil() as isize;
-    let halves: Vec<(isize, f64)> =
-        (-reach..=reach).map(|dy| (dy, (radius * radius - (dy * dy) as f64).max(0.0).sqrt())).collect();
-    let total: f64 = halves.iter().map(|(_, half)| 2.0 * half).sum();
-    // Prefix sums of the rows the disc reaches, over the whole width (clamped at the edges).
-    let gy0 = y0.saturating_sub(reach as usize);
-    let gy1 = (y1 + reach as usize).min(h);
-    let pad = reach as usize + 1;
-    let prefix: Vec<Vec<f64>> = (gy0..gy1)
-        .into_par_iter()
-        .map(|y| {
-            let row = &img[y * w..(y + 1) * w];
-            let mut p = Vec::with_capacity(w + 2 * pad + 1);
-            p.push(0.0);
-            let mut acc = 0.0;
-            for i in 0..w + 2 * pad {
-                let x = (i as isize - pad as isize).clamp(0, w as isize - 1) as usize;
-                acc += f64::from(row[x]);
-                p.push(acc);
-            }
-            p
-        })
-        .collect();
-    // ∫ of the row (box pixels) from its pixel-edge coordinate 0 to `at` (px), `at` within
-    // the padded row: pixel i covers [i − 0.5, i + 0.5] of the image's coordinates.
-    let integral = |p: &[f64], at: f64| {
-        let u = at + 0.5 + pad as f64;
-        let i = (u.floor() as usize).min(p.len() - 2);
-        let f = u - i as f64;
-        p[i] + f * (p[i + 1] - p[i])
-    };
-    (y0..y1)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            let (prefix, halves) = (&prefix, &halves);
-            (x0..x1).map(move |x| {
-                let mut acc = 0.0;
-                for &(dy, half) in halves {
-                    if half <= 0.0 {
-                        continue;
-                    }
-                    let yy = (y as isize + dy).clamp(gy0 as isize, gy1 as isize - 1) as usize;
-                    let p = &prefix[yy - gy0];
-                    acc += integral(p, x as f64 + half) - integral(p, x as f64 - half);
-                }
-                (acc / total) as f32
-            })
-        })
-        .collect()
-}
-
 /// Blurs each pixel by the disc its own depth calls for (radius px; a gather approximation of
-/// defocus, like [`defocus`]); radii under a pixel, which a disc of whole rows cannot draw,
-/// get the Gaussian of the same variance (σ = radius/2).
+/// defocus, like [`defocus`]): each row of the disc, as wide as the disc is at that row's
+/// centre line, summed from row prefix sums of the box-filtered pixels (so a fraction of a pixel
+/// counts by its fraction), edges clamped. Radii under a pixel, which a disc of whole rows
+/// cannot draw, get the Gaussian of the same variance (σ = radius/2).
 pub fn defocus_disc(img: &mut LinearImage, radius_of_depth: impl Fn(f64) -> f64 + Sync) {
     let (w, h) = (img.width as usize, img.height as usize);
     let radius: Vec<f64> = img.depth.par_iter().map(|&d| radius_of_depth(f64::from(d)).min(24.0)).collect();
@@ -217,41 +163,55 @@ pub fn defocus_disc(img: &mut LinearImage, radius_of_depth: impl Fn(f64) -> f64 
     let sigma: Vec<f64> = radius.iter().map(|&r| if r < 1.0 { r / 2.0 } else { 0.0 }).collect();
     defocus_sigmas(&mut small, &sigma);
     let mut out = small.radiance;
-    // From a pixel up: discs at radii 1, 1.2, 1.44, …, each pixel blending the two around its own.
-    let mut levels = vec![1.0];
-    while *levels.last().unwrap_or(&1.0) < largest {
-        let next = levels.last().unwrap_or(&1.0) * 1.2;
-        levels.push(next);
+    if largest < 1.0 {
+        img.radiance = out;
+        return;
     }
-    for pair in levels.windows(2) {
-        let (lo, hi) = (pair[0], pair[1]);
-        let inside = |r: f64| r >= lo && r < hi;
-        let mut bb = [usize::MAX, usize::MAX, 0, 0];
-        for y in 0..h {
-            for x in 0..w {
-                if inside(radius[y * w + x]) {
-                    bb = [bb[0].min(x), bb[1].min(y), bb[2].max(x + 1), bb[3].max(y + 1)];
-                }
+    // Prefix sums of every row, padded either side by the largest radius (edges clamped):
+    // `prefix[y][i]` sums the padded row's first i pixels.
+    let pad = largest.ceil() as usize + 1;
+    let stride = w + 2 * pad + 1;
+    let radiance = &img.radiance;
+    let prefix: Vec<f64> = (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let row = &radiance[y * w..(y + 1) * w];
+            let mut acc = 0.0;
+            std::iter::once(0.0).chain((0..w + 2 * pad).map(move |i| {
+                let x = (i as isize - pad as isize).clamp(0, w as isize - 1) as usize;
+                acc += f64::from(row[x]);
+                acc
+            }))
+        })
+        .collect();
+    // ∫ of row y (box pixels) up to image coordinate `at`: pixel i covers [i − 0.5, i + 0.5].
+    let integral = |y: usize, at: f64| {
+        let p = &prefix[y * stride..(y + 1) * stride];
+        let u = at + 0.5 + pad as f64;
+        let i = (u.floor().max(0.0) as usize).min(stride - 2);
+        let f = u - i as f64;
+        p[i] + f * (p[i + 1] - p[i])
+    };
+    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, v) in row.iter_mut().enumerate() {
+            let r = radius[y * w + x];
+            if r < 1.0 {
+                continue;
             }
-        }
-        if bb[0] == usize::MAX {
-            continue;
-        }
-        let a = disc_window(&img.radiance, w, h, bb, lo);
-        let b = disc_window(&img.radiance, w, h, bb, hi);
-        let ww = bb[2] - bb[0];
-        for y in bb[1]..bb[3] {
-            for x in bb[0]..bb[2] {
-                let r = radius[y * w + x];
-                if !inside(r) {
+            let reach = r.ceil() as isize;
+            let (mut acc, mut total) = (0.0, 0.0);
+            for dy in -reach..=reach {
+                let half = (r * r - (dy * dy) as f64).max(0.0).sqrt();
+                if half <= 0.0 {
                     continue;
                 }
-                let i = (y - bb[1]) * ww + (x - bb[0]);
-                let t = ((r - lo) / (hi - lo)) as f32;
-                out[y * w + x] = a[i] * (1.0 - t) + b[i] * t;
+                let yy = (y as isize + dy).clamp(0, h as isize - 1) as usize;
+                acc += integral(yy, x as f64 + half) - integral(yy, x as f64 - half);
+                total += 2.0 * half;
             }
+            *v = (acc / total) as f32;
         }
-    }
+    });
     img.radiance = out;
 }
 
