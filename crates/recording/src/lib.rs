@@ -39,7 +39,8 @@ mod write;
 pub use flag::Flag;
 pub use read::{MAX_TRANSLATION_MM, Recording, open, read_recording};
 pub use schema::{
-    BiteRecord, BodyRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader, SessionId, TimingsRecord,
+    BiteRecord, BodyRecord, CaptureRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader,
+    SessionId, TimingsRecord,
 };
 pub use write::{Overwrite, RecordingWriter, create_file};
 

@@ -143,6 +143,7 @@ mod tests {
             path: None,
             t: 0.25,
             exposure_s: None,
+            lens_position: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: pose,

@@ -83,6 +83,10 @@ pub struct RecordingHeader {
     /// The marker file's JSON, when known.
     #[serde(default)]
     pub marker: Option<Value>,
+    /// How the phone was set to film: its capture plan and where its focus was locked, when the
+    /// app planned it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capture: Option<CaptureRecord>,
     /// Settings of the writer (detector, search, smoothing, link), free-form.
     #[serde(default)]
     pub settings: Value,
@@ -107,6 +111,7 @@ impl RecordingHeader {
             readout_s: None,
             exposure_s: None,
             marker: None,
+            capture: None,
             settings: Value::Null,
             key_id: None,
             created_unix_s: now,
@@ -117,6 +122,34 @@ impl RecordingHeader {
     pub fn to_line(&self) -> String {
         serde_json::json!({ "recording": self }).to_string()
     }
+}
+
+/// How a phone was set to film a session (`jawtrack_devices::plan`): camera, format, zoom,
+/// distance, and where focus was locked.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaptureRecord {
+    /// The plan in words ("hold the phone about 22 cm away: …").
+    pub plan: String,
+    /// Frame size (px).
+    pub width: u32,
+    /// Frame height (px).
+    pub height: u32,
+    /// Frames per second.
+    pub fps: f64,
+    /// The zoom: 1, or the sensor's native crop. Intrinsics belong to a zoom.
+    pub zoom: f64,
+    /// Where the phone was to be held, and focus locked (mm).
+    pub distance_mm: f64,
+    /// The nearest and farthest the markers stay sharp with focus locked there (mm).
+    pub near_mm: f64,
+    /// See `near_mm`.
+    pub far_mm: f64,
+    /// The nearest the lens focuses (mm).
+    pub min_focus_mm: f64,
+    /// AVFoundation's lens position (0 near – 1 far) focus was locked at, when known: intrinsics
+    /// belong to a lens position too (focusing moves the lens, scaling the image).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lens_position: Option<f64>,
 }
 
 /// One body in a frame's record.
@@ -169,6 +202,10 @@ pub struct FrameRecord {
     /// The frame's exposure (s), when the camera reported it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exposure_s: Option<f64>,
+    /// AVFoundation's lens position (0 near – 1 far) while the frame was taken, when reported:
+    /// a change means focus moved, and with it the focal length.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lens_position: Option<f64>,
     /// The upper jaw's marker.
     pub maxilla: Option<BodyRecord>,
     /// The lower jaw's marker.
@@ -233,6 +270,7 @@ impl FrameRecord {
             path: path.map(str::to_owned),
             t,
             exposure_s: None,
+            lens_position: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: None,

@@ -116,6 +116,7 @@ mod tests {
             path: None,
             t: i as f64 / 30.0,
             exposure_s: None,
+            lens_position: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: None,

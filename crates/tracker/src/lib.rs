@@ -29,18 +29,20 @@ mod flicker;
 pub mod oblique;
 pub mod registration;
 pub mod roi;
+pub mod sharpness;
 pub mod smoothing;
 
 pub use bite::{Bite, BiteRefusal, BiteRule, BiteWindow};
 pub use jawtrack_recording::Flag;
 pub use registration::{IntercuspationCalibration, Registration, RegistrationError, calibrate_intercuspation};
+pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX};
 pub use smoothing::{Smoother, SmootherConfig};
 
 use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::motion::to_frame_time;
 use jawtrack_pose::{
-    BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, median, solve_pnp,
+    BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, solve_pnp,
 };
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
 use nalgebra::{Matrix6, Point2, Point3};
@@ -102,10 +104,6 @@ pub struct TrackerConfig {
     /// can focus, or far from where its focus was locked). See [`DEFOCUSED_BLUR_PER_CELL`].
     pub max_blur_per_cell: f64,
 }
-
-/// The default [`TrackerConfig::max_blur_per_cell`]: measured on renders with a phone's optics
-/// (`docs/accuracy.md`, "Capture"), a blur of this much of a cell leaves the jaw within TBD.
-pub const DEFOCUSED_BLUR_PER_CELL: f64 = 0.2;
 
 impl Default for TrackerConfig {
     fn default() -> Self {
@@ -214,6 +212,7 @@ impl FrameResult {
             path: path.map(str::to_owned),
             t: self.t,
             exposure_s: None,
+            lens_position: None,
             maxilla: self.maxilla.as_ref().map(body),
             mandible: self.mandible.as_ref().map(body),
             maxilla_from_mandible: self.maxilla_from_mandible,
@@ -529,17 +528,7 @@ impl Tracker {
             };
             bodies[slot(kind)] = self.accept(kind, pose, rejected, other.or(own).as_ref(), &mut flags);
         }
-        let mut defocused = false;
-        for (kind, body) in BodyKind::ALL.iter().zip(bodies.iter_mut()) {
-            let Some(b) = body else { continue };
-            let used: Vec<&Detection> = detections.iter().filter(|d| b.tags.contains(&d.id)).collect();
-            b.blur_px = median(used.iter().filter_map(|d| d.blur_px));
-            b.cell_px = median(used.iter().map(|d| longest_cell_px(d))).unwrap_or(0.0);
-            if b.defocused(self.config.max_blur_per_cell) {
-                flags.push(Flag::Defocused(*kind));
-                defocused = true;
-            }
-        }
+        let defocused = sharpness::judge(&mut bodies, &detections, self.config.max_blur_per_cell, &mut flags);
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
                 Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
@@ -603,7 +592,7 @@ impl Tracker {
     pub fn observations(&self, kind: BodyKind, detections: &[Detection]) -> Vec<Observation> {
         let mine: Vec<&Detection> =
             detections.iter().filter(|d| self.marker.find_tag(d.id).is_some_and(|(b, _)| b == kind)).collect();
-        let thin = |d: &Detection| cell_px(d) < THIN_CELL_PX;
+        let thin = |d: &Detection| sharpness::cell_px(d) < THIN_CELL_PX;
         let skip_thin = mine.iter().filter(|d| !thin(d)).count() >= 2;
         let mut out = Vec::new();
         for d in mine {
@@ -719,28 +708,6 @@ impl Tracker {
     }
 }
 
-/// A tag whose cells are narrower than this (px, across its shortest side) is seen too
-/// steeply to place its corners: its border and its data cells blur into one another (at 200
-/// mm on a 1080p phone frame, a tag seen 83° from face-on has cells of 1 px across and its
-/// corners land up to 1.25 px off, moving the jaw 0.19 mm; `docs/accuracy.md`, "Capture").
-pub const THIN_CELL_PX: f64 = 2.0;
-
-/// The lengths (px) of a detected tag's four sides.
-fn sides_px(d: &Detection) -> [f64; 4] {
-    let c = &d.corners;
-    std::array::from_fn(|i| (c[i][0] - c[(i + 1) % 4][0]).hypot(c[i][1] - c[(i + 1) % 4][1]))
-}
-
-/// The width (px) of a detected tag's cells across its shortest side.
-fn cell_px(d: &Detection) -> f64 {
-    sides_px(d).into_iter().fold(f64::INFINITY, f64::min) / 8.0
-}
-
-/// The width (px) of a detected tag's cells along its longest side.
-fn longest_cell_px(d: &Detection) -> f64 {
-    sides_px(d).into_iter().fold(0.0, f64::max) / 8.0
-}
-
 /// Refuses settings out of range.
 fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
     c.bite.validate().map_err(TrackError::BadConfig)?;
@@ -788,30 +755,6 @@ fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageView<'_>, di
 mod tests {
     use super::*;
     use nalgebra::Vector3;
-
-    /// A detection of `id` whose quad is `w` × `h` px at (100, 100).
-    fn quad(id: u32, w: f64, h: f64) -> Detection {
-        let corners = [[100.0, 100.0 + h], [100.0 + w, 100.0 + h], [100.0 + w, 100.0], [100.0, 100.0]];
-        let center = [100.0 + w / 2.0, 100.0 + h / 2.0];
-        Detection { id, hamming: 0, decision_margin: 50.0, center, corners, homography: [0.0; 9], blur_px: None }
-    }
-
-    #[test]
-    fn a_tag_seen_edge_on_is_left_out_while_two_others_remain() {
-        let tracker = Tracker::new(Marker::default(), TrackerConfig::default()).expect("valid");
-        let tags = |d: &[Detection]| {
-            let mut ids: Vec<u32> = tracker.observations(BodyKind::Maxilla, d).iter().map(|o| o.tag).collect();
-            ids.dedup();
-            ids
-        };
-        // Tag 2's cells are 1 px across (an 8 px short side): seen at ~83°.
-        let seen = [quad(0, 60.0, 60.0), quad(1, 60.0, 40.0), quad(2, 60.0, 8.0), quad(12, 60.0, 8.0)];
-        assert_eq!(tags(&seen), [0, 1]);
-        // With one other tag only, it is kept: four more points beat a lone tag's mirror.
-        assert_eq!(tags(&seen[1..3]), [1, 2]);
-        // 16 px is two pixels a cell: kept.
-        assert_eq!(tags(&[quad(0, 60.0, 60.0), quad(1, 60.0, 40.0), quad(2, 60.0, 16.0)]), [0, 1, 2]);
-    }
 
     #[test]
     fn a_record_carries_every_field_in_row_major_order() {

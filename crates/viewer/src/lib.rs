@@ -519,6 +519,7 @@ mod tests {
             path: None,
             t,
             exposure_s: None,
+            lens_position: None,
             maxilla: None,
             mandible: None,
             maxilla_from_mandible: Some(m),

@@ -311,6 +311,7 @@ impl PosePacket {
             path: None,
             t: self.t,
             exposure_s: None,
+            lens_position: None,
             maxilla: self.maxilla.as_ref().map(body),
             mandible: self.mandible.as_ref().map(body),
             maxilla_from_mandible: self.maxilla_from_mandible,
