@@ -31,7 +31,7 @@ mod focal;
 mod session;
 
 use adjust::{Adjustment, adjust};
-pub use focal::{FocalCheck, check_focal};
+pub use focal::{FOCUS_MOVED, FocalCheck, check_focal};
 use jawtrack_marker::{BodyKind, BodyProvenance, Marker, MarkerError, PrintError, Tag, TagProvenance};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};
 use nalgebra::{Isometry3, Matrix3, Point2, Point3, Rotation3, Unit, Vector2, Vector3};

@@ -366,3 +366,29 @@ fn one_direction_of_view_places_a_tag_by_default_and_never_when_more_are_asked_f
         );
     }
 }
+
+/// Focusing elsewhere scales a phone's focal length by a few per cent: with the marker's tags
+/// measured (here the printed marker itself), 3 % either way is named and the right focal
+/// length is not; 1 % (within what a focus change can be mistaken for) is not named either.
+#[test]
+fn a_focus_that_moved_is_named_with_a_measured_marker() {
+    let mut rng = Lcg(5);
+    let truth = printed(&mut rng);
+    let (frames, _) = views(&truth, 40, 0.05, &mut rng);
+    let with = |scale: f64| -> Vec<CalibrationFrame> {
+        frames
+            .iter()
+            .map(|x| {
+                let camera = CameraIntrinsics { fx: x.camera.fx * scale, fy: x.camera.fy * scale, ..x.camera };
+                CalibrationFrame { camera, ..x.clone() }
+            })
+            .collect()
+    };
+    for (scale, moved) in [(1.0, false), (1.03, true), (0.97, true), (1.005, false)] {
+        let check = check_focal(&truth, &with(scale)).expect("views with three tags");
+        eprintln!("focal length × {scale}: {check}");
+        assert_eq!(check.focus_moved(), moved, "× {scale}: {check}");
+        assert!(!check.looks_wrong(), "× {scale}: {check}");
+        assert!((check.best_scale * scale - 1.0).abs() < 0.005, "× {scale}: {check}");
+    }
+}
