@@ -18,16 +18,19 @@
 //! fit, or an uncertainty says the frames did not constrain it (distortion without corners
 //! near the image's edges, a readout without motion, …), with what to film instead.
 
+mod file;
 mod solve;
 #[cfg(test)]
 mod tests;
+
+pub use file::{CalibratedAt, CameraFile, CameraFileError, LENS_POSITION_MOVED};
 
 pub use jawtrack_calibration::SeenTag;
 use jawtrack_calibration::{CalibrationFrame, check_focal};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, RollingShutter, solve_pnp};
 use nalgebra::{Point2, Point3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use solve::{Problem, Sighting, Track, ViewData};
 
 /// The tags seen in one frame, and when.
@@ -92,7 +95,7 @@ impl Default for CameraCalibrationOptions {
 }
 
 /// 1σ of each estimate.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Uncertainty {
     /// Of fx (px).
     pub fx: f64,
@@ -114,7 +117,7 @@ pub struct Uncertainty {
 }
 
 /// A camera calibrated.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CameraCalibration {
     /// Image size [width, height] (px).
     pub image_size: [u32; 2],

@@ -5,7 +5,9 @@
 use crate::frames::{detect_marker_tags, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_camera_calibration::{CameraCalibration, CameraCalibrationOptions, CameraFrame, calibrate_camera};
+use jawtrack_camera_calibration::{
+    CalibratedAt, CameraCalibration, CameraCalibrationOptions, CameraFile, CameraFrame, calibrate_camera,
+};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use std::path::PathBuf;
@@ -50,6 +52,18 @@ pub(crate) struct CalibrateCameraArgs {
     /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     linear_edges: bool,
+    /// The lens position (AVFoundation's 0 near – 1 far) focus was locked at while filming,
+    /// recorded with the calibration: intrinsics belong to a focus, and `jawtrack track
+    /// --camera` warns when a recording's differs. Default: the --like recording's.
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    lens_position: Option<f64>,
+    /// The zoom filmed at (1, or the sensor's native 2× crop), recorded likewise. Default: the
+    /// --like recording's.
+    #[arg(long, value_name = "Z", allow_hyphen_values = true)]
+    zoom: Option<f64>,
+    /// The JawTrack app's recording made with the calibration video: its lens position and zoom.
+    #[arg(long, value_name = "RECORDING")]
+    like: Option<PathBuf>,
 }
 
 pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
@@ -71,6 +85,7 @@ pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
     if !(a.max_rms_px.is_finite() && a.max_rms_px > 0.0) {
         bail!("--max-rms-px must be a positive number of pixels, got {}", a.max_rms_px);
     }
+    let calibrated_at = calibrated_at(a)?;
     let marker = match &a.marker {
         Some(p) => Marker::load(p)?,
         None => Marker::default(),
@@ -90,16 +105,33 @@ pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
     let started = std::time::Instant::now();
     let c = calibrate_camera(&frames, width, height, &marker, &options)?;
     print_result(&c, started.elapsed().as_secs_f64());
-    let json = serde_json::json!({
-        "version": 1,
-        "calibration": c,
-        "track_flags": track_flags(&c),
-    });
-    let text = serde_json::to_string_pretty(&json).context("the result as JSON")?;
-    std::fs::write(&a.out, text + "\n").with_context(|| format!("writing {}", a.out.display()))?;
+    let file = CameraFile::new(c, calibrated_at);
+    std::fs::write(&a.out, file.to_json() + "\n").with_context(|| format!("writing {}", a.out.display()))?;
     say!("wrote {}", a.out.display());
-    say!("track with: jawtrack track {} …", track_flags(&c));
+    say!("track with: jawtrack track --camera {} … (or {})", a.out.display(), file.track_flags);
     Ok(())
+}
+
+/// The lens position and zoom filmed at: the flags, else the --like recording's capture.
+fn calibrated_at(a: &CalibrateCameraArgs) -> Result<CalibratedAt> {
+    let like = match &a.like {
+        Some(p) => jawtrack_recording::open(p)?.header.and_then(|h| h.capture),
+        None => None,
+    };
+    if a.like.is_some() && like.is_none() && (a.lens_position.is_none() || a.zoom.is_none()) {
+        eprintln!("note: --like's recording has no capture plan: its lens position and zoom are not known");
+    }
+    let at = CalibratedAt {
+        lens_position: a.lens_position.or(like.as_ref().and_then(|c| c.lens_position)),
+        zoom: a.zoom.or(like.as_ref().map(|c| c.zoom)),
+    };
+    if let Some(p) = at.lens_position.filter(|p| !(p.is_finite() && (0.0..=1.0).contains(p))) {
+        bail!("--lens-position is AVFoundation's lens position, within 0–1; got {p}");
+    }
+    if let Some(z) = at.zoom.filter(|z| !(z.is_finite() && (1.0..=20.0).contains(z))) {
+        bail!("--zoom must be at least 1 (1, or the native crop's 2), got {z}");
+    }
+    Ok(at)
 }
 
 /// Detects the marker's tags in every frame, with a progress bar; the frames and their size.
@@ -117,22 +149,6 @@ fn detect(a: &CalibrateCameraArgs, marker: &Marker) -> Result<(Vec<CameraFrame>,
     }
     let (Ok(w), Ok(h)) = (u32::try_from(w), u32::try_from(h)) else { bail!("frames of {w}×{h} px are too large") };
     Ok((frames.into_iter().map(|f| CameraFrame { t: f.t, tags: f.tags }).collect(), w, h))
-}
-
-/// The flags that give `jawtrack track` this camera.
-fn track_flags(c: &CameraCalibration) -> String {
-    let k = &c.intrinsics;
-    // A readout estimated just below 0 (a global shutter, within its noise) is 0.
-    format!(
-        "--intrinsics {:.3},{:.3},{:.3},{:.3},{:.6},{:.6} --readout-ms {:.3}",
-        k.fx,
-        k.fy,
-        k.cx,
-        k.cy,
-        k.k1,
-        k.k2,
-        (c.readout_s * 1e3).max(0.0)
-    )
 }
 
 fn print_result(c: &CameraCalibration, seconds: f64) {
