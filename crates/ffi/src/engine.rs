@@ -31,9 +31,11 @@ pub struct BodyPose {
     /// RMS reprojection error (px).
     pub rms_px: f64,
     /// How blurred its tags' edges are (σ, px), when measured: the lens's defocus.
+    #[uniffi(default)]
     pub blur_px: Option<f64>,
     /// The width (px) of its tags' cells, what its blur is judged against (`defocused` beyond a
     /// fifth of it).
+    #[uniffi(default)]
     pub cell_px: f64,
 }
 
@@ -92,6 +94,17 @@ pub struct FrameResult {
     pub maxilla_scan_from_mandible_scan: Option<Vec<f64>>,
     /// Quality flags by name, e.g. `mandible:single_tag`.
     pub flags: Vec<String>,
+    /// How far the markers are from the camera (mm): the mean depth of the bodies solved, for
+    /// the capture guidance ([`crate::CapturePlanner::guide`]).
+    #[uniffi(default)]
+    pub depth_mm: Option<f64>,
+    /// Whether a body is flagged `defocused` (its tags blurred beyond what its pose can stand):
+    /// the frame gives no jaw pose, and the guidance says the phone is out of focus.
+    #[uniffi(default)]
+    pub defocused: bool,
+    /// The lens position the camera reported for the frame ([`crate::Tracker::set_lens_position`]).
+    #[uniffi(default)]
+    pub lens_position: Option<f64>,
     /// The overlay's geometry.
     pub overlay: Overlay,
     /// Tag detection time (ms).
@@ -167,6 +180,8 @@ pub(crate) struct Engine {
     times: VecDeque<f64>,
     /// Luma of BGRA frames, reused between frames.
     pub(crate) luma: Vec<u8>,
+    /// The lens position the camera last reported, stamped on each frame.
+    pub(crate) lens_position: Option<f64>,
 }
 
 fn kind_name(kind: BodyKind) -> String {
@@ -176,7 +191,16 @@ fn kind_name(kind: BodyKind) -> String {
 impl Engine {
     pub(crate) fn new(marker: Marker, settings: Settings) -> Result<Self, JawTrackError> {
         let tracker = Tracker::new(marker, settings.tracker_config()?)?;
-        Ok(Engine { tracker, settings, frame: 0, last: None, view: None, times: VecDeque::new(), luma: Vec::new() })
+        Ok(Engine {
+            tracker,
+            settings,
+            frame: 0,
+            last: None,
+            view: None,
+            times: VecDeque::new(),
+            luma: Vec::new(),
+            lens_position: None,
+        })
     }
 
     /// Keeps the bodies' motion, the registration and the recent jaw poses: a settings change
@@ -279,6 +303,16 @@ impl Engine {
             maxilla_from_mandible: r.maxilla_from_mandible.map(|p| p.to_row_major().to_vec()),
             maxilla_scan_from_mandible_scan: r.maxilla_scan_from_mandible_scan.map(|p| p.to_row_major().to_vec()),
             flags: r.flags.iter().map(Flag::name).collect(),
+            depth_mm: {
+                let z: Vec<f64> = [&r.maxilla, &r.mandible]
+                    .into_iter()
+                    .flatten()
+                    .map(|b| b.camera_from_body.translation().z)
+                    .collect();
+                (!z.is_empty()).then(|| z.iter().sum::<f64>() / z.len() as f64)
+            },
+            defocused: r.flags.iter().any(|f| matches!(f, Flag::Defocused(_))),
+            lens_position: self.lens_position,
             overlay: Overlay { tags, axes },
             detection_ms: r.timings.detection_s * 1e3,
             pose_ms: r.timings.pose_s * 1e3,
@@ -338,6 +372,7 @@ pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
         path: None,
         t: r.t,
         exposure_s: r.exposure_s,
+        lens_position: r.lens_position,
         maxilla: body(&r.maxilla, "camera_from_maxilla")?,
         mandible: body(&r.mandible, "camera_from_mandible")?,
         maxilla_from_mandible: r

@@ -24,6 +24,7 @@ mod calibrator;
 mod capture;
 mod engine;
 mod error;
+mod plan;
 mod settings;
 
 pub use calibrator::{
@@ -35,6 +36,7 @@ pub use engine::{
     AxisOverlay, BodyPose, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
 };
 pub use error::JawTrackError;
+pub use plan::{CaptureFormat, CaptureGuidance, CapturePlanner, GuidanceKind, PlanChoice};
 pub use settings::{
     AppSettings, Camera, FocusMode, Resolution, Settings, default_app_settings, default_settings,
     validate_app_settings, validate_settings,
@@ -150,6 +152,18 @@ impl Tracker {
         }
     }
 
+    /// The lens position (AVFoundation's `lensPosition`, 0 near – 1 far) the camera reports
+    /// from now on, stamped on each frame's result and recorded with it; `None` when unknown.
+    /// Focusing moves the lens and scales the image: a recording whose lens position moved, or
+    /// differs from the calibration's, is measured with the wrong focal length.
+    pub fn set_lens_position(&self, lens_position: Option<f64>) -> Result<(), JawTrackError> {
+        if let Some(p) = lens_position.filter(|p| !(p.is_finite() && (0.0..=1.0).contains(p))) {
+            return Err(invalid(format!("a lens position is within 0–1, got {p}")));
+        }
+        lock(&self.engine).lens_position = lens_position;
+        Ok(())
+    }
+
     /// The result of the last frame tracked (by either door), if any.
     pub fn last_result(&self) -> Option<FrameResult> {
         lock(&self.engine).last.clone()
@@ -174,7 +188,7 @@ impl Drop for Tracker {
 }
 
 /// What a recording's header says about where it came from.
-#[derive(Debug, Clone, PartialEq, uniffi::Record)]
+#[derive(Debug, Clone, uniffi::Record)]
 pub struct RecordingInfo {
     /// The device and camera, e.g. "iPhone15,2 back wide".
     pub device: Option<String>,
@@ -189,6 +203,12 @@ pub struct RecordingInfo {
     /// The camera's rolling-shutter readout the tracker was told (s), so that `jawtrack track`
     /// re-tracks the session's video the same way.
     pub readout_s: Option<f64>,
+    /// The capture plan the camera was set by, if any: written into the header.
+    #[uniffi(default)]
+    pub plan: Option<Arc<CapturePlanner>>,
+    /// The lens position focus was locked at (0 near – 1 far), when it was.
+    #[uniffi(default)]
+    pub locked_lens_position: Option<f64>,
 }
 
 /// Writes a session as JSON Lines in the schema of `jawtrack track`: a header line, then one
@@ -223,6 +243,10 @@ impl Recorder {
             capture::check_readout(r, "readout_s")?;
         }
         header.readout_s = info.readout_s;
+        if let Some(p) = info.locked_lens_position.filter(|p| !(p.is_finite() && (0.0..=1.0).contains(p))) {
+            return Err(invalid(format!("a lens position is within 0–1, got {p}")));
+        }
+        header.capture = info.plan.map(|p| p.record(info.locked_lens_position));
         let writer = RecordingWriter::create(std::path::Path::new(&path), header, Overwrite::Refuse)?;
         Ok(Arc::new(Recorder { writer: Mutex::new(Some(writer)), frames: Mutex::new(0), path }))
     }
