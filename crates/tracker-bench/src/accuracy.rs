@@ -62,6 +62,12 @@ pub struct AccuracyArgs {
     python: String,
     #[command(flatten)]
     chew: benchtop::chew::ChewArgs,
+    #[command(flatten)]
+    capture: benchtop::capture::CaptureArgs,
+    /// Run the capture section alone (no calibration, static grid, hinge, excursions or chew
+    /// at the rig's distances).
+    #[arg(long, conflicts_with = "no_capture")]
+    capture_only: bool,
 }
 
 /// Runs the benchtop experiments and writes the report, tables, plots and calibrated marker
@@ -83,6 +89,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     if let Some(c) = &chew {
         c.validate()?;
     }
+    let capture = a.capture.options(a.quick)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let started = std::time::Instant::now();
     let bar = indicatif::ProgressBar::new(0);
@@ -107,9 +114,21 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         }
         bar.set_position(done as u64);
     };
+    if a.capture_only {
+        let Some(c) = &capture else { anyhow::bail!("--capture-only and --no-capture leave nothing to run") };
+        let captures = benchtop::capture::run(&options, c, &mut progress)?;
+        bar.finish_and_clear();
+        let path = crate::capture::write_alone(&captures, c, &a.out)?;
+        crate::say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
+        return Ok(());
+    }
     let run = benchtop::run(&options, &mut progress)?;
     let chews = match &chew {
         Some(c) => benchtop::chew::run(&options, c, &mut progress)?,
+        None => Vec::new(),
+    };
+    let captures = match &capture {
+        Some(c) => benchtop::capture::run(&options, c, &mut progress)?,
         None => Vec::new(),
     };
     bar.finish_and_clear();
@@ -128,15 +147,25 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     let mut files = write_csv(&run, &a.out)?;
     files.extend(write_plots(&run, &a.out)?);
     files.extend(crate::chew::plots(&chews, &a.out)?);
+    files.extend(crate::capture::write(&captures, &a.out)?);
     let mut report = report(&run, &options, &files, &a.out);
     // The chewing section goes with the other results, before the list of plots.
     let at = report.find("\n## Plots and tables").unwrap_or(report.len());
     report.insert_str(at, &crate::chew::markdown(&chews, run.reference.is_ok()));
+    if let Some(c) = &capture {
+        let at = report.find("\n## Plots and tables").unwrap_or(report.len());
+        report.insert_str(at, &crate::capture::markdown(&captures, c));
+    }
     let path = a.out.join("report.md");
     std::fs::write(&path, &report).with_context(|| format!("writing {}", path.display()))?;
     crate::say(format_args!("{}", summary(&run)));
     for line in crate::chew::summary(&chews) {
         crate::say(format_args!("{line}"));
+    }
+    if let Some(c) = &capture {
+        for line in crate::capture::summary(&captures, c) {
+            crate::say(format_args!("{line}"));
+        }
     }
     crate::say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
     Ok(())

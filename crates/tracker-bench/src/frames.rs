@@ -5,11 +5,27 @@
 use anyhow::{Context, Result};
 use jawtrack_marker::Marker;
 use jawtrack_synth::scenes::{FrameSpec, scene_frames};
-use jawtrack_synth::{GroundTruth, Orientation, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use jawtrack_synth::{
+    GroundTruth, Orientation, Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer,
+};
 use std::path::{Path, PathBuf};
 
+/// A phone's camera filming from where it can focus ([`Realism::phone_wide`]): its format,
+/// zoom, distance and where its lens is focused.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Phone {
+    /// The frame size.
+    pub resolution: Resolution,
+    /// 1, or the sensor's native 2× crop.
+    pub zoom: f64,
+    /// Where the phone stands (mm from the markers).
+    pub distance_mm: f64,
+    /// Where its lens is locked (mm).
+    pub focus_mm: f64,
+}
+
 /// What to render: one scene at 1080p, default realism (but for the exposure and shutter
-/// asked for), the nominal marker.
+/// asked for), the nominal marker; or with a phone's optics.
 #[derive(Debug, Clone, Copy)]
 pub struct Request {
     /// The scene.
@@ -30,6 +46,8 @@ pub struct Request {
     pub readout_s: f64,
     /// How the phone is held (the chew scene's choice).
     pub orientation: Orientation,
+    /// A phone's optics instead of the default realism's lens, and its distance.
+    pub phone: Option<Phone>,
 }
 
 impl Request {
@@ -45,6 +63,7 @@ impl Request {
             exposure_s: None,
             readout_s: 0.0,
             orientation: Orientation::Upright,
+            phone: None,
         }
     }
 
@@ -60,14 +79,24 @@ impl Request {
         if self.orientation == Orientation::Landscape {
             name += "-landscape";
         }
+        if let Some(p) = self.phone {
+            let size = match p.resolution {
+                Resolution::P1080 => "1080p",
+                Resolution::P4k => "4k",
+            };
+            name += &format!("-phone-{size}-{}x-at{}mm-focus{}mm", p.zoom, p.distance_mm, p.focus_mm);
+        }
         name
     }
 
     fn config(&self) -> SynthConfig {
-        let realism = Realism::default();
+        let realism = match self.phone {
+            Some(p) => Realism::phone_wide(p.focus_mm, p.zoom),
+            None => Realism::default(),
+        };
         SynthConfig {
             seed: self.seed,
-            resolution: Resolution::P1080,
+            resolution: self.phone.map_or(Resolution::P1080, |p| p.resolution),
             realism: Realism {
                 exposure_s: self.exposure_s.unwrap_or(realism.exposure_s),
                 readout_s: self.readout_s,
@@ -78,7 +107,7 @@ impl Request {
                 cycles: self.cycles,
                 fps: self.fps,
                 orientation: self.orientation,
-                distance_mm: None,
+                distance_mm: self.phone.map(|p| p.distance_mm),
             },
             marker: Marker::default(),
             max_frames: self.max_frames,
@@ -114,11 +143,14 @@ fn cached(dir: &Path, req: &Request) -> Option<GroundTruth> {
     let mut truth: GroundTruth = serde_json::from_str(&text).ok()?;
     let config = req.config();
     let specs = req.specs();
+    let (w, h) = config.resolution.size();
+    // The frames' intrinsics (zoomed, breathing) as the renderer makes them.
+    let intrinsics = Synthesizer::new(config.clone()).ok()?.header().intrinsics;
     let same = truth.scene == config.scene.name()
         && truth.seed == config.seed
         && truth.realism == config.realism
-        && truth.image_size == [1920, 1080]
-        && truth.intrinsics == config.resolution.default_intrinsics()
+        && truth.image_size == [w, h]
+        && truth.intrinsics == intrinsics
         && truth.frames.len() >= specs.len()
         && truth.frames.iter().zip(&specs).all(|(f, s)| f.spec == *s);
     if !same {

@@ -10,6 +10,7 @@
 
 pub mod accuracy;
 pub mod benchtop;
+pub mod capture;
 pub mod chew;
 pub mod frames;
 pub mod opencv;

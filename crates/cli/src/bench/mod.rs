@@ -25,7 +25,7 @@ enum BenchKind {
     /// jawtrack links no C, so its report has our columns only. For the reference stack's
     /// columns (AprilTag C + OpenCV SQPnP) beside ours, give the same flags to
     /// `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- …`.
-    Accuracy(jawtrack_tracker_bench::accuracy::AccuracyArgs),
+    Accuracy(Box<jawtrack_tracker_bench::accuracy::AccuracyArgs>),
     /// The phone link on loopback: a sustained stream against a real receiver (loss, CPU), then
     /// random, forged and replayed datagrams (none accepted, every one counted).
     Link(link::LinkBenchArgs),

@@ -18,6 +18,7 @@
 //! the two markers are parallel, where Z-Y-Z angles are singular (β = 0 leaves α and γ
 //! undefined). To first order, the components equal the Euler-angle errors about the same axes.
 
+pub mod capture;
 pub mod chew;
 pub mod hinge_axis;
 mod session;
