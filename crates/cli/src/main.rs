@@ -38,6 +38,7 @@ mod marker;
 mod metrics;
 mod numbers;
 mod output;
+mod plan;
 mod points;
 mod progress;
 mod register;
@@ -90,6 +91,9 @@ enum Command {
     /// principal point, radial distortion and the rolling shutter's readout, each with its
     /// uncertainty; prints the flags `track` takes.
     CalibrateCamera(calibrate_camera::CalibrateCameraArgs),
+    /// Where and how to film with a phone: camera, format, zoom and the distance to hold it at,
+    /// beyond where its lens can focus, with focus locked there.
+    Plan(plan::PlanArgs),
     /// Register a marker to the scan of its printed harness (ICP of the dodecahedron from an
     /// initial guess), writing its entry of the registration file `track` reads.
     Register(register::RegisterArgs),
@@ -145,6 +149,7 @@ fn main() {
         Command::Bench(a) => bench::run(&a),
         Command::CalibrateMarker(a) => calibrate::run(&a),
         Command::CalibrateCamera(a) => calibrate_camera::run(&a),
+        Command::Plan(a) => plan::run(&a),
         Command::Register(a) => register::run(&a),
         Command::Keygen => {
             link::keygen();

@@ -51,6 +51,19 @@ pub(crate) struct SynthArgs {
     /// upright, both markers in the same rows).
     #[arg(long)]
     landscape: bool,
+    /// A Pro iPhone's wide camera as it really is (6.8 mm f/1.78: a 3.8 mm disc pupil, focus
+    /// breathing, the lens's own blur), its focus locked at --focus-mm, instead of the default
+    /// realism's lens.
+    #[arg(long, conflicts_with_all = ["clean", "realism"])]
+    phone: bool,
+    /// With --phone: where the lens is focused (mm), whatever the subject's distance (default:
+    /// --distance-mm, else 200, the nearest a current Pro wide camera focuses).
+    #[arg(long, value_name = "MM", requires = "phone")]
+    focus_mm: Option<f64>,
+    /// With --phone: the sensor crop (1, or 2 for a 48 MP sensor's native 2× crop); the
+    /// intrinsics are zoomed with it.
+    #[arg(long, default_value_t = 1.0, requires = "phone")]
+    zoom: f64,
     /// Where the phone stands (mm from the markers): the static scene's one distance instead of
     /// its 80/100/120 mm, the chew scene's instead of 120 mm (current Pro iPhones focus from
     /// 15–20 cm).
@@ -96,7 +109,16 @@ impl TypedValueParser for SceneParser {
 /// The realism settings: `--clean`, `--realism FILE` or the defaults, then `--exposure-ms` and
 /// `--readout-ms` over them.
 pub(crate) fn load_realism(a: &SynthArgs) -> Result<Realism> {
-    let mut realism = if a.clean {
+    let mut realism = if a.phone {
+        let focus = a.focus_mm.or(a.distance_mm).unwrap_or(200.0);
+        if !(focus.is_finite() && (20.0..=2000.0).contains(&focus)) {
+            bail!("--focus-mm must be within 20–2000 mm, got {focus}");
+        }
+        if !(a.zoom.is_finite() && (1.0..=10.0).contains(&a.zoom)) {
+            bail!("--zoom is a sensor crop from 1 to 10, got {}", a.zoom);
+        }
+        Realism::phone_wide(focus, a.zoom)
+    } else if a.clean {
         Realism::clean()
     } else {
         match &a.realism {

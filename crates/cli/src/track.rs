@@ -10,6 +10,7 @@ use indicatif::ProgressBar;
 use jawtrack_apriltag::Detection;
 use jawtrack_apriltag::DetectorConfig;
 use jawtrack_calibration::{CalibrationFrame, FocalCheck, SeenTag, SessionOptions, check_focal, refine};
+use jawtrack_camera_calibration::CameraFile;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
@@ -25,6 +26,10 @@ struct Like {
     readout_s: Option<f64>,
     exposure_s: Option<f64>,
     marker: Option<Marker>,
+    /// Where focus was locked (the header's capture plan), else the frames' median lens position.
+    lens_position: Option<f64>,
+    /// The capture plan's zoom.
+    zoom: Option<f64>,
 }
 
 impl Like {
@@ -43,11 +48,28 @@ impl Like {
             ),
             None => None,
         };
+        let mut positions: Vec<f64> = recording.frames.iter().filter_map(|f| f.lens_position).collect();
+        positions.sort_by(f64::total_cmp);
+        if let (Some(lo), Some(hi)) = (positions.first(), positions.last())
+            && hi - lo > jawtrack_camera_calibration::LENS_POSITION_MOVED
+        {
+            eprintln!(
+                "warning: like {}: the lens position moved from {lo:.3} to {hi:.3} during the recording: focus was not \
+                 locked, so the focal length changed with it (up to 3.5 %); the app locks focus before recording",
+                path.display()
+            );
+        }
         let like = Like {
             intrinsics: h.intrinsics,
             readout_s: h.readout_s,
             exposure_s: h.exposure_s.or_else(|| exposures.get(exposures.len() / 2).copied()),
             marker,
+            lens_position: h
+                .capture
+                .as_ref()
+                .and_then(|c| c.lens_position)
+                .or_else(|| positions.get(positions.len() / 2).copied()),
+            zoom: h.capture.as_ref().map(|c| c.zoom),
         };
         eprintln!(
             "note: like {}: intrinsics {}, readout {}, exposure {}, marker {} (each unless given)",
@@ -69,9 +91,21 @@ pub(crate) struct TrackArgs {
     #[arg(long)]
     marker: Option<PathBuf>,
     /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2] (pixel centres at integer coordinates);
-    /// default: the --like recording's.
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "like")]
+    /// default: the --camera file's, else the --like recording's.
+    #[arg(long, allow_hyphen_values = true, required_unless_present_any = ["like", "camera"])]
     intrinsics: Option<CameraIntrinsics>,
+    /// The camera file `jawtrack calibrate-camera` wrote: its intrinsics and readout (each
+    /// unless given), and the lens position and zoom it was calibrated at, which the
+    /// recording's are checked against (--lens-position, --zoom, or the --like recording's).
+    #[arg(long, value_name = "CAMERA_JSON")]
+    camera: Option<PathBuf>,
+    /// The lens position (AVFoundation's 0 near – 1 far) the frames were filmed at, to check
+    /// against the --camera file's; default: the --like recording's.
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    lens_position: Option<f64>,
+    /// The zoom the frames were filmed at (1, or a native crop), to check likewise.
+    #[arg(long, value_name = "Z", allow_hyphen_values = true)]
+    zoom: Option<f64>,
     /// Track as a recording was made: its header's intrinsics, readout, exposure (else its
     /// frames' median exposure) and marker, each unless given here. For re-tracking the video
     /// the iPhone app recorded beside its poses (`--video session.mov --like session.jsonl`).
@@ -153,13 +187,37 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         bail!("--exposure-ms must be a number of milliseconds above 0 and under 1000, got {e}");
     }
     let like = Like::read(a.like.as_deref())?;
-    let intrinsics = match (a.intrinsics, like.intrinsics) {
-        (Some(k), _) => k,
-        (None, Some(k)) => k,
-        (None, None) => bail!("--like's header names no intrinsics: give --intrinsics fx,fy,cx,cy[,k1,k2]"),
+    let camera = a.camera.as_deref().map(CameraFile::load).transpose()?;
+    let intrinsics = match (a.intrinsics, &camera, like.intrinsics) {
+        (Some(k), ..) => k,
+        (None, Some(c), _) => c.calibration.intrinsics,
+        (None, None, Some(k)) => k,
+        (None, None, None) => bail!("--like's header names no intrinsics: give --intrinsics fx,fy,cx,cy[,k1,k2]"),
     };
-    intrinsics.validate().context(if a.intrinsics.is_some() { "--intrinsics" } else { "--like's intrinsics" })?;
-    let readout_s = a.readout_ms.map(|r| r / 1000.0).or(like.readout_s).unwrap_or(0.0);
+    intrinsics.validate().context(if a.intrinsics.is_some() { "--intrinsics" } else { "the intrinsics" })?;
+    let readout_s = a
+        .readout_ms
+        .map(|r| r / 1000.0)
+        .or(camera.as_ref().map(|c| c.calibration.readout_s.max(0.0)))
+        .or(like.readout_s)
+        .unwrap_or(0.0);
+    for (flag, v, ok) in [
+        ("--lens-position", a.lens_position, a.lens_position.is_none_or(|p| p.is_finite() && (0.0..=1.0).contains(&p))),
+        ("--zoom", a.zoom, a.zoom.is_none_or(|z| z.is_finite() && z >= 1.0)),
+    ] {
+        if !ok {
+            bail!("{flag} is out of range (lens position 0–1, zoom at least 1), got {}", v.unwrap_or(f64::NAN));
+        }
+    }
+    if let Some(c) = &camera {
+        let lens = a.lens_position.or(like.lens_position);
+        for d in c.calibrated_at.differences(lens, a.zoom.or(like.zoom)) {
+            eprintln!(
+                "warning: {d}: the camera file's intrinsics do not hold for these frames; calibrate at the focus and zoom you \
+                 record with (lock focus where `jawtrack plan` says)"
+            );
+        }
+    }
     let exposure_s = a.exposure_ms.map(|e| e / 1000.0).or(like.exposure_s);
     let marker = match (&a.marker, like.marker) {
         (Some(p), _) => {
@@ -294,9 +352,31 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     for line in summary.uncalibrated_lines() {
         eprintln!("warning: {line}");
     }
-    let focal = check_focal(tracker.marker(), &views.frames).filter(FocalCheck::looks_wrong);
+    if summary.defocused > 0 {
+        eprintln!(
+            "warning: {} of {} frames had a marker out of focus (flagged BODY:defocused: its tags' edges blurred by more \
+             than a fifth of their cells) and give no jaw pose: the phone was nearer than its lens focuses, or far from \
+             where its focus was locked; `jawtrack plan --phone MODEL` says where to hold it",
+            summary.defocused, summary.read
+        );
+    }
+    let check = check_focal(tracker.marker(), &views.frames);
+    let focal = check.filter(FocalCheck::looks_wrong);
     if let Some(focal) = &focal {
         eprintln!("warning: {}", crate::calibrate::intrinsics_warning(focal, []));
+    }
+    // A few per cent is what a focus moved since calibration does; only a measured marker (its
+    // print errors known) can tell it.
+    if let Some(moved) =
+        check.filter(|c| focal.is_none() && c.focus_moved() && !tracker.marker().measured_tags().is_empty())
+    {
+        eprintln!(
+            "warning: the focal length that fits is {:.3}× the one given ({moved}): did the focus or the zoom change \
+             since the camera was calibrated? Focusing moves a phone's lens and scales the image (3.5 % between \
+             infinity and 20 cm); every distance is off by about that factor. Calibrate at the focus you record with, \
+             or lock focus where `jawtrack plan` says",
+            moved.best_scale
+        );
     }
     for (id, seen, dropped) in tracker.mismatched_tags(5) {
         if focal.is_some() {
@@ -388,8 +468,10 @@ struct FocalViews {
 }
 
 impl FocalViews {
-    /// Views kept at most; every `STRIDE`-th frame with three tags of a body is offered.
+    /// Views kept at most: the first `DENSE` frames with three tags of a body, then every
+    /// `STRIDE`-th (a short recording needs them all to see a focus that moved).
     const MAX: usize = 200;
+    const DENSE: usize = 40;
     const STRIDE: usize = 5;
 
     fn add(&mut self, r: &FrameResult, camera: &CameraIntrinsics) {
@@ -398,7 +480,7 @@ impl FocalViews {
             return;
         }
         self.offered += 1;
-        if (self.offered - 1).is_multiple_of(Self::STRIDE) {
+        if self.offered <= Self::DENSE || (self.offered - 1).is_multiple_of(Self::STRIDE) {
             let tags = r.detections.iter().map(|d| SeenTag { id: d.id, corners: d.corners }).collect();
             self.frames.push(CalibrationFrame { camera: *camera, tags });
         }
@@ -413,6 +495,8 @@ struct Summary {
     /// Frames skipped as unreadable.
     unreadable: usize,
     both: usize,
+    /// Frames with a body flagged `defocused`.
+    defocused: usize,
     flags: BTreeMap<String, usize>,
     detection_s: Vec<f64>,
     /// Per body (maxilla, mandible): frames whose pose used a tag the calibrated marker left
@@ -438,6 +522,7 @@ impl Summary {
             }
         }
         self.both += usize::from(r.maxilla_from_mandible.is_some());
+        self.defocused += usize::from(r.flags.iter().any(|f| matches!(f, jawtrack_tracker::Flag::Defocused(_))));
         for f in &r.flags {
             *self.flags.entry(f.name()).or_default() += 1;
         }
