@@ -124,6 +124,10 @@ pub enum FocusMode {
     Auto,
     /// Locked at `lens_position`.
     Manual,
+    /// The capture plan's ([`crate::CapturePlanner`]): the plan chooses the format and zoom
+    /// (the resolution setting is not used), the phone is guided to the plan's distance,
+    /// beyond where its lens can focus, and focus is locked there before recording starts.
+    Planned,
 }
 
 /// Everything on the settings screen.
@@ -169,7 +173,7 @@ pub fn default_app_settings() -> AppSettings {
         camera: Camera::BackWide,
         resolution: Resolution::Hd1080,
         fps: 60,
-        focus: FocusMode::Auto,
+        focus: FocusMode::Planned,
         lens_position: 0.5,
         exposure_locked: false,
         max_exposure_s: 0.002,
