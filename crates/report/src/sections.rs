@@ -183,6 +183,15 @@ fn quality_warnings(inputs: &Inputs, with_pose: usize) -> Vec<String> {
             fixed(100.0 * with_pose as f64 / total as f64, 0)
         ));
     }
+    let is_defocused =
+        |n: &String| matches!(jawtrack_recording::Flag::from_name(n), Some(jawtrack_recording::Flag::Defocused(_)));
+    let defocused = rec.frames.iter().filter(|f| f.flags.iter().any(is_defocused)).count();
+    if defocused > 0 {
+        w.push(format!(
+            "{defocused} of {total} frames had a marker out of focus (BODY:defocused) and give no jaw pose: the phone \
+             was nearer than its lens focuses, or far from where focus was locked (jawtrack plan says where to hold it)"
+        ));
+    }
     let gap = longest_gap(inputs);
     if gap > 0.5 {
         w.push(format!("tracking paused for {} s at the longest: no path is drawn across a pause", fixed(gap, 2)));

@@ -168,3 +168,28 @@ fn quality_numbers_are_the_recording_s() {
     assert!(r.html.contains("<td>mandible:lost</td><td>11</td>"));
     assert!(r.html.contains("nominal (the ideal solid"), "the marker named");
 }
+
+#[test]
+fn frames_out_of_focus_are_counted_and_explained() {
+    // 10 frames at 20 frames/s; frames 2–4 have the maxilla flagged defocused, so no jaw pose.
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 20.0, 0.0);
+    let mut lines = vec![RecordingHeader::new("focus test").to_line()];
+    for k in 0..10usize {
+        let (t, pose) = session.poses[k];
+        let body = json!({"camera_from_body": pose, "tags": [0, 1], "rms_px": 0.1, "blur_px": 5.0, "cell_px": 14.0});
+        let blurred = (2..=4).contains(&k);
+        lines.push(
+            json!({"frame": k, "t": t, "maxilla": body, "mandible": body.clone(),
+                "maxilla_from_mandible": if blurred { Value::Null } else { json!(pose) },
+                "flags": if blurred { vec!["maxilla:defocused"] } else { vec![] }})
+            .to_string(),
+        );
+    }
+    let rec = read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording");
+    let r = render(&inputs(&rec, "f.jsonl", session.poses[0].1));
+    let focus: Vec<&String> = r.warnings.iter().filter(|w| w.contains("out of focus")).collect();
+    assert_eq!(focus.len(), 1, "{:?}", r.warnings);
+    assert!(focus[0].starts_with("3 of 10 frames had a marker out of focus") && focus[0].contains("jawtrack plan"));
+    assert!(r.html.contains("<td>maxilla:defocused</td><td>3</td>"), "the flag's count in the table");
+}
