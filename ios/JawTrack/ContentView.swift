@@ -1,7 +1,8 @@
 // Adapts SwiftUI to JawTrackKit's ScreenState and AppController: lays out the camera screen
-// (preview and overlay, status bar, Record / Transmit / Calibrate bite / Calibrate marker /
-// Settings, the alerts; the marker calibration's panel in place of the buttons while it is open)
-// and forwards every tap and scene phase to the controller.
+// (preview and overlay, status bar, the capture plan before recording, Record / Transmit /
+// Calibrate bite / Calibrate marker / Settings, the alerts; the marker calibration's panel in
+// place of the plan and buttons while it is open) and forwards every tap and scene phase to the
+// controller.
 import JawTrackKit
 import SwiftUI
 
@@ -28,6 +29,7 @@ struct ContentView: View {
                 if model.calibration.isOpen {
                     CalibrationView(screen: model.calibration, controller: controller.markerCalibration)
                 } else {
+                    if state.showsPlan { plan }
                     controls
                 }
             }
@@ -45,6 +47,24 @@ struct ContentView: View {
         } message: { message in
             Text(message.text)
         }
+    }
+
+    /// The capture plan, shown before recording: where to hold the phone and how the camera is
+    /// set, then its notes (figures assumed, a target out of reach).
+    private var plan: some View {
+        VStack(alignment: .leading, spacing: 4) {
+            ForEach(state.planLines.indices, id: \.self) { i in
+                Text(state.planLines[i])
+                    .font(i == 0 ? .footnote : .caption)
+                    .foregroundColor(i == 0 ? .white : .yellow)
+            }
+        }
+        .frame(maxWidth: .infinity, alignment: .leading)
+        .padding(8)
+        .background(Color.black.opacity(0.55))
+        .clipShape(RoundedRectangle(cornerRadius: 8))
+        .padding(.horizontal, 8)
+        .padding(.bottom, 6)
     }
 
     private var controls: some View {

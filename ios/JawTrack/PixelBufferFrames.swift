@@ -1,15 +1,19 @@
 // Adapts AVCaptureVideoDataOutput's CMSampleBuffers to JawTrackKit's CameraFrame: the pixels in
 // place while the CVPixelBuffer is locked (plane 0 of 420f as luma, or BGRA), the presentation
-// time, the EXIF exposure time and ISO, the intrinsic matrix attachment and the sample buffer
-// itself.
+// time, the EXIF exposure time and ISO, the intrinsic matrix attachment, the lens position and
+// focus activity as last observed (CameraController's LensReadings) and the sample buffer itself.
 import AVFoundation
 import ImageIO
 import JawTrackKit
 
 final class PixelBufferFrames: NSObject, AVCaptureVideoDataOutputSampleBufferDelegate {
     private let handler: (CameraFrame) -> Void
+    private let lens: LensReadings
 
-    init(handler: @escaping (CameraFrame) -> Void) { self.handler = handler }
+    init(handler: @escaping (CameraFrame) -> Void, lens: LensReadings) {
+        self.handler = handler
+        self.lens = lens
+    }
 
     func captureOutput(_ output: AVCaptureOutput, didOutput sampleBuffer: CMSampleBuffer, from connection: AVCaptureConnection) {
         guard let pixels = CMSampleBufferGetImageBuffer(sampleBuffer),
@@ -23,6 +27,7 @@ final class PixelBufferFrames: NSObject, AVCaptureVideoDataOutputSampleBufferDel
         let width = luma ? CVPixelBufferGetWidthOfPlane(pixels, 0) : CVPixelBufferGetWidth(pixels)
         let height = luma ? CVPixelBufferGetHeightOfPlane(pixels, 0) : CVPixelBufferGetHeight(pixels)
         let exif = CMGetAttachment(sampleBuffer, key: kCGImagePropertyExifDictionary, attachmentModeOut: nil) as? [String: Any]
+        let lensNow = lens.current
         handler(CameraFrame(
             buffer: FrameBuffer(
                 base: UnsafeRawPointer(base), byteCount: stride * height, width: width, height: height,
@@ -34,6 +39,8 @@ final class PixelBufferFrames: NSObject, AVCaptureVideoDataOutputSampleBufferDel
             cameraMatrix: CameraPlanner.cameraMatrix(fromAttachment: CMGetAttachment(
                 sampleBuffer, key: kCMSampleBufferAttachmentKey_CameraIntrinsicMatrix, attachmentModeOut: nil
             ) as? Data),
+            lensPosition: lensNow.position,
+            adjustingFocus: lensNow.adjusting,
             native: sampleBuffer
         ))
     }

@@ -1,6 +1,6 @@
-// Adapts SwiftUI's Form to JawTrackKit's SettingsForm: lays out its choices, ranges, pairing note
-// and problems, runs the QR scanner for it, and hands the draft to `onSave` (the controller's
-// `save`, which answers with the library's refusal or nil).
+// Adapts SwiftUI's Form to JawTrackKit's SettingsForm: lays out its choices, ranges, notes (the
+// planned focus's, the pairing's) and problems, runs the QR scanner for it, and hands the draft
+// to `onSave` (the controller's `save`, which answers with the library's refusal or nil).
 import JawTrackCore
 import JawTrackKit
 import SwiftUI
@@ -25,14 +25,18 @@ struct SettingsView: View {
         NavigationStack {
             Form {
                 if let problem = form.problem { Text(problem).foregroundColor(.red) }
-                Section("Camera") {
+                Section {
                     picker("Camera", $form.draft.camera, SettingsForm.cameras)
-                    picker("Resolution", $form.draft.resolution, SettingsForm.resolutions)
-                    picker("Frame rate", $form.draft.fps, SettingsForm.frameRates)
                     picker("Focus", $form.draft.focus, SettingsForm.focusModes)
+                    picker("Resolution", $form.draft.resolution, SettingsForm.resolutions).disabled(!form.usesResolution)
+                    picker("Frame rate", $form.draft.fps, SettingsForm.frameRates)
                     if form.showsLensPosition { slider("Lens", $form.draft.lensPosition, SettingsForm.lensPosition) }
                     Toggle("Lock exposure and white balance", isOn: $form.draft.exposureLocked)
                     Toggle("BGRA frames (converted, slower)", isOn: $form.draft.bgra)
+                } header: {
+                    Text("Camera")
+                } footer: {
+                    if let note = form.focusNote { Text(note) }
                 }
                 Section {
                     picker("Exposure limit", $form.draft.maxExposureS, SettingsForm.exposureLimits)

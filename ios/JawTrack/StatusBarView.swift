@@ -1,5 +1,6 @@
-// Adapts SwiftUI to JawTrackKit's StatusBar: lays out its items, link light and notes, re-read
-// four times a second so the light turns red when acknowledgements stop, without new frames.
+// Adapts SwiftUI to JawTrackKit's StatusBar: lays out its items, link light, the capture plan's
+// guidance (a line of its own) and notes, re-read four times a second so the light turns red
+// when acknowledgements stop, without new frames.
 import JawTrackKit
 import SwiftUI
 
@@ -19,6 +20,9 @@ struct StatusBarView: View {
                         Circle().fill(bar.link.green ? Color.green : Color.red).frame(width: 8, height: 8)
                         Text(bar.link.text).foregroundColor(bar.link.green ? Color.green : Color.red)
                     }
+                }
+                if let guidance = bar.guidance {
+                    Text(guidance.text).font(.footnote.bold()).foregroundColor(Self.color(guidance.tone)).lineLimit(2)
                 }
                 ForEach(bar.notes.indices, id: \.self) { i in
                     Text(bar.notes[i].text).foregroundColor(Self.color(bar.notes[i].tone)).lineLimit(2)

@@ -4,15 +4,20 @@ import JawTrackCore
 /// The camera as the app drives it (AVFoundation's capture session in the app). It is also the
 /// frame source. Calls may block, so the camera does its work on its own queue.
 public protocol CameraControl: FrameSource {
-    /// Sets the camera up for `plan` and `settings`; `completion` gets what the pipeline needs
-    /// and how to make a movie writer for the chosen format (nil when it offers none).
-    func configure(
-        _ plan: CapturePlan,
-        settings: AppSettings,
-        completion: @escaping (Result<(CaptureConfiguration, VideoSinkFactory?), Error>) -> Void
-    )
-    /// Starts the frames.
+    /// Describes `camera` as it is before being configured (the phone's model, the nearest
+    /// distance the lens focuses at, the formats); `completion` gets it, or why not (no such
+    /// camera). The capture plan and the format are decided from it (`CaptureSetup`).
+    func describe(_ camera: Camera, completion: @escaping (Result<CameraDevice, Error>) -> Void)
+    /// Sets the camera up as `setup` says (its device's camera, the format at
+    /// `setup.formatIndex`, `setup.plan`); `completion` gets how to make a movie writer for that
+    /// format (nil when it offers none), or why the camera could not be set up.
+    func configure(_ setup: CaptureSetup, completion: @escaping (Result<VideoSinkFactory?, Error>) -> Void)
+    /// Starts the frames. A plan whose focus is `continuousAutoUntilLocked` focuses
+    /// continuously again (a lock of an earlier session is let go).
     func start()
+    /// Locks the focus where the lens is now; `completion` gets the lens position it locked at
+    /// (0 near – 1 far) once the lens is locked, or why it could not lock.
+    func lockFocus(completion: @escaping (Result<Double, Error>) -> Void)
     /// Locks exposure and white balance where they are now; `onProblem` gets what could not be done.
     func lockExposureAndWhiteBalance(onProblem: @escaping (String) -> Void)
     /// Caps the exposure automatic exposure may choose (s; nil: the camera's own limit), within
@@ -48,13 +53,34 @@ public struct ScreenState {
     /// The rolling-shutter readout the tracker is told and where it comes from (nil until the
     /// camera is configured).
     public var readout: ReadoutChoice?
+    /// The capture plan the camera is set by (focus mode planned; nil otherwise).
+    public var plan: PlanChoice?
+    /// The last frame's guidance to the plan's distance and focus (focus mode planned).
+    public var guidance: CaptureGuidance?
+    /// Where focus was locked for this session (focus mode planned; nil: not yet).
+    public var lockedLensPosition: Double?
 
     /// The status bar at `now`.
     public func statusBar(now: Double) -> StatusBar {
         StatusBar(
             status: status, transmitting: isTransmitting, light: light, linkProblem: linkProblem,
-            recording: isRecording, recordedFrames: recordedFrames, now: now
+            recording: isRecording, recordedFrames: recordedFrames, now: now, guidance: guidance
         )
+    }
+
+    /// Whether the plan is shown: before recording, while there is one.
+    public var showsPlan: Bool { plan != nil && !isRecording }
+    /// The plan in words: its summary, then each of its notes once (figures assumed, a target
+    /// out of reach).
+    public var planLines: [String] {
+        guard let plan else {
+            return []
+        }
+        var lines = [StatusBar.sentence(plan.summary)]
+        for note in plan.notes.map(StatusBar.sentence) where !lines.contains(note) {
+            lines.append(note)
+        }
+        return lines
     }
 
     /// Settings are locked while recording (a recording has one set of settings).
@@ -86,9 +112,18 @@ public final class AppController {
     /// Bumped whenever the camera starts, stops or is configured: a pending exposure lock of an
     /// earlier session must not fire in a later one (whose settings may not want it).
     private var cameraGeneration = 0
+    /// Bumped whenever the focus lock is cleared: a lock asked for before must not count after.
+    private var focusGeneration = 0
+    /// Bumped whenever the camera is described and configured anew: the answers of an earlier
+    /// configuration are dropped.
+    private var configurationGeneration = 0
     private var tracker: Tracker?
     /// The camera as last configured: its model and lens key the readout table.
     private var configuration: CaptureConfiguration?
+    /// The capture plan of the camera as configured (focus mode planned).
+    private var planner: CapturePlanner?
+    /// This session's focus lock (focus mode planned; nil otherwise).
+    private var focusLock: FocusLock?
     private var linkKeyId: String?
     private var started = false
     private var cameraReady = false
@@ -172,6 +207,7 @@ public final class AppController {
 
     private func stopCamera() {
         cameraGeneration += 1
+        clearFocusLock()
         camera.stop()
     }
 
@@ -194,17 +230,46 @@ public final class AppController {
         }
         cameraReady = false
         cameraGeneration += 1
-        camera.configure(CapturePlan(settings.settings), settings: settings.settings) { [weak self] result in
-            self?.deliver { self?.cameraConfigured(result) }
+        configurationGeneration += 1
+        planner = nil
+        clearFocusLock()
+        state.plan = nil
+        let generation = configurationGeneration
+        let current = settings.settings
+        camera.describe(current.camera) { [weak self] result in
+            self?.deliver { self?.cameraDescribed(result, settings: current, generation: generation) }
         }
     }
 
-    private func cameraConfigured(_ result: Result<(CaptureConfiguration, VideoSinkFactory?), Error>) {
+    /// The camera described: the plan and format decided (`CaptureSetup`, with the marker the
+    /// tracker uses), then the camera configured with them.
+    private func cameraDescribed(_ result: Result<CameraDevice, Error>, settings current: AppSettings, generation: Int) {
+        guard generation == configurationGeneration else {
+            return
+        }
+        let setup: CaptureSetup
+        do {
+            setup = try CaptureSetup(device: result.get(), settings: current, markerJSON: tracker?.markerJson())
+        } catch {
+            state.message = UserMessage(title: "Camera", text: userText(error))
+            return
+        }
+        camera.configure(setup) { [weak self] result in
+            self?.deliver { self?.cameraConfigured(result, setup: setup, generation: generation) }
+        }
+    }
+
+    private func cameraConfigured(_ result: Result<VideoSinkFactory?, Error>, setup: CaptureSetup, generation: Int) {
+        guard generation == configurationGeneration else {
+            return
+        }
         switch result {
-        case .success(let (configuration, makeVideo)):
-            self.configuration = configuration
+        case .success(let makeVideo):
+            configuration = setup.configuration
+            planner = setup.planner
+            state.plan = setup.choice
             updateTrackerSettings(settings.settings)
-            pipeline.use(camera: configuration, makeVideo: makeVideo)
+            pipeline.use(camera: setup.configuration, makeVideo: makeVideo)
             cameraReady = true
             state.configurationID += 1
             if !settingsOpen {
@@ -215,10 +280,60 @@ public final class AppController {
         }
     }
 
+    /// A new session, new settings or a new configuration: focus is locked anew (focus mode
+    /// planned), and an answer to a lock asked for before is dropped.
+    private func clearFocusLock() {
+        focusGeneration += 1
+        focusLock = planner.map(FocusLock.init(planner:))
+        state.guidance = nil
+        state.lockedLensPosition = nil
+        state.status.focusMoved = nil
+        pipeline.focusLocked(at: nil)
+    }
+
+    /// Asks the camera to lock its focus; the answer counts only in the session that asked.
+    private func lockFocus() {
+        let generation = focusGeneration
+        camera.lockFocus { [weak self] result in
+            self?.deliver { self?.focusLocked(result, generation: generation) }
+        }
+    }
+
+    /// The camera's answer: the lens position goes to the tracker (the library checks it), then
+    /// the lock counts.
+    private func focusLocked(_ result: Result<Double, Error>, generation: Int) {
+        guard generation == focusGeneration, focusLock != nil else {
+            return
+        }
+        switch result {
+        case .success(let lensPosition):
+            pipeline.focusLocked(at: lensPosition) { [weak self] error in
+                self?.deliver { self?.focusTaken(at: lensPosition, error: error, generation: generation) }
+            }
+        case .failure(let error):
+            focusLock?.failed()
+            state.message = UserMessage(title: "Camera", text: PlatformText.focusNotLocked(error))
+        }
+    }
+
+    private func focusTaken(at lensPosition: Double, error: Error?, generation: Int) {
+        guard generation == focusGeneration, focusLock != nil else {
+            return
+        }
+        if let error {
+            focusLock?.failed()
+            state.message = UserMessage(title: "Camera", text: PlatformText.focusNotLocked(error))
+            return
+        }
+        focusLock?.locked(at: lensPosition)
+        state.lockedLensPosition = lensPosition
+    }
+
     /// Starts the frames; when the settings ask, locks exposure and white balance once
     /// auto-exposure has had time to settle, unless the camera stopped or changed meanwhile.
     private func startSession() {
         cameraGeneration += 1
+        clearFocusLock()
         camera.start()
         guard let delay = CapturePlan(settings.settings).lockExposureAfter else {
             return
@@ -294,13 +409,30 @@ public final class AppController {
 
     // MARK: Frames
 
-    private func show(_ report: FrameReport) {
+    /// One frame's report on the screen; in focus mode planned, also its guidance, and the
+    /// focus locked once the phone has been held still long enough (`FocusLock`). Internal for
+    /// the tests, which hand it frames at depths the fixtures do not have.
+    func show(_ report: FrameReport) {
         var next = state
         if let result = report.result {
             next.overlay = result.overlay
             next.status = TrackingStatus(result: result)
         } else {
             next.overlay = nil
+            next.status.defocused = false
+        }
+        var lockNow = false
+        if var lock = focusLock {
+            let step = lock.frame(
+                depthMm: report.result?.depthMm, defocused: report.result?.defocused ?? false,
+                lensPosition: report.lensPosition, adjustingFocus: report.adjustingFocus
+            )
+            focusLock = lock
+            next.guidance = step.guidance
+            next.status.focusMoved = step.movedLensPosition.map {
+                TrackingStatus.LensMove(lensPosition: $0, lockedAt: lock.lockedLensPosition ?? $0)
+            }
+            lockNow = step.lockNow
         }
         next.status.intrinsicsEstimated = report.intrinsicsEstimated
         next.status.exposure = report.exposure
@@ -320,6 +452,9 @@ public final class AppController {
         if let cap = report.exposureCap {
             camera.limitExposure(to: cap)
         }
+        if lockNow {
+            lockFocus()
+        }
     }
 
     // MARK: Settings
@@ -331,6 +466,7 @@ public final class AppController {
         } catch {
             return userText(error)
         }
+        clearFocusLock()
         updateTrackerSettings(new)
         if state.isTransmitting {
             setTransmitting(false)
@@ -345,18 +481,32 @@ public final class AppController {
         state.isRecording ? stopRecording() : startRecording()
     }
 
+    /// Starts recording; in focus mode planned, only once focus is locked (a recording is
+    /// measured with one focal length).
     private func startRecording() {
         guard let documents else {
             state.message = UserMessage(title: "Recording", text: "The app's Documents folder is not available.")
             return
         }
         let current = settings.settings
+        if let focusLock, !focusLock.isLocked {
+            state.message = UserMessage(title: "Recording", text: focusLock.holdText)
+            return
+        }
+        if focusLock == nil, current.focus == .planned {
+            state.message = UserMessage(
+                title: "Recording", text: "The camera is not set up for its capture plan yet, so focus cannot lock."
+            )
+            return
+        }
         pipeline.startRecording(RecordingRequest(
             directory: documents,
             baseName: RecordingFiles.defaultName(at: Date(timeIntervalSince1970: clock())),
             settingsJSON: StoredSettings(current).headerJSON(),
             keyId: state.isTransmitting ? linkKeyId : nil,
-            withVideo: current.recordVideo
+            withVideo: current.recordVideo,
+            planner: focusLock?.planner,
+            lockedLensPosition: focusLock?.lockedLensPosition
         ))
         state.recordedFrames = 0
         state.isRecording = true

@@ -52,18 +52,26 @@ public struct CameraFrame {
     /// The camera's intrinsic matrix for this frame (nine numbers, column-major, in pixels of
     /// the active format), when delivered.
     public let cameraMatrix: [Float]?
+    /// The lens position (0 near – 1 far) while the frame was taken, when the camera says:
+    /// focusing moves the lens and scales the image, so it is recorded with the frame.
+    public let lensPosition: Double?
+    /// Whether the camera was adjusting its focus, when it says.
+    public let adjustingFocus: Bool?
     /// The platform's own frame (a `CMSampleBuffer` in the app), handed untouched to the video
     /// writer; nil in tests.
     public let native: AnyObject?
 
     public init(
-        buffer: FrameBuffer, time: Double, exposure: Double?, iso: Double? = nil, cameraMatrix: [Float]?, native: AnyObject? = nil
+        buffer: FrameBuffer, time: Double, exposure: Double?, iso: Double? = nil, cameraMatrix: [Float]?,
+        lensPosition: Double? = nil, adjustingFocus: Bool? = nil, native: AnyObject? = nil
     ) {
         self.buffer = buffer
         self.time = time
         self.exposure = exposure
         self.iso = iso
         self.cameraMatrix = cameraMatrix
+        self.lensPosition = lensPosition
+        self.adjustingFocus = adjustingFocus
         self.native = native
     }
 }

@@ -11,6 +11,10 @@ public struct FrameReport {
     public var intrinsicsEstimated = false
     /// The frame's exposure (s), when the camera said.
     public var exposure: Double?
+    /// The frame's lens position (0 near – 1 far) and whether the camera was adjusting its
+    /// focus, when the camera said.
+    public var lensPosition: Double?
+    public var adjustingFocus: Bool?
     /// Frames the camera dropped so far (gaps in the frame times).
     public var droppedFrames: UInt64 = 0
     /// Frames in the recording so far, while recording.
@@ -28,10 +32,10 @@ public struct FrameReport {
 let exposureCapSettle = 0.5
 
 /// The per-frame work, on one serial queue that owns the tracker, the recorder and the link:
-/// each frame is tracked in place (`FrameDoor`, no copy) with its own intrinsics, then its
-/// result goes to the marker calibration (when one collects views), the recorder, the link and
-/// the screen. A frame older than the last one is
-/// dropped, and gaps in the frame times are counted as frames the camera dropped (the capture
+/// each frame is tracked in place (`FrameDoor`, no copy) with its own intrinsics and lens
+/// position (the frame's, else where focus was locked), then its result goes to the marker
+/// calibration (when one collects views), the recorder, the link and the screen. A frame older
+/// than the last one is dropped, and gaps in the frame times are counted as frames the camera dropped (the capture
 /// output discards frames that arrive while one is being tracked, so the queue never falls
 /// behind).
 public final class FramePipeline {
@@ -59,6 +63,8 @@ public final class FramePipeline {
     /// The exposure cap in force (s; nil: none) and when it last changed.
     private var exposureCap: Double?
     private var exposureCapChanged: Double?
+    /// Where focus is locked (nil: not locked): the lens position of frames that do not say theirs.
+    private var lockedLensPosition: Double?
 
     public init(queue: DispatchQueue = DispatchQueue(label: "org.jawtrack.frames", qos: .userInitiated)) {
         self.queue = queue
@@ -89,6 +95,22 @@ public final class FramePipeline {
             self.lastTime = nil
             self.exposureCap = camera?.maxExposure
             self.exposureCapChanged = nil
+        }
+    }
+
+    /// Focus locked at `lensPosition` (nil: no longer locked): the tracker is told at once, and
+    /// frames that do not say their own lens position are stamped with it. `completion` gets
+    /// the library's refusal of the value, or nil.
+    public func focusLocked(at lensPosition: Double?, completion: @escaping (Error?) -> Void = { _ in }) {
+        queue.async {
+            do {
+                try self.tracker?.setLensPosition(lensPosition: lensPosition)
+                self.lockedLensPosition = lensPosition
+                completion(nil)
+            } catch {
+                self.lockedLensPosition = nil
+                completion(error)
+            }
         }
     }
 
@@ -196,6 +218,8 @@ public final class FramePipeline {
         lastTime = frame.time
         var report = FrameReport()
         report.exposure = frame.exposure
+        report.lensPosition = frame.lensPosition
+        report.adjustingFocus = frame.adjustingFocus
         report.droppedFrames = dropped
         report.exposureCap = adjustExposureCap(frame, camera: camera)
         var intrinsics: Intrinsics?
@@ -206,6 +230,8 @@ public final class FramePipeline {
             )
             report.intrinsicsEstimated = resolved.estimated
             intrinsics = resolved.intrinsics
+            // Stamped on the result and recorded with the frame.
+            try tracker.setLensPosition(lensPosition: frame.lensPosition ?? lockedLensPosition)
             try FrameDoor.track(
                 frame.buffer, handle: tracker.frameHandle(), intrinsics: resolved.intrinsics, time: frame.time,
                 exposure: frame.exposure
@@ -266,7 +292,9 @@ public final class FramePipeline {
                 markerJson: tracker.markerJson(),
                 settingsJson: request.settingsJSON,
                 keyId: request.keyId,
-                readoutS: tracker.settings().readoutS
+                readoutS: tracker.settings().readoutS,
+                plan: request.planner,
+                lockedLensPosition: request.lockedLensPosition
             )
             do {
                 recording = .active(try RecordingSession(request: request, info: info, makeVideo: makeVideo))

@@ -21,6 +21,28 @@ public enum PlatformText {
         AppError(message: "The \(CameraPlanner.title(of: camera)) camera has no manual focus; choose auto.")
     }
 
+    public static func focusLockUnsupported(_ camera: Camera) -> AppError {
+        AppError(message: "The \(CameraPlanner.title(of: camera)) camera cannot lock its focus.")
+    }
+
+    /// Why focus was not locked, and what to do: in focus mode planned, recording waits for it.
+    public static func focusNotLocked(_ error: Error) -> String {
+        var text = userText(error).trimmingCharacters(in: .whitespacesAndNewlines)
+        if !text.hasSuffix(".") {
+            text += "."
+        }
+        return text + " Focus mode Planned records only with the focus locked: leave the app and come back to try "
+            + "again, or choose Auto focus in Settings."
+    }
+
+    /// The camera's formats are not those it described (the configuration asked for one that is
+    /// not there).
+    public static var formatUnavailable: AppError {
+        AppError(
+            message: "The camera's format changed while it was being set up; open Settings and close them to try again."
+        )
+    }
+
     public static var exposureLockUnsupported: AppError {
         AppError(message: "This camera cannot lock its exposure.")
     }

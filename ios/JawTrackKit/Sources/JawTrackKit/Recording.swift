@@ -85,13 +85,28 @@ public struct RecordingRequest: Equatable {
     public let settingsJSON: String?
     public let keyId: String?
     public let withVideo: Bool
+    /// The capture plan the camera was set by (focus mode planned) and the lens position focus
+    /// was locked at: both go into the header (`capture`).
+    public let planner: CapturePlanner?
+    public let lockedLensPosition: Double?
 
-    public init(directory: URL, baseName: String, settingsJSON: String?, keyId: String?, withVideo: Bool) {
+    public init(
+        directory: URL, baseName: String, settingsJSON: String?, keyId: String?, withVideo: Bool,
+        planner: CapturePlanner? = nil, lockedLensPosition: Double? = nil
+    ) {
         self.directory = directory
         self.baseName = baseName
         self.settingsJSON = settingsJSON
         self.keyId = keyId
         self.withVideo = withVideo
+        self.planner = planner
+        self.lockedLensPosition = lockedLensPosition
+    }
+
+    /// The same plan object (the library's planner is a reference), and the rest equal.
+    public static func == (a: RecordingRequest, b: RecordingRequest) -> Bool {
+        a.directory == b.directory && a.baseName == b.baseName && a.settingsJSON == b.settingsJSON && a.keyId == b.keyId
+            && a.withVideo == b.withVideo && a.planner === b.planner && a.lockedLensPosition == b.lockedLensPosition
     }
 }
 
@@ -108,8 +123,8 @@ public protocol VideoSink: AnyObject {
 public typealias VideoSinkFactory = (URL) throws -> VideoSink
 
 /// One recording: the poses through the library's `Recorder` (header with device, intrinsics,
-/// marker and settings; each line flushed as written, so a killed app leaves a readable file)
-/// and, when asked, the frames as the sensor delivered them in a .mov beside it (no rotation,
+/// marker, settings, and the capture plan with where focus was locked; each line flushed as
+/// written, so a killed app leaves a readable file) and, when asked, the frames as the sensor delivered them in a .mov beside it (no rotation,
 /// so the recorded intrinsics hold), for `jawtrack track --video`. Never overwrites: a taken
 /// name gets a number. Used on the pipeline's queue only.
 public final class RecordingSession {

@@ -130,7 +130,7 @@ public struct StoredSettings: Codable, Equatable {
         camera = Self.cameraNames[settings.camera] ?? "back_wide"
         resolution = Self.resolutionNames[settings.resolution] ?? "1080p"
         fps = settings.fps
-        focus = settings.focus == .manual ? "manual" : "auto"
+        focus = Self.focusNames[settings.focus] ?? "planned"
         lensPosition = settings.lensPosition
         exposureLocked = settings.exposureLocked
         maxExposureS = settings.maxExposureS
@@ -157,7 +157,7 @@ public struct StoredSettings: Codable, Equatable {
         guard let resolution = Self.resolutionNames.first(where: { $0.value == resolution })?.key else {
             throw AppError(message: "unknown resolution \"\(resolution)\"")
         }
-        guard let focus: FocusMode = ["auto": .auto, "manual": .manual][focus] else {
+        guard let focus = Self.focusNames.first(where: { $0.value == focus })?.key else {
             throw AppError(message: "unknown focus mode \"\(focus)\"")
         }
         let tracker = JawTrackCore.Settings(
@@ -185,4 +185,6 @@ public struct StoredSettings: Codable, Equatable {
 
     static let cameraNames: [Camera: String] = [.backWide: "back_wide", .backTele: "back_tele", .front: "front"]
     static let resolutionNames: [Resolution: String] = [.hd720: "720p", .hd1080: "1080p", .uhd4k: "4k"]
+    /// "auto" and "manual" as stored before the capture plan, which added "planned".
+    static let focusNames: [FocusMode: String] = [.planned: "planned", .auto: "auto", .manual: "manual"]
 }

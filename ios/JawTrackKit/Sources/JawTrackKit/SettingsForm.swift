@@ -38,7 +38,12 @@ public struct SettingsForm {
         Choice(value: Resolution.uhd4k, label: "4K"),
     ]
     public static let frameRates = [Choice(value: UInt32(30), label: "30 fps"), Choice(value: UInt32(60), label: "60 fps")]
-    public static let focusModes = [Choice(value: FocusMode.auto, label: "Auto"), Choice(value: FocusMode.manual, label: "Manual")]
+    /// Planned first: the default, and what a phone that cannot focus close needs.
+    public static let focusModes = [
+        Choice(value: FocusMode.planned, label: "Planned"),
+        Choice(value: FocusMode.auto, label: "Auto"),
+        Choice(value: FocusMode.manual, label: "Manual"),
+    ]
     public static let decimations = [Float(1), 1.5, 2, 3, 4].map { Choice(value: $0, label: String(format: "%g", Double($0))) }
     public static let lensPosition = NumberRange(range: 0...1, step: 0.01, format: "%.2f")
     public static let quadSigma = NumberRange(range: 0...0.8, step: 0.1, format: "%.1f")
@@ -54,11 +59,19 @@ public struct SettingsForm {
     ]
     public static let exposureLimitNote =
         "Automatic exposure stays at or below the limit while the room is bright enough, and may go up to 4× it in a dim room. Longer exposures smear moving tags; shorter ones are noisier."
+    public static let plannedFocusNote =
+        "Planned: the app plans the format, zoom and distance for this camera (it cannot focus closer than its "
+        + "nearest focus), guides you to that distance and locks the focus there before recording. The resolution "
+        + "setting is not used while focus is planned."
     public static let readoutNote =
         "Rows are read one after another; the tracker needs how long that takes to solve both jaws at one instant. Leave empty to use the phone's published figure; enter the readout `jawtrack calibrate-camera` measured to use it instead."
 
     /// Whether the lens position control is shown.
     public var showsLensPosition: Bool { draft.focus == .manual }
+    /// Whether the resolution setting is used: not while focus is planned (the plan chooses).
+    public var usesResolution: Bool { draft.focus != .planned }
+    /// What the camera section's footer says about the focus mode chosen.
+    public var focusNote: String? { draft.focus == .planned ? Self.plannedFocusNote : nil }
 
     /// The first problem of the settings (nil: they can be saved).
     public var problem: String? {

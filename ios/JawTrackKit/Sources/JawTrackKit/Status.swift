@@ -9,6 +9,17 @@ public struct TrackingStatus: Equatable {
         public var solved = false
     }
 
+    /// The lens away from where focus was locked.
+    public struct LensMove: Equatable {
+        public let lensPosition: Double
+        public let lockedAt: Double
+
+        public init(lensPosition: Double, lockedAt: Double) {
+            self.lensPosition = lensPosition
+            self.lockedAt = lockedAt
+        }
+    }
+
     public var maxilla = Jaw()
     public var mandible = Jaw()
     /// Detection plus pose time (ms).
@@ -21,6 +32,12 @@ public struct TrackingStatus: Equatable {
     /// Frames the camera dropped since tracking started (late or lost).
     public var droppedFrames: UInt64 = 0
     public var problem: String?
+    /// A body's tags were blurred beyond what its pose can stand (`FrameResult.defocused`): the
+    /// frame gives no jaw pose, and nothing of it is shown as good.
+    public var defocused = false
+    /// Focus is locked and this frame's lens is away from where it was locked: the focal length
+    /// changed with it.
+    public var focusMoved: LensMove?
 
     public init() {}
 
@@ -30,6 +47,7 @@ public struct TrackingStatus: Equatable {
         processingMs = result.detectionMs + result.poseMs
         fps = result.fps
         flags = result.flags
+        defocused = result.defocused
     }
 
     private static func jaw(_ pose: BodyPose?, detected: Int) -> Jaw {
@@ -57,13 +75,17 @@ public struct StatusItem: Equatable {
 }
 
 /// The status bar's content, decided here and only laid out by the view: the first line
-/// (jaws, timing, frame rate, link, recording), then at most one line each for the frame's
-/// problem or flags (and one per jaw whose pose uses tags the marker's calibration left
-/// nominal), estimated intrinsics, and the link's problem.
+/// (jaws, timing, frame rate, link, recording), the capture plan's guidance on a line of its own
+/// (focus mode planned), then at most one line each for the frame's problem or flags (and one
+/// per jaw whose pose uses tags the marker's calibration left nominal), a defocused frame, a
+/// focus that moved since it was locked, dropped frames, estimated intrinsics, and the link's
+/// problem.
 public struct StatusBar: Equatable {
     public let items: [StatusItem]
     /// Whether the link light is shown, and green.
     public let link: (shown: Bool, green: Bool, text: String)
+    /// The guidance to the plan's distance and focus, when there is one.
+    public let guidance: StatusItem?
     public let notes: [StatusItem]
 
     public init(
@@ -73,11 +95,14 @@ public struct StatusBar: Equatable {
         linkProblem: String?,
         recording: Bool,
         recordedFrames: UInt64,
-        now: Double
+        now: Double,
+        guidance: CaptureGuidance? = nil
     ) {
+        // A defocused frame gives no trustworthy pose: never shown as good.
+        let good = { (jaw: TrackingStatus.Jaw) -> StatusTone in jaw.solved && !status.defocused ? .good : .warning }
         var items = [
-            StatusItem(text: "Maxilla \(status.maxilla.tags)", tone: status.maxilla.solved ? .good : .warning),
-            StatusItem(text: "Mandible \(status.mandible.tags)", tone: status.mandible.solved ? .good : .warning),
+            StatusItem(text: "Maxilla \(status.maxilla.tags)", tone: good(status.maxilla)),
+            StatusItem(text: "Mandible \(status.mandible.tags)", tone: good(status.mandible)),
             StatusItem(text: String(format: "%.1f ms", status.processingMs), tone: .normal),
             StatusItem(text: String(format: "%.0f fps", status.fps), tone: .normal),
         ]
@@ -89,12 +114,22 @@ public struct StatusBar: Equatable {
         }
         self.items = items
         link = (transmitting, light.isGreen(at: now), light.text(at: now))
+        self.guidance = guidance.map { StatusItem(text: Self.sentence($0.message), tone: Self.tone(of: $0.kind)) }
         var notes: [StatusItem] = []
         if let problem = status.problem {
             notes.append(StatusItem(text: problem, tone: .problem))
         } else if !status.flags.isEmpty {
             notes.append(StatusItem(text: status.flags.joined(separator: ", "), tone: .warning))
             notes += Self.uncalibratedNotes(status.flags)
+        }
+        if status.defocused, guidance?.kind != .outOfFocus {
+            notes.append(StatusItem(text: "The markers are out of focus: this frame gives no jaw pose.", tone: .problem))
+        }
+        if let moved = status.focusMoved {
+            notes.append(StatusItem(text: String(
+                format: "Focus moved (lens at %.2f, locked at %.2f): the focal length changed with it.",
+                moved.lensPosition, moved.lockedAt
+            ), tone: .problem))
         }
         if status.droppedFrames > 0 {
             notes.append(StatusItem(text: "\(status.droppedFrames) frames dropped (tracking slower than the camera)", tone: .warning))
@@ -106,6 +141,26 @@ public struct StatusBar: Equatable {
             notes.append(StatusItem(text: linkProblem, tone: .problem))
         }
         self.notes = notes
+    }
+
+    /// The colour of a guidance: ready is good, holding still while focus locks is normal, too
+    /// close or too far a warning, out of focus (nothing measured) a problem.
+    public static func tone(of kind: GuidanceKind) -> StatusTone {
+        switch kind {
+        case .ready: return .good
+        case .holdStill: return .normal
+        case .noMarkers, .tooClose, .tooFar: return .warning
+        case .outOfFocus: return .problem
+        }
+    }
+
+    /// The library's lower-case phrase as a sentence: its first letter upper-case ("too close:
+    /// …" → "Too close: …").
+    public static func sentence(_ text: String) -> String {
+        guard let first = text.first else {
+            return text
+        }
+        return first.uppercased() + text.dropFirst()
     }
 
     /// The `BODY:uncalibrated_tag` flags in words: the jaw's pose uses tags that the calibrated
@@ -129,7 +184,7 @@ public struct StatusBar: Equatable {
     }
 
     public static func == (a: StatusBar, b: StatusBar) -> Bool {
-        a.items == b.items && a.notes == b.notes && a.link.shown == b.link.shown && a.link.green == b.link.green
-            && a.link.text == b.link.text
+        a.items == b.items && a.guidance == b.guidance && a.notes == b.notes && a.link.shown == b.link.shown
+            && a.link.green == b.link.green && a.link.text == b.link.text
     }
 }

@@ -16,7 +16,7 @@ final class CalibrationTests: XCTestCase {
     override func setUpWithError() throws {
         set = try FixtureSet.load("hinge-1080p")
         camera = FakeCamera()
-        camera.configuration = set.configuration
+        camera.device = set.device()
         documents = try Fixtures.scratch("calibration-\(name.filter(\.isLetter))")
         calibrationQueue = DispatchQueue(label: "test.calibration")
         controller = AppController(
@@ -185,7 +185,14 @@ final class CalibrationTests: XCTestCase {
     }
 
     func testTheMarkerIsNotCalibratedWhileRecording() {
+        // Focus mode auto: recording needs no focus lock (FocusTests records in focus mode planned).
+        var auto = controller.settings.settings
+        auto.focus = .auto
+        controller.settingsOpened()
+        XCTAssertNil(controller.save(auto))
+        controller.settingsClosed()
         controller.toggleRecording()
+        XCTAssertTrue(controller.state.isRecording)
         XCTAssertFalse(controller.state.canCalibrateMarker)
         controller.openMarkerCalibration()
         XCTAssertFalse(screen.isOpen)

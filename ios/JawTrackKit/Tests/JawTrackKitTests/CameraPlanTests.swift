@@ -24,6 +24,7 @@ final class CameraPlanTests: XCTestCase {
 
     func testThePlanIsForMeasuring() {
         var settings = defaultAppSettings()
+        XCTAssertEqual(settings.focus, .planned, "the default")
         var plan = CapturePlan(settings)
         XCTAssertFalse(plan.videoHDR)
         XCTAssertFalse(plan.stabilization)
@@ -31,7 +32,12 @@ final class CameraPlanTests: XCTestCase {
         XCTAssertTrue(plan.discardLateFrames)
         XCTAssertNil(plan.lockExposureAfter)
         XCTAssertEqual(plan.layout, .luma)
+        XCTAssertEqual(plan.focus, .continuousAutoUntilLocked)
+        XCTAssertEqual(CapturePlan(settings, zoomFactor: 2).zoomFactor, 2, "the capture plan's native crop")
+        settings.focus = .auto
+        plan = CapturePlan(settings, zoomFactor: 2)
         XCTAssertEqual(plan.focus, .continuousAuto)
+        XCTAssertEqual(plan.zoomFactor, 1, "zoom 1 unless planned")
         settings.exposureLocked = true
         settings.bgra = true
         settings.focus = .manual
@@ -41,7 +47,97 @@ final class CameraPlanTests: XCTestCase {
         XCTAssertEqual(plan.lockExposureAfter, 1)
         XCTAssertEqual(plan.layout, .bgra)
         XCTAssertEqual(plan.focus, .locked(lensPosition: 1))
+        XCTAssertEqual(plan.zoomFactor, 1)
         XCTAssertEqual(plan.frameDuration, 1.0 / 60)
+    }
+
+    /// The wide camera's 1080p and 4K formats as a phone lists them (video range, then full
+    /// range), with `nativeZooms`.
+    private func phoneFormats(nativeZooms: [Double]) -> [CameraFormatInfo] {
+        [(1920, 1080), (3840, 2160)].flatMap { width, height in
+            [false, true].map { fullRange in
+                CameraFormatInfo(
+                    width: width, height: height, frameRates: [1...60], fullRange420: fullRange, fieldOfViewDegrees: 70,
+                    nativeZooms: nativeZooms
+                )
+            }
+        }
+    }
+
+    func testAProPhoneIsPlannedAt1080pWithItsNativeCrop() throws {
+        let device = CameraDevice(model: "iPhone16,1", camera: .backWide, minimumFocusMm: 200, formats: phoneFormats(nativeZooms: [2]))
+        var settings = defaultAppSettings()
+        settings.resolution = .uhd4k
+        let setup = try CaptureSetup(device: device, settings: settings, markerJSON: nil)
+        XCTAssertEqual(setup.formatIndex, 1, "1080p, full range; the resolution setting is not used")
+        XCTAssertEqual(setup.plan.zoomFactor, 2)
+        XCTAssertEqual(setup.plan.focus, .continuousAutoUntilLocked)
+        XCTAssertEqual(setup.plan.fps, 60)
+        XCTAssertNotNil(setup.planner)
+        let choice = try XCTUnwrap(setup.choice)
+        XCTAssertEqual([choice.width, choice.height, choice.fps], [1920, 1080, 60])
+        XCTAssertEqual(choice.zoom, 2)
+        XCTAssertEqual(choice.distanceMm, 220)
+        XCTAssertTrue(choice.summary.contains("2× native crop"), choice.summary)
+        XCTAssertTrue(choice.notes.isEmpty, "the phone reported its nearest focus: \(choice.notes)")
+        let configuration = setup.configuration
+        XCTAssertEqual(configuration.referenceWidth, 1920)
+        XCTAssertEqual(configuration.deviceDescription, "iPhone16,1 back wide")
+        XCTAssertEqual(
+            configuration.estimatedMatrix[0], 2 * CameraPlanner.pinholeMatrix(width: 1920, height: 1080, fieldOfViewDegrees: 70)[0],
+            accuracy: 1e-2, "the estimate's focal length is the crop's"
+        )
+        let marker = try Tracker(settings: defaultSettings(), markerJson: nil).markerJson()
+        XCTAssertEqual(try CaptureSetup(device: device, settings: settings, markerJSON: marker).choice, choice,
+                       "the tracker's marker: the nominal one")
+    }
+
+    func testATwelveMegapixelPhoneIsPlannedAt4K() throws {
+        let device = CameraDevice(
+            model: "iPhone14,2", camera: .backWide, minimumFocusMm: CameraDevice.focusDistance(reported: -1),
+            formats: phoneFormats(nativeZooms: [])
+        )
+        XCTAssertNil(device.minimumFocusMm, "AVFoundation's -1: not known")
+        let setup = try CaptureSetup(device: device, settings: defaultAppSettings(), markerJSON: nil)
+        XCTAssertEqual(setup.formatIndex, 3, "4K, full range")
+        XCTAssertEqual(setup.plan.zoomFactor, 1)
+        let choice = try XCTUnwrap(setup.choice)
+        XCTAssertEqual([choice.width, choice.height], [3840, 2160])
+        XCTAssertFalse(choice.notes.isEmpty, "the nearest focus did not come from the phone: the plan says where from")
+    }
+
+    func testOtherFocusModesChooseByTheResolutionAtZoomOne() throws {
+        let device = CameraDevice(model: "iPhone16,1", camera: .backWide, minimumFocusMm: 200, formats: phoneFormats(nativeZooms: [2]))
+        var settings = defaultAppSettings()
+        settings.focus = .auto
+        settings.resolution = .uhd4k
+        let setup = try CaptureSetup(device: device, settings: settings, markerJSON: nil)
+        XCTAssertEqual(setup.formatIndex, 3)
+        XCTAssertEqual(setup.plan.zoomFactor, 1)
+        XCTAssertNil(setup.planner)
+        XCTAssertNil(setup.choice)
+        XCTAssertEqual(setup.configuration.estimatedMatrix, CameraPlanner.pinholeMatrix(width: 3840, height: 2160, fieldOfViewDegrees: 70))
+        settings.focus = .manual
+        settings.resolution = .hd720
+        XCTAssertThrowsError(try CaptureSetup(device: device, settings: settings, markerJSON: nil)) {
+            XCTAssertEqual(userText($0), "This camera cannot film 1280×720 at 60 fps; choose another resolution or frame rate.")
+        }
+    }
+
+    func testThePlansFormatCropsNativelyAndTheCameraIsDescribedAsThePlannerTakesIt() throws {
+        let formats = [
+            CameraFormatInfo(width: 1920, height: 1080, frameRates: [1...30, 1...60], fullRange420: true, fieldOfViewDegrees: 70),
+            CameraFormatInfo(width: 1920, height: 1080, frameRates: [1...60], fullRange420: false, fieldOfViewDegrees: 70, nativeZooms: [2]),
+        ]
+        XCTAssertEqual(try CameraPlanner.chooseFormat(formats, width: 1920, height: 1080, fps: 60, zoom: 2), 1,
+                       "the one that crops at 2× natively, though video range")
+        XCTAssertEqual(try CameraPlanner.chooseFormat(formats, width: 1920, height: 1080, fps: 60, zoom: 1), 0)
+        XCTAssertThrowsError(try CameraPlanner.chooseFormat(Array(formats.prefix(1)), width: 1920, height: 1080, fps: 60, zoom: 2),
+                             "a zoom that upscales is not taken")
+        XCTAssertEqual(formats[1].captureFormat, CaptureFormat(width: 1920, height: 1080, maxFps: 60, fovDeg: 70, nativeZooms: [2]))
+        XCTAssertEqual(formats[0].captureFormat.maxFps, 60)
+        XCTAssertEqual(CameraDevice.focusDistance(reported: 200), 200)
+        XCTAssertNil(CameraDevice.focusDistance(reported: 0))
     }
 
     func testTheEstimatedMatrixComesFromTheFieldOfView() throws {
@@ -115,6 +211,9 @@ final class CameraPlanTests: XCTestCase {
                        "Keychain: User interaction is not allowed.")
         XCTAssertEqual(PlatformText.pixelFormatUnavailable(.luma).message, "This camera does not deliver 420f frames.")
         XCTAssertEqual(PlatformText.noManualFocus(.front).message, "The front camera has no manual focus; choose auto.")
+        XCTAssertEqual(PlatformText.focusNotLocked(AppError(message: "busy")),
+                       "busy. Focus mode Planned records only with the focus locked: leave the app and come back to try again, or choose Auto focus in Settings.")
+        XCTAssertFalse(PlatformText.formatUnavailable.message.isEmpty)
         XCTAssertTrue(PlatformText.exposureNotLocked(AppError(message: "busy")).hasSuffix("busy"))
     }
 

@@ -13,13 +13,17 @@ final class MotionTests: XCTestCase {
         set = try FixtureSet.load()
     }
 
-    /// The fixture frames' size, filmed by `model` with a sensor whose gain tops out at 3200.
-    private func configuration(model: String, settings: AppSettings = defaultAppSettings()) -> CaptureConfiguration {
-        let format = CameraFormatInfo(
+    /// The fixture frames' size, with a sensor whose gain tops out at 3200.
+    private var format: CameraFormatInfo {
+        CameraFormatInfo(
             width: set.frames[0].width, height: set.frames[0].height, frameRates: [1...60], fullRange420: true,
             fieldOfViewDegrees: 65, maxISO: 3200
         )
-        return CaptureConfiguration(format: format, plan: CapturePlan(settings), model: model, camera: .backWide)
+    }
+
+    /// That format filmed by `model`.
+    private func configuration(model: String, settings: AppSettings = defaultAppSettings()) -> CaptureConfiguration {
+        CaptureConfiguration(format: format, plan: CapturePlan(settings), model: model, camera: .backWide)
     }
 
     func testTheCapStartsAtTwoMillisecondsAndLiftsOnlyWhileTheGainIsAtItsLimit() throws {
@@ -85,7 +89,7 @@ final class MotionTests: XCTestCase {
 
     func testTheScreenTellsTheTrackerThePhonesReadoutOrTheCalibratedOne() throws {
         let camera = FakeCamera()
-        camera.configuration = configuration(model: "iPhone16,2")
+        camera.device = set.device(model: "iPhone16,2", format: format)
         let controller = AppController(
             settings: SettingsStore(values: MemoryKeyValueStore(), secrets: MemorySecretStore()),
             camera: camera,
@@ -112,7 +116,7 @@ final class MotionTests: XCTestCase {
         controller.pipeline.queue.sync {}
         XCTAssertEqual(camera.exposureCaps, [0.004], "the dark room lifted the cap once")
 
-        camera.configuration = configuration(model: "iPhone14,2")
+        camera.device = set.device(model: "iPhone14,2", format: format)
         controller.settingsOpened()
         var plain = controller.settings.settings
         plain.calibratedReadoutS = nil

@@ -74,6 +74,7 @@ final class RecordingTests: XCTestCase {
         XCTAssertEqual(intrinsics["cx"], set.intrinsics[2])
         XCTAssertNotNil(header["marker"] as? [String: Any])
         XCTAssertEqual((header["settings"] as? [String: Any])?["record_video"] as? Bool, true)
+        XCTAssertNil(header["capture"], "no capture plan asked for (FocusTests records one)")
         let sessions = Set(lines.dropFirst().compactMap { $0["session"] as? String })
         XCTAssertEqual(sessions.count, 1, "one session id on every frame")
         for (line, report) in zip(lines.dropFirst(), reports) {

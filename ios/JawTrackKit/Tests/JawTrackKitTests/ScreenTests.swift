@@ -19,7 +19,7 @@ final class ScreenTests: XCTestCase {
     override func setUpWithError() throws {
         set = try FixtureSet.load()
         camera = FakeCamera()
-        camera.configuration = set.configuration
+        camera.device = set.device()
         documents = try Fixtures.scratch("documents-\(name.filter(\.isLetter))")
         controller = makeController(values: MemoryKeyValueStore())
     }
@@ -143,6 +143,10 @@ final class ScreenTests: XCTestCase {
     }
 
     func testRecordingThenNamingIt() throws {
+        // Focus mode auto: recording needs no focus lock (FocusTests records in focus mode planned).
+        var auto = controller.settings.settings
+        auto.focus = .auto
+        XCTAssertNil(controller.save(auto))
         controller.start(cameraAllowed: true)
         controller.toggleRecording()
         XCTAssertTrue(controller.state.isRecording)

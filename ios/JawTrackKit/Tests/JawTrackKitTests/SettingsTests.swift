@@ -33,6 +33,32 @@ final class SettingsTests: XCTestCase {
         XCTAssertEqual(reloaded.settings, changed)
     }
 
+    func testThePlannedFocusModeRoundTripsAndSettingsStoredBeforeItStillLoad() throws {
+        let values = MemoryKeyValueStore()
+        let store = SettingsStore(values: values, secrets: MemorySecretStore())
+        var planned = store.settings
+        planned.focus = .planned
+        planned.fps = 30
+        try store.save(planned)
+        let stored = try JSONSerialization.jsonObject(with: try XCTUnwrap(values.data(forKey: SettingsStore.key))) as? [String: Any]
+        XCTAssertEqual(stored?["focus"] as? String, "planned")
+        XCTAssertEqual(SettingsStore(values: values, secrets: MemorySecretStore()).settings, planned)
+
+        for (name, mode) in [("auto", FocusMode.auto), ("manual", .manual)] {
+            var old = try XCTUnwrap(stored)
+            old["focus"] = name
+            values.set(try JSONSerialization.data(withJSONObject: old), forKey: SettingsStore.key)
+            let loaded = SettingsStore(values: values, secrets: MemorySecretStore())
+            XCTAssertNil(loaded.loadProblem)
+            XCTAssertEqual(loaded.settings.focus, mode, "stored before the planned mode existed")
+            XCTAssertEqual(StoredSettings(loaded.settings).focus, name)
+        }
+        var unknown = try XCTUnwrap(stored)
+        unknown["focus"] = "macro"
+        values.set(try JSONSerialization.data(withJSONObject: unknown), forKey: SettingsStore.key)
+        XCTAssertTrue(try XCTUnwrap(SettingsStore(values: values, secrets: MemorySecretStore()).loadProblem).contains("macro"))
+    }
+
     func testTheLibraryRefusesBadSettingsAndNothingIsSaved() throws {
         let values = MemoryKeyValueStore()
         let store = SettingsStore(values: values, secrets: MemorySecretStore())
@@ -99,8 +125,14 @@ final class SettingsTests: XCTestCase {
         form.portText = ""
         XCTAssertEqual(form.draft.receiverPort, 0)
         XCTAssertFalse(form.showsLensPosition)
+        XCTAssertEqual(SettingsForm.focusModes.map(\.label), ["Planned", "Auto", "Manual"])
+        XCTAssertEqual(form.draft.focus, SettingsForm.focusModes[0].value, "the default is shown first")
+        XCTAssertFalse(form.usesResolution, "the plan chooses the format")
+        XCTAssertTrue(try XCTUnwrap(form.focusNote).contains("resolution setting is not used"))
         form.draft.focus = .manual
         XCTAssertTrue(form.showsLensPosition)
+        XCTAssertTrue(form.usesResolution)
+        XCTAssertNil(form.focusNote)
         XCTAssertEqual(SettingsForm.decimations.map(\.label), ["1", "1.5", "2", "3", "4"])
         XCTAssertEqual(SettingsForm.cameras.count, 3)
     }

@@ -115,13 +115,22 @@ struct FixtureSet {
         return [Float(fx), 0, 0, 0, Float(fy), 0, Float(cx + 0.5), Float(cy + 0.5), 1]
     }
 
-    var configuration: CaptureConfiguration {
-        let format = CameraFormatInfo(
+    /// The format the fixture frames have.
+    var format: CameraFormatInfo {
+        CameraFormatInfo(
             width: frames[0].width, height: frames[0].height, frameRates: [1...60], fullRange420: true, fieldOfViewDegrees: 65
         )
+    }
+
+    var configuration: CaptureConfiguration {
         var settings = defaultAppSettings()
         settings.fps = 30
         return CaptureConfiguration(format: format, plan: CapturePlan(settings), model: "Linux", camera: .backWide)
+    }
+
+    /// A camera whose one format is the fixture frames', as the camera layer describes it.
+    func device(model: String = "Linux", minimumFocusMm: Double? = nil, format: CameraFormatInfo? = nil) -> CameraDevice {
+        CameraDevice(model: model, camera: .backWide, minimumFocusMm: minimumFocusMm, formats: [format ?? self.format])
     }
 }
 
@@ -154,6 +163,8 @@ class MemoryFrameSource: FrameSource {
         exposure: Double? = 0.002,
         iso: Double? = nil,
         cameraMatrix: [Float]?,
+        lensPosition: Double? = nil,
+        adjustingFocus: Bool? = nil,
         truncateTo byteCount: Int? = nil,
         native: AnyObject? = nil
     ) {
@@ -169,7 +180,8 @@ class MemoryFrameSource: FrameSource {
                     bytesPerRow: bytesPerRow, layout: layout
                 )
                 handler(CameraFrame(
-                    buffer: buffer, time: time, exposure: exposure, iso: iso, cameraMatrix: cameraMatrix, native: native
+                    buffer: buffer, time: time, exposure: exposure, iso: iso, cameraMatrix: cameraMatrix,
+                    lensPosition: lensPosition, adjustingFocus: adjustingFocus, native: native
                 ))
             }
         }
@@ -178,30 +190,48 @@ class MemoryFrameSource: FrameSource {
 
 /// A camera for the screen model's tests: records what it was asked, and is a frame source.
 final class FakeCamera: MemoryFrameSource, CameraControl {
-    var configured: [CapturePlan] = []
+    /// The plans configured (and the setups they came with).
+    var configured: [CapturePlan] { setups.map(\.plan) }
+    var setups: [CaptureSetup] = []
+    var described: [Camera] = []
     var starts = 0
     var locks = 0
     var lockFailure: String?
     var stops = 0
-    var configuration: CaptureConfiguration?
+    /// The camera as it describes itself.
+    var device: CameraDevice?
+    /// Makes `describe` fail.
     var failure: AppError?
+    /// Makes `configure` fail.
+    var configureFailure: AppError?
     var makeVideo: VideoSinkFactory?
+    /// The focus locks asked for, to be answered by the test.
+    var focusLocks: [(Result<Double, Error>) -> Void] = []
 
-    func configure(
-        _ plan: CapturePlan,
-        settings: AppSettings,
-        completion: @escaping (Result<(CaptureConfiguration, VideoSinkFactory?), Error>) -> Void
-    ) {
-        configured.append(plan)
+    func describe(_ camera: Camera, completion: @escaping (Result<CameraDevice, Error>) -> Void) {
+        described.append(camera)
         if let failure {
             completion(.failure(failure))
         } else {
-            completion(.success((configuration!, makeVideo)))
+            completion(.success(device!))
+        }
+    }
+
+    func configure(_ setup: CaptureSetup, completion: @escaping (Result<VideoSinkFactory?, Error>) -> Void) {
+        setups.append(setup)
+        if let configureFailure {
+            completion(.failure(configureFailure))
+        } else {
+            completion(.success(makeVideo))
         }
     }
 
     func start() {
         starts += 1
+    }
+
+    func lockFocus(completion: @escaping (Result<Double, Error>) -> Void) {
+        focusLocks.append(completion)
     }
 
     func lockExposureAndWhiteBalance(onProblem: @escaping (String) -> Void) {
