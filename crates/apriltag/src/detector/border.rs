@@ -37,18 +37,19 @@ pub const PIXEL_SIGMA_PX: f64 = 0.5;
 const NP: usize = 7;
 type Params = SVector<f64, NP>;
 
-/// Profiles are read every this many pixels along the normal …
+/// Profiles are read every this many pixels along the normal (every third of the blur's σ
+/// when that is longer) …
 const STEP_PX: f64 = 0.5;
-/// … every half cell along the side, from a cell in from either end (the corners' other
-/// side comes in nearer).
-const ALONG: [f64; 12] = [1.25, 1.75, 2.25, 2.75, 3.25, 3.75, 4.25, 4.75, 5.25, 5.75, 6.25, 6.75];
+/// … at eight places along the side, from a cell in from either end (the corners' other side
+/// comes in nearer), to fit the side's line …
+const ALONG: [f64; 8] = [1.25, 2.0, 2.75, 3.5, 4.5, 5.25, 6.0, 6.75];
+/// … or at six of those places, to measure the side's blur alone.
+const ALONG_BLUR: [f64; 6] = [1.75, 2.75, 3.75, 4.25, 5.25, 6.25];
 /// A window reaches this many σ (plus [`REACH_PX`]) either side of the side's edge.
 const REACH_SIGMAS: f64 = 4.0;
 const REACH_PX: f64 = 2.0;
-/// Levenberg–Marquardt iterations per round, and rounds (each re-sizing the windows to the
-/// blur found).
-const ITERATIONS: usize = 12;
-const ROUNDS: usize = 3;
+/// Levenberg–Marquardt iterations at most per window.
+const ITERATIONS: usize = 10;
 
 /// Bands across the side, going inward: beyond the quiet zone, the quiet zone, then the black
 /// border square's eight rows.
@@ -99,11 +100,12 @@ pub(super) struct SideFit {
 }
 
 /// The fit of a tag's border: its four sides (top, right, bottom, left of the upright tag, C's
-/// pixel convention) and its blur.
+/// pixel convention) when it was blurred enough to fit them, and its blur.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct BorderFit {
-    pub sides: [SideFit; 4],
-    /// The lens's blur σ (px): the second-sharpest side's, less the pixel's own spread.
+    pub sides: Option<[SideFit; 4]>,
+    /// The lens's blur σ (px), the pixel's own spread taken out: the second-sharpest side's, or
+    /// of the two sides measured the sharper.
     pub blur_px: f64,
 }
 
@@ -143,8 +145,8 @@ fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
-/// The profiles of side `side` of the tag `h` maps.
-fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize) -> Option<Vec<Profile>> {
+/// The profiles of side `side` of the tag `h` maps, across it at each of `along` (cells).
+fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f64]) -> Option<Vec<Profile>> {
     let at = |u: f64, v: f64| {
         let (x, y) = side_point(side, u, v);
         project(h, x, y)
@@ -155,8 +157,8 @@ fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize) -> Option<Vec<Profile
             *cell = print(bitmap, side, c as i32 - 1, b as i32 - 2);
         }
     }
-    let mut out = Vec::with_capacity(ALONG.len());
-    for &u in &ALONG {
+    let mut out = Vec::with_capacity(along.len());
+    for &u in along {
         let origin = at(u, 0.0);
         let (a, b) = (at(u - 0.25, 0.0), at(u + 0.25, 0.0));
         let d = [b[0] - a[0], b[1] - a[1]];
@@ -309,46 +311,73 @@ fn sample(im: &ImageView<'_>, lut: &[f64; 256], p: [f64; 2]) -> Option<f64> {
     )
 }
 
+/// Reads each profile's samples (profile, t, value) over its window: from just inside the quiet
+/// zone's outer edge to two cells in, at most `reach` px from the side's current edge (offset
+/// and slope in `q`) either way; `None` when a window leaves the image.
+fn read(
+    im: &ImageView<'_>,
+    lut: &[f64; 256],
+    profiles: &[Profile],
+    q: &Params,
+    reach: f64,
+) -> Option<Vec<(usize, f64, f64)>> {
+    let mut data = Vec::new();
+    for (pi, p) in profiles.iter().enumerate() {
+        let e = q[0] + q[1] * p.along;
+        let lo = (0.8 * p.across[0]).max(-reach) + e;
+        let hi = p.across[3].min(reach) + e;
+        let step = STEP_PX.max(q[2] / 3.0);
+        let n = ((hi - lo) / step).floor() as usize;
+        for k in 0..=n {
+            let t = lo + k as f64 * step;
+            let at = [p.origin[0] + t * p.normal[0], p.origin[1] + t * p.normal[1]];
+            data.push((pi, t, sample(im, lut, at)?));
+        }
+    }
+    Some(data)
+}
+
+/// A first guess of the blur (px) from the steepest rise of each profile: a Gaussian edge of
+/// height H rises at most H / (σ·√(2π)) per pixel. The median over the profiles.
+fn blur_guess(data: &[(usize, f64, f64)], contrast: f64) -> Option<f64> {
+    let mut steepest: Vec<f64> = Vec::new();
+    for run in data.chunk_by(|a, b| a.0 == b.0) {
+        // Over 1 px (two steps), against noise.
+        let slope = run.windows(3).map(|w| (w[2].2 - w[0].2).abs() / (w[2].1 - w[0].1)).fold(0.0, f64::max);
+        if slope > 0.0 {
+            steepest.push(contrast / (slope * (2.0 * std::f64::consts::PI).sqrt()));
+        }
+    }
+    steepest.sort_by(f64::total_cmp);
+    steepest.get(steepest.len() / 2).copied()
+}
+
 /// Fits one side; `None` when its profiles leave the image, the fit does not converge, or what
-/// it finds cannot be a border (no contrast, a blur wider than the cells).
+/// it finds cannot be a border (no contrast, a blur wider than the cells). The windows are sized
+/// by a first guess of the blur, and sized again when the fit finds it a third different.
 fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Option<SideFit> {
     let cell = profiles.iter().map(|p| p.across[2] - p.across[1]).fold(f64::INFINITY, f64::min);
     if !(cell.is_finite() && cell > 1.0) {
         return None;
     }
     let mut q = Params::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.2]);
-    let mut data: Vec<(usize, f64, f64)> = Vec::new();
-    let mut levels_set = false;
-    for _ in 0..ROUNDS {
-        // Windows from just inside the quiet zone's outer edge to two cells in, at most
-        // REACH_SIGMAS σ from the border either way.
-        let reach = REACH_SIGMAS * q[2] + REACH_PX;
-        data.clear();
-        for (pi, p) in profiles.iter().enumerate() {
-            let e = q[0] + q[1] * p.along;
-            let lo = (0.8 * p.across[0]).max(-reach) + e;
-            let hi = p.across[3].min(reach) + e;
-            let n = ((hi - lo) / STEP_PX).floor() as usize;
-            for k in 0..=n {
-                let t = lo + k as f64 * STEP_PX;
-                let at = [p.origin[0] + t * p.normal[0], p.origin[1] + t * p.normal[1]];
-                data.push((pi, t, sample(im, lut, at)?));
-            }
-        }
-        if !levels_set {
-            // Paper: the brightest quarter of the samples; ink: the darkest.
-            let mut v: Vec<f64> = data.iter().map(|d| d.2).collect();
-            v.sort_by(f64::total_cmp);
-            let (ink, paper) = (v[v.len() / 8], v[v.len() - 1 - v.len() / 8]);
-            if paper - ink < 1.0 {
-                return None;
-            }
-            (q[3], q[4], q[5]) = (paper, ink, paper);
-            levels_set = true;
-        }
-        let before = q;
+    // A first look, half a cell either way (at most 10 px): the levels and a guess of the blur.
+    let first = read(im, lut, profiles, &q, (0.5 * cell).clamp(3.0, 10.0))?;
+    let mut v: Vec<f64> = first.iter().map(|d| d.2).collect();
+    v.sort_by(f64::total_cmp);
+    // Paper: the brightest eighth of the samples; ink: the darkest.
+    let (ink, paper) = (v[v.len() / 8], v[v.len() - 1 - v.len() / 8]);
+    if paper - ink < 1.0 {
+        return None;
+    }
+    (q[3], q[4], q[5]) = (paper, ink, paper);
+    q[2] = blur_guess(&first, paper - ink)?.clamp(0.3, cell);
+    let mut data = Vec::new();
+    for round in 0..2 {
+        let guess = q[2];
+        data = read(im, lut, profiles, &q, REACH_SIGMAS * guess + REACH_PX)?;
         q = levenberg_marquardt(profiles, &data, q, cell)?;
-        if (q[2] - before[2]).abs() < 0.05 * q[2] && (q[0] - before[0]).abs() < 0.01 {
+        if round == 0 && (q[2] - guess).abs() < guess / 3.0 {
             break;
         }
     }
@@ -411,12 +440,15 @@ fn levenberg_marquardt(profiles: &[Profile], data: &[(usize, f64, f64)], start: 
             let next = clamp(q - step);
             let c = cost(&next);
             if c.is_finite() && c < current {
+                // Settled: the line moved under 0.001 px, the blur under 0.1 %, and the misfit
+                // fell by under a millionth.
                 let moved = (next[0] - q[0]).abs() + (next[1] - q[1]).abs();
+                let settled = moved < 1e-3 && (next[2] - q[2]).abs() < 1e-3 * q[2] || current - c < 1e-6 * current;
                 q = next;
                 current = c;
                 lambda = (lambda / 3.0).max(1e-9);
                 improved = true;
-                if moved < 1e-4 {
+                if settled {
                     return Some(q);
                 }
                 break;
@@ -441,17 +473,39 @@ pub(super) fn intersect(a: &[[f64; 2]; 2], b: &[[f64; 2]; 2]) -> Option<[f64; 2]
     Some([a[0][0] + t * da[0], a[0][1] + t * da[1]])
 }
 
-/// Fits the border of tag `id`, decoded with homography `h` (tag coordinates to pixels in C's
-/// convention, upright) in `im` read through `lut`; `None` when a side cannot be fitted (the
-/// tag is cut by the frame's edge, too small, or not what it was decoded as).
-pub(super) fn fit_border(im: &ImageView<'_>, lut: &[f64; 256], id: u32, h: &[f64; 9]) -> Option<BorderFit> {
+/// A side whose blur is under this fraction of its cell is sharp enough that the gradient
+/// fit's line stands ([`super::MODEL_SIDE_BLUR_PER_CELL`] is where the model's takes over):
+/// when the two sides measured first are both under it, the other two are not fitted.
+const SHARP_BLUR_PER_CELL: f64 = 0.12;
+
+/// The border of tag `id`, decoded with homography `h` (tag coordinates to pixels in C's
+/// convention, upright) in `im` read through `lut`: its blur, and each side's line where the
+/// blur calls for the model (`None` for a side the gradient fit keeps). The top and right sides
+/// are measured first, at six places each; only when either is blurred by
+/// [`SHARP_BLUR_PER_CELL`] or more, and `want_lines`, are all four fitted at eight, for their
+/// lines. `None` when a
+/// side cannot be fitted (the tag is cut by the frame's edge, too small, or not what it was
+/// decoded as).
+pub(super) fn fit_border(
+    im: &ImageView<'_>,
+    lut: &[f64; 256],
+    id: u32,
+    h: &[f64; 9],
+    want_lines: bool,
+) -> Option<BorderFit> {
     let bitmap = Tag36h11::bitmap(id)?;
-    let side = |k: usize| fit_side(im, lut, &profiles(h, &bitmap, k)?);
-    let sides = [side(0)?, side(1)?, side(2)?, side(3)?];
+    let side = |k: usize, along: &[f64]| fit_side(im, lut, &profiles(h, &bitmap, k, along)?);
+    let sharp = |s: &SideFit| s.sigma_px < SHARP_BLUR_PER_CELL * s.cell_px;
+    let (top, right) = (side(0, &ALONG_BLUR)?, side(1, &ALONG_BLUR)?);
+    let lens = |sigma: f64| (sigma * sigma - PIXEL_SIGMA_PX * PIXEL_SIGMA_PX).max(0.0).sqrt();
+    if !want_lines || (sharp(&top) && sharp(&right)) {
+        // Motion smears at most one of two perpendicular sides: the sharper is the lens's.
+        return Some(BorderFit { sides: None, blur_px: lens(top.sigma_px.min(right.sigma_px)) });
+    }
+    let sides = [side(0, &ALONG)?, side(1, &ALONG)?, side(2, &ALONG)?, side(3, &ALONG)?];
     let mut sigmas = sides.map(|s| s.sigma_px);
     sigmas.sort_by(f64::total_cmp);
-    let blur_px = (sigmas[1] * sigmas[1] - PIXEL_SIGMA_PX * PIXEL_SIGMA_PX).max(0.0).sqrt();
-    Some(BorderFit { sides, blur_px })
+    Some(BorderFit { sides: Some(sides), blur_px: lens(sigmas[1]) })
 }
 
 #[cfg(test)]

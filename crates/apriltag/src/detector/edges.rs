@@ -254,9 +254,12 @@ pub(super) fn refine_edges(
         // side's summed profile (out to a cell), and the side fitted again with windows that
         // take it in whole. (A cell narrower than the usual window holds no ramp to widen for.)
         if ramps && recentre && !points.is_empty() && flat * 2 >= points.len() && widest_cell > base as f64 + 0.5 {
-            // Out to a cell (as far as windows for a ramp a cell wide look), over every fourth
-            // sample: a ramp's width at half its height stands well above the noise.
-            summed(&mut fit, &mut profile, widest_cell, 4);
+            // Out to a cell (as far as windows for a ramp a cell wide look), over every sample,
+            // then smoothed over a pixel: a wide ramp's gradient is low, and on a noisy frame (a
+            // 2× sensor crop gathers a quarter of the light per pixel) one spike taken as its
+            // height cut the ramp's width at half of it to a third (corners 3–5 px off).
+            summed(&mut fit, &mut profile, widest_cell, 1);
+            smooth_even(&mut profile, 2);
             let mut offsets: Vec<f64> = points.iter().map(|p| p.2).collect();
             offsets.sort_by(f64::total_cmp);
             let at = (profile.len() / 2) as i64 + (4.0 * offsets[offsets.len() / 2]).round() as i64;
@@ -317,6 +320,15 @@ pub(super) fn refine_edges(
         if det.abs() > 0.001 {
             quad.p[(i + 1) & 3] = corner;
         }
+    }
+}
+
+/// A profile filled on even steps, averaged over `half` even steps either way (edges kept).
+pub(super) fn smooth_even(profile: &mut [f64], half: usize) {
+    let values: Vec<f64> = profile.iter().copied().step_by(2).collect();
+    for (i, v) in profile.iter_mut().step_by(2).enumerate() {
+        let (lo, hi) = (i.saturating_sub(half), (i + half).min(values.len() - 1));
+        *v = values[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64;
     }
 }
 

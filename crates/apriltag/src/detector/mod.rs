@@ -284,16 +284,14 @@ const MODEL_SIDE_MAX_MISFIT: f64 = 0.05;
 /// Gaussian the model assumes (a tag smeared 8 px over 12 px cells: 0.065 px off with the
 /// model's sides, within 0.02 px with the ramp's).
 fn with_border_fit(im: &ImageView<'_>, lut: &[f64; 256], d: Detection, sides: bool) -> Detection {
-    let Some(fit) = border::fit_border(im, lut, d.id, &d.homography) else { return d };
+    let Some(fit) = border::fit_border(im, lut, d.id, &d.homography, sides) else { return d };
     let measured = Detection { blur_px: Some(fit.blur_px), ..d };
-    if !sides {
-        return measured;
-    }
+    let Some(fitted) = fit.sides.filter(|_| sides) else { return measured };
     let c = d.corners;
     // The gradient fit's sides, as the border fit orders them: top, right, bottom, left.
     let gradient = [[c[3], c[2]], [c[2], c[1]], [c[1], c[0]], [c[0], c[3]]];
     let mut lines = gradient;
-    for (line, side) in lines.iter_mut().zip(&fit.sides) {
+    for (line, side) in lines.iter_mut().zip(&fitted) {
         if side.sigma_px > MODEL_SIDE_BLUR_PER_CELL * side.cell_px && side.misfit < MODEL_SIDE_MAX_MISFIT {
             *line = side.line;
         }
