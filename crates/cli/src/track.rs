@@ -355,7 +355,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     if summary.defocused > 0 {
         eprintln!(
             "warning: {} of {} frames had a marker out of focus (flagged BODY:defocused: its tags' edges blurred by more \
-             than a fifth of their cells) and give no jaw pose: the phone was nearer than its lens focuses, or far from \
+             than 0.14 of their cells' width) and give no jaw pose: the phone was nearer than its lens focuses, or far from \
              where its focus was locked; `jawtrack plan --phone MODEL` says where to hold it",
             summary.defocused, summary.read
         );

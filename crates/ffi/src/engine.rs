@@ -33,8 +33,8 @@ pub struct BodyPose {
     /// How blurred its tags' edges are (σ, px), when measured: the lens's defocus.
     #[uniffi(default)]
     pub blur_px: Option<f64>,
-    /// The width (px) of its tags' cells, what its blur is judged against (`defocused` beyond a
-    /// fifth of it).
+    /// The width (px) of its tags' cells, what its blur is judged against (`defocused` beyond 0.14
+    /// of it).
     #[uniffi(default)]
     pub cell_px: f64,
 }

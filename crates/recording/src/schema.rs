@@ -168,8 +168,8 @@ pub struct BodyRecord {
     /// frame came over the link (packets do not carry it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cov: Option<Vec<f64>>,
-    /// How blurred its tags' edges were (σ, px): the lens's defocus (a body blurred beyond a
-    /// fifth of its cells is flagged `defocused`); absent when not measured.
+    /// How blurred its tags' edges were (σ, px): the lens's defocus (a body blurred beyond 0.14
+    /// of its cells' width is flagged `defocused`); absent when not measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blur_px: Option<f64>,
     /// The width (px) of its tags' cells, what its blur is judged against.

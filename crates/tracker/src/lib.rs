@@ -35,7 +35,7 @@ pub mod smoothing;
 pub use bite::{Bite, BiteRefusal, BiteRule, BiteWindow};
 pub use jawtrack_recording::Flag;
 pub use registration::{IntercuspationCalibration, Registration, RegistrationError, calibrate_intercuspation};
-pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX};
+pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX, THIN_RATIO};
 pub use smoothing::{Smoother, SmootherConfig};
 
 use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi};
@@ -137,8 +137,8 @@ pub struct BodyResult {
     /// Covariance of (rotation vector [rad], translation [mm]) of a left perturbation in the
     /// camera frame.
     pub covariance: Matrix6<f64>,
-    /// How blurred its tags' edges are (σ, px; the median of their [`Detection::blur_px`]),
-    /// when measured.
+    /// How blurred its tags' edges are by the lens (σ, px; their [`Detection::blur_px`]'s median
+    /// less what the motion predicted over the exposure adds, [`sharpness`]), when measured.
     pub blur_px: Option<f64>,
     /// The width (px) of its tags' cells (the median, each tag's along its longest side: its
     /// scale at its distance, however steeply it is seen).
@@ -424,7 +424,8 @@ impl Tracker {
         let start = Instant::now();
         let expected = self.expected_region(frame, camera, t);
         let mut searched = expected;
-        let smeared = self.predicts_smear(camera, t);
+        // Either body's recent motion predicts a smear of `roi::SMEAR_PX` or more.
+        let smeared = self.smears(camera, t).iter().any(|&s| s >= roi::SMEAR_PX);
         let mut detections = self.detect(frame, expected, smeared)?;
         // A body missing from its expected region, or a tag at the region's edge (the
         // prediction was off, and the edge fit there lacks its pixels): search everywhere.
@@ -475,13 +476,16 @@ impl Tracker {
         roi::region(&groups, camera, frame.width(), frame.height(), s.margin, s.min_margin_px)
     }
 
-    /// Whether either body's recent motion predicts a smear of [`roi::SMEAR_PX`] or more over
-    /// the exposure of a frame at `t`.
-    fn predicts_smear(&self, camera: &CameraIntrinsics, t: f64) -> bool {
-        BodyKind::ALL.iter().any(|&k| {
+    /// How far (px) each body's recent motion predicts its tags smear over the exposure of a
+    /// frame at `t` (0 without a recent pose).
+    fn smears(&self, camera: &CameraIntrinsics, t: f64) -> [f64; 2] {
+        BodyKind::ALL.map(|k| {
             let (b, reach) = (&self.bodies[slot(k)], self.corners[slot(k)].iter().map(|p| p.coords.norm()));
-            b.last().is_some_and(|l| self.recent(l.0, t))
-                && b.smear_px(camera, self.config.exposure_s, reach.fold(0.0, f64::max)) >= roi::SMEAR_PX
+            if b.last().is_some_and(|l| self.recent(l.0, t)) {
+                b.smear_px(camera, self.config.exposure_s, reach.fold(0.0, f64::max))
+            } else {
+                0.0
+            }
         })
     }
 
@@ -495,7 +499,8 @@ impl Tracker {
         if detections.is_empty() {
             flags.push(Flag::NoTags);
         }
-        let smeared = self.predicts_smear(camera, t);
+        let smears = self.smears(camera, t);
+        let smeared = smears.iter().any(|&s| s >= roi::SMEAR_PX);
         let mut solved: [Option<(BodyPose, Vec<u32>)>; 2] = [None, None];
         let mut seen: [Option<Pose>; 2] = [None, None];
         for kind in BodyKind::ALL {
@@ -528,7 +533,7 @@ impl Tracker {
             };
             bodies[slot(kind)] = self.accept(kind, pose, rejected, other.or(own).as_ref(), &mut flags);
         }
-        let defocused = sharpness::judge(&mut bodies, &detections, self.config.max_blur_per_cell, &mut flags);
+        let defocused = sharpness::judge(&mut bodies, &detections, smears, self.config.max_blur_per_cell, &mut flags);
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
                 Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
@@ -588,16 +593,16 @@ impl Tracker {
 
     /// Every corner of `kind`'s tags among the detections: the correspondences its PnP
     /// solves (for benchmarks and diagnostics). A tag seen so steeply that its cells are under
-    /// [`THIN_CELL_PX`] across is left out while the body has two others.
+    /// [`THIN_CELL_PX`] across, or whose shortest side is under [`THIN_RATIO`] of its longest, is
+    /// left out while the body has two others.
     pub fn observations(&self, kind: BodyKind, detections: &[Detection]) -> Vec<Observation> {
         let mine: Vec<&Detection> =
             detections.iter().filter(|d| self.marker.find_tag(d.id).is_some_and(|(b, _)| b == kind)).collect();
-        let thin = |d: &Detection| sharpness::cell_px(d) < THIN_CELL_PX;
-        let skip_thin = mine.iter().filter(|d| !thin(d)).count() >= 2;
+        let skip_thin = mine.iter().filter(|d| !sharpness::thin(d)).count() >= 2;
         let mut out = Vec::new();
         for d in mine {
             let Some((_, tag)) = self.marker.find_tag(d.id) else { continue };
-            if skip_thin && thin(d) {
+            if skip_thin && sharpness::thin(d) {
                 continue;
             }
             for (corner, pixel) in tag.corners.iter().zip(&d.corners) {
