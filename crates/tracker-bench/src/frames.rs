@@ -91,7 +91,13 @@ impl Request {
 
     fn config(&self) -> SynthConfig {
         let realism = match self.phone {
-            Some(p) => Realism::phone_wide(p.focus_mm, p.zoom),
+            // A 4K frame's pixel covers a quarter of the sensor a 1080p pixel does, and gathers a
+            // quarter of its light (the zoom's crop is the realism's own).
+            Some(p) => {
+                let r = Realism::phone_wide(p.focus_mm, p.zoom);
+                let (w, _) = p.resolution.size();
+                Realism { full_well_e: r.full_well_e * (1920.0 / f64::from(w)).powi(2), ..r }
+            }
             None => Realism::default(),
         };
         SynthConfig {
