@@ -34,7 +34,11 @@ fn a_waved_marker_calibrates_the_camera_and_its_readout() {
         jawtrack(&[&base[..], extra, &[s(&frames)]].concat())
     };
     let report = ok(&run(&[]));
-    assert!(report.contains("track with: jawtrack track --intrinsics ") && report.contains("--readout-ms"), "{report}");
+    let said = |w: &str| report.contains(w);
+    assert!(
+        said("track with: jawtrack track --camera ") && said("or --intrinsics ") && said("--readout-ms"),
+        "{report}"
+    );
     let written: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).expect("written")).expect("json");
     let c = &written["calibration"];
