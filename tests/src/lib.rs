@@ -38,6 +38,34 @@ pub fn fixture_sets() -> Vec<PathBuf> {
     v
 }
 
+/// Every fixture set and its number of frames, as `fixtures/README.md` lists them, in the order
+/// of [`fixture_sets`]. Tests that loop over the fixtures compare what they went through with
+/// this, so that a missing set or frame fails them instead of leaving them nothing to check;
+/// `crates/synth/tests/fixtures.rs` checks it against the folders.
+pub const FIXTURE_FRAMES: [(&str, usize); 8] = [
+    ("chew-1080p", 3),
+    ("clean-excursion-1080p", 4),
+    ("clean-hinge-1080p", 5),
+    ("clean-static-1080p", 18),
+    ("clean-static-4k", 2),
+    ("hinge-1080p", 5),
+    ("static-1080p", 6),
+    ("static-4k", 1),
+];
+
+/// A fixture set's name: its folder's.
+pub fn set_name(set: &std::path::Path) -> String {
+    set.file_name().and_then(|n| n.to_str()).unwrap_or("?").to_owned()
+}
+
+/// Asserts that `checked`, the (set name, frames checked) of a test's loop over
+/// [`fixture_sets`], is every set of [`FIXTURE_FRAMES`] with all its frames.
+#[track_caller]
+pub fn assert_every_fixture_frame(what: &str, checked: &[(String, usize)]) {
+    let want: Vec<(String, usize)> = FIXTURE_FRAMES.iter().map(|&(name, n)| (name.to_owned(), n)).collect();
+    assert_eq!(checked, want, "{what}: the (set, frames) checked are not every fixture frame");
+}
+
 /// The homography mapping tag coordinates ((−1,+1) bottom-left … (−1,−1) top-left, y down)
 /// to pixels through four corners in detection order.
 pub fn tag_homography(corners: &[[f64; 2]; 4]) -> Option<Matrix3<f64>> {
@@ -123,4 +151,14 @@ pub fn read_tag(img: &image::GrayImage, corners: &[[f64; 2]; 4]) -> Option<TagRe
         white: quiet.iter().sum::<f64>() / quiet.len() as f64,
         cells,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    /// The guard itself: a loop that checked no fixture frame fails.
+    #[test]
+    #[should_panic(expected = "not every fixture frame")]
+    fn checking_no_fixture_frame_fails() {
+        super::assert_every_fixture_frame("nothing", &[]);
+    }
 }

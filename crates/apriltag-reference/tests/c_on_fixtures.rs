@@ -5,12 +5,14 @@
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_pose::median;
 use jawtrack_synth::GroundTruth;
-use jawtrack_test_support::fixture_sets;
+use jawtrack_test_support::{assert_every_fixture_frame, fixture_sets, set_name};
 use std::io::Write as _;
 
 /// What the reference did on one fixture set.
 struct SetResult {
     name: String,
+    /// Frames run through the reference.
+    frames: usize,
     /// Tags the truth calls detectable, and how many the reference found.
     want: usize,
     found: usize,
@@ -30,7 +32,7 @@ fn run(params: &ReferenceParams) -> Vec<SetResult> {
             serde_json::from_str(&std::fs::read_to_string(set.join("ground_truth.json")).expect("truth"))
                 .expect("json");
         let (mut want, mut found, mut false_pos, mut errs) = (0, 0, 0, Vec::new());
-        let (mut want_frontal, mut found_frontal) = (0, 0);
+        let (mut want_frontal, mut found_frontal, mut frames) = (0, 0, 0);
         for f in &gt.frames {
             let img = image::open(set.join(&f.file)).expect("png").to_luma8();
             let (w, h) = img.dimensions();
@@ -66,11 +68,12 @@ fn run(params: &ReferenceParams) -> Vec<SetResult> {
                     }
                 }
             }
+            frames += 1;
         }
         errs.sort_by(f64::total_cmp);
-        let name = set.file_name().and_then(|n| n.to_str()).unwrap_or("?").to_owned();
         out.push(SetResult {
-            name,
+            name: set_name(&set),
+            frames,
             want,
             found,
             want_frontal,
@@ -92,7 +95,8 @@ fn reference_finds_the_tags_where_the_truth_puts_them() {
     for decimate in [1.0, 2.0] {
         let params = ReferenceParams { quad_decimate: decimate, ..ReferenceParams::default() };
         let results = run(&params);
-        assert!(!results.is_empty(), "no fixture sets");
+        let checked: Vec<(String, usize)> = results.iter().map(|r| (r.name.clone(), r.frames)).collect();
+        assert_every_fixture_frame(&format!("decimate {decimate}"), &checked);
         for r in &results {
             let _ = writeln!(
                 std::io::stderr(),
@@ -107,6 +111,7 @@ fn reference_finds_the_tags_where_the_truth_puts_them() {
                 r.errors.get(r.errors.len() * 9 / 10).copied().unwrap_or(f64::NAN),
             );
             if r.name.starts_with("clean-") && decimate == 2.0 {
+                assert!(r.want_frontal > 0, "{}: no frontal tag to find", r.name);
                 assert_eq!(
                     r.found_frontal, r.want_frontal,
                     "{}: the reference misses frontal tags on exact frames",

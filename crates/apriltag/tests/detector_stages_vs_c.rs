@@ -5,7 +5,7 @@
 use jawtrack_apriltag::workers::Workers;
 use jawtrack_apriltag::{ImageView, QuadThreshold, clusters, components, preprocess, quads, threshold};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
-use jawtrack_test_support::fixture_sets;
+use jawtrack_test_support::{FIXTURE_FRAMES, fixture_sets, set_name};
 use std::collections::HashMap;
 
 fn read_pnm(path: &std::path::Path) -> image::GrayImage {
@@ -16,15 +16,15 @@ fn read_pnm(path: &std::path::Path) -> image::GrayImage {
 fn decimation_threshold_regions_clusters_and_quads_match_c() {
     let dir = tempfile_dir();
     std::env::set_current_dir(&dir).expect("enter the temporary folder");
-    let mut frames = Vec::new();
-    for set in fixture_sets() {
-        let name = set.file_name().and_then(|n| n.to_str()).unwrap_or("").to_owned();
-        if name.ends_with("-4k") {
-            continue; // the C debug output of a 4K frame is slow to write; 1080p covers the logic
-        }
-        frames.push(set.join("frame_0000.png"));
-    }
-    assert!(frames.len() >= 4, "fixtures missing");
+    // The C debug output of a 4K frame is slow to write; 1080p covers the logic.
+    let hd = |name: &str| !name.ends_with("-4k");
+    let frames: Vec<_> =
+        fixture_sets().into_iter().filter(|s| hd(&set_name(s))).map(|s| s.join("frame_0000.png")).collect();
+    let want: Vec<_> = FIXTURE_FRAMES.iter().filter(|(name, _)| hd(name)).map(|(name, _)| name.to_string()).collect();
+    let got: Vec<_> = frames.iter().filter_map(|f| f.parent()).map(set_name).collect();
+    assert_eq!(got, want, "the first frame of every 1080p fixture set");
+    let settings =
+        [(1.0, false, 5), (1.5, false, 5), (2.0, false, 5), (2.0, true, 5), (3.0, false, 40), (4.0, false, 5)];
     let mut compared = 0;
     let mut total_quads = 0;
     for path in &frames {
@@ -33,9 +33,7 @@ fn decimation_threshold_regions_clusters_and_quads_match_c() {
         // An odd stride and an odd crop exercise the edges of the tiling.
         let crop_w = w - 3;
         let view = ImageView::new(img.as_raw(), crop_w, h - 1, w).expect("valid view");
-        for (decimate, deglitch, diff) in
-            [(1.0, false, 5), (1.5, false, 5), (2.0, false, 5), (2.0, true, 5), (3.0, false, 40), (4.0, false, 5)]
-        {
+        for &(decimate, deglitch, diff) in &settings {
             let params = ReferenceParams {
                 quad_decimate: decimate,
                 deglitch,
@@ -75,6 +73,7 @@ fn decimation_threshold_regions_clusters_and_quads_match_c() {
         std::io::stderr(),
         "decimation, threshold, regions, cluster points and {total_quads} quads equal C's on {compared} frame/setting pairs"
     );
+    assert_eq!(compared, settings.len() * want.len(), "every setting on every frame");
     assert!(total_quads > 100, "too few quads compared: {total_quads}");
 }
 

@@ -3,11 +3,14 @@
 
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
-use jawtrack_test_support::{fixture_sets, say_skipped, shared_data};
+use jawtrack_test_support::{
+    FIXTURE_FRAMES, assert_every_fixture_frame, fixture_sets, say_skipped, set_name, shared_data,
+};
 use std::io::Write as _;
 use std::path::PathBuf;
 
 fn frames() -> Vec<PathBuf> {
+    let mut checked = Vec::new();
     let mut v: Vec<PathBuf> = fixture_sets()
         .iter()
         .flat_map(|s| {
@@ -19,26 +22,37 @@ fn frames() -> Vec<PathBuf> {
                 })
                 .unwrap_or_default();
             f.sort();
+            checked.push((set_name(s), f.len()));
             f
         })
         .collect();
+    assert_every_fixture_frame("fixture frames", &checked);
     match shared_data() {
         Some(d) => {
             for sub in
                 ["photos/swatbotics-mapping", "photos/duckietown", "photos/apriltags-jl", "negatives/kalibr-aprilgrid"]
             {
-                if let Ok(rd) = std::fs::read_dir(d.join(sub)) {
-                    let mut f: Vec<PathBuf> = rd
-                        .filter_map(|e| e.ok().map(|e| e.path()))
-                        .filter(|p| p.extension().is_some_and(|e| matches!(e.to_str(), Some("png" | "jpg" | "JPG"))))
-                        .collect();
-                    f.sort();
-                    v.extend(f);
-                }
+                // With ../shared/data present, each of its folders is expected whole.
+                let rd = std::fs::read_dir(d.join(sub)).unwrap_or_else(|e| panic!("{sub}: {e}"));
+                let mut f: Vec<PathBuf> = rd
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| p.extension().is_some_and(|e| matches!(e.to_str(), Some("png" | "jpg" | "JPG"))))
+                    .collect();
+                assert!(!f.is_empty(), "no images in {sub}");
+                f.sort();
+                v.extend(f);
             }
         }
         None => say_skipped("detector vs C on real photos: ../shared/data is not present"),
     }
+    v
+}
+
+/// The fixture frames of [`frames`], all of which a test that takes them alone must check.
+fn fixture_frames() -> Vec<PathBuf> {
+    let v: Vec<PathBuf> =
+        frames().into_iter().filter(|p| p.starts_with(jawtrack_test_support::fixtures_dir())).collect();
+    assert_eq!(v.len(), FIXTURE_FRAMES.iter().map(|s| s.1).sum::<usize>(), "fixture frames");
     v
 }
 
@@ -98,7 +112,7 @@ fn two_threads_find_exactly_what_one_does() {
     let one = Detector::new(DetectorConfig::default()).expect("detector");
     let two = Detector::new(DetectorConfig { nthreads: 2, ..DetectorConfig::default() }).expect("detector");
     let mut tags = 0;
-    for path in frames().iter().filter(|p| p.starts_with(jawtrack_test_support::fixtures_dir())) {
+    for path in &fixture_frames() {
         let img = image::open(path).expect("image").to_luma8();
         let (w, h) = (img.width() as usize, img.height() as usize);
         let view = ImageView::new(img.as_raw(), w, h, w).expect("view");
@@ -122,7 +136,7 @@ fn blurred_and_sharpened_quad_images_give_cs_tags_and_corners() {
             ..ReferenceParams::default()
         })
         .expect("reference");
-        for path in frames().iter().filter(|p| p.starts_with(jawtrack_test_support::fixtures_dir())) {
+        for path in &fixture_frames() {
             let img = image::open(path).expect("image").to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
             let mine = ours.detect(&ImageView::new(img.as_raw(), w, h, w).expect("view")).expect("detects");

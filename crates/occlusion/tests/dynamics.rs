@@ -112,6 +112,7 @@ fn a_sphere_slid_along_the_patch_stays_on_its_surface_and_follows_the_target() {
     let options = DynamicsOptions::default();
     let target = sliding_target();
     let steps = run(upper, lower, &target, &options);
+    assert_eq!(steps.len(), target.len());
     let expected = spring_force(&options, 0.3);
     let (mut worst_z, mut worst_x, mut worst_force): (f64, f64, f64) = (0.0, 0.0, 0.0);
     for (s, (_, goal)) in steps.iter().zip(&target) {
@@ -219,6 +220,7 @@ fn the_resolved_motion_does_not_depend_on_the_step_size() {
     target.extend((1..=6).map(|i| (0.3 + i as f64 / 60.0, to)));
     let run_with = |dt_s: f64| run(upper, lower, &target, &DynamicsOptions { dt_s, ..Default::default() });
     let (coarse, fine) = (run_with(1e-3), run_with(5e-4));
+    assert_eq!((coarse.len(), fine.len()), (target.len(), target.len()), "a step per target sample");
     // The correction: how far the contacts hold the sphere off the target.
     let correction = coarse.iter().map(|s| s.target_offset_mm).fold(0.0, f64::max);
     let allowed = (0.05 * correction).max(0.005);

@@ -30,6 +30,7 @@ fn agrees_with_opencv_solvepnp() {
     let data: Value = serde_json::from_str(text).expect("json");
     let cases = data["cases"].as_array().expect("cases");
     let (mut worst_exact, mut worst_iterative, mut worst_sqpnp_chi2) = ((0.0f64, 0.0f64), (0.0f64, 0.0f64), 0.0f64);
+    let (mut exact, mut noisy) = (0, 0);
     for (i, case) in cases.iter().enumerate() {
         let camera: CameraIntrinsics = serde_json::from_value(case["camera"].clone()).expect("camera");
         let obs: Vec<Observation> = case["points"]
@@ -54,6 +55,7 @@ fn agrees_with_opencv_solvepnp() {
             let (dr, dt) = ours.camera_from_body.distance_to(&truth);
             assert!(dt < 1e-9 && dr < 1e-9, "case {i}: {dt:.2e} mm, {dr:.2e} rad from the truth");
             worst_exact = (worst_exact.0.max(dt), worst_exact.1.max(dr));
+            exact += 1;
             let (cr, ct) = iterative.distance_to(&truth);
             assert!(ct < 1e-6 && cr < 1e-6, "case {i}: OpenCV itself is off ({ct:.2e} mm, {cr:.2e} rad)");
         } else {
@@ -73,8 +75,11 @@ fn agrees_with_opencv_solvepnp() {
             let chi2 = (e.transpose() * inv * e)[(0, 0)];
             assert!(chi2 < 22.5, "case {i}: SQPnP is far outside our covariance (chi-square {chi2:.1})");
             worst_sqpnp_chi2 = worst_sqpnp_chi2.max(chi2);
+            noisy += 1;
         }
     }
+    // `make_opencv_cases.py` writes 40 cases, noise-free and noisy in turn.
+    assert_eq!((exact, noisy), (20, 20), "noise-free and noisy cases checked");
     eprintln!(
         "{} cases ({}): noise-free worst {:.1e} mm / {:.1e} rad from the truth; noisy worst {:.1e} mm / \
          {:.1e} rad from OpenCV ITERATIVE, SQPnP within chi-square {:.2} of ours",

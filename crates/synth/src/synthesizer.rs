@@ -744,6 +744,7 @@ mod tests {
                 c.realism = Realism::clean();
                 c.options = SceneOptions { orientation, cycles: 4, ..SceneOptions::default() };
                 let synth = Synthesizer::new(c).expect("valid");
+                let mut checked = 0;
                 for spec in &synth.frames {
                     let (ch, cx, cm) = synth.poses_at(spec, spec.t);
                     let tags = synth.tag_truth(spec, &synth.scene_at(&ch, cx, cm, &[]), &[]);
@@ -751,7 +752,11 @@ mod tests {
                         let n = tags.iter().filter(|t| t.body == body && t.should_be_detected()).count();
                         assert!(n >= 2, "{orientation:?}, seed {seed}, t = {:.3}: {n} {body} tags", spec.t);
                     }
+                    checked += 1;
                 }
+                // Four cycles of at least 0.6 s each were checked frame by frame.
+                let least = (4.0 * 0.6 * synth.config.options.fps) as usize;
+                assert!(checked >= least, "{orientation:?}, seed {seed}: {checked} frames checked");
             }
         }
     }

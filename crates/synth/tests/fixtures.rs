@@ -4,7 +4,7 @@
 use jawtrack_apriltag::Tag36h11;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer};
-use jawtrack_test_support::{fixture_sets, read_tag};
+use jawtrack_test_support::{assert_every_fixture_frame, fixture_sets, read_tag, set_name};
 use nalgebra::Point3;
 use std::path::Path;
 
@@ -22,9 +22,17 @@ fn fixture_sets_are_complete_and_within_budget() {
     let sets = fixture_sets();
     assert!(sets.len() >= 6, "fixture sets missing: {sets:?}");
     let (mut hd, mut uhd, mut bytes) = (0, 0, 0u64);
+    let mut listed = Vec::new();
     for set in &sets {
         let gt = load(set);
         assert!(!gt.frames.is_empty(), "{}", set.display());
+        // The folder holds exactly the frames its truth lists.
+        let pngs = std::fs::read_dir(set)
+            .expect("set folder")
+            .filter(|e| e.as_ref().is_ok_and(|e| e.path().extension().is_some_and(|x| x == "png")))
+            .count();
+        assert_eq!(pngs, gt.frames.len(), "{}: frames on disk and in the truth", set.display());
+        listed.push((set_name(set), gt.frames.len()));
         for f in &gt.frames {
             let path = set.join(&f.file);
             let (w, h) = image::image_dimensions(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -38,13 +46,17 @@ fn fixture_sets_are_complete_and_within_budget() {
         }
     }
     assert!(hd >= 24 && uhd >= 2, "{hd} 1080p and {uhd} 4K frames");
+    // The list the other tests count their fixture frames against is the folders'.
+    assert_every_fixture_frame("ground truths", &listed);
     assert!(bytes < 20 * 1024 * 1024, "fixtures take {:.1} MB", bytes as f64 / 1048576.0);
 }
 
 #[test]
 fn ground_truth_is_self_consistent() {
+    let mut checked = Vec::new();
     for set in fixture_sets() {
         let gt = load(&set);
+        let mut frames = 0;
         let marker = Marker::from_json(&gt.true_marker.to_string()).expect("the true marker is a valid marker file");
         assert_eq!(gt.print_errors.len(), 24);
         if is_clean(&set) {
@@ -59,6 +71,8 @@ fn ground_truth_is_self_consistent() {
             let composed = f.camera_from_maxilla * f.maxilla_from_mandible;
             let (a, d) = composed.distance_to(&f.camera_from_mandible);
             assert!(a < 1e-12 && d < 1e-9, "{} {}", set.display(), f.file);
+            // A frame without tags would check no corner below.
+            assert!(!f.tags.is_empty(), "{} {}: no tags in the truth", set.display(), f.file);
             // Stored corners are the projection of the true marker under the stored poses.
             for t in &f.tags {
                 let (kind, tag) = marker.find_tag(t.id).expect("tag in marker");
@@ -69,18 +83,23 @@ fn ground_truth_is_self_consistent() {
                     assert!((p.x - stored[0]).abs() < 1e-6 && (p.y - stored[1]).abs() < 1e-6);
                 }
             }
+            frames += 1;
         }
+        checked.push((set_name(&set), frames));
     }
+    assert_every_fixture_frame("self-consistency", &checked);
 }
 
 /// Every tag the truth says a detector should find is in the image where the truth says,
 /// with the right code: the images and the ground truth agree.
 #[test]
 fn images_show_the_tags_where_the_truth_puts_them() {
+    let mut checked = Vec::new();
     for set in fixture_sets() {
         let gt = load(&set);
-        let (mut tags, mut decoded) = (0usize, 0usize);
+        let (mut tags, mut decoded, mut frames) = (0usize, 0usize, 0usize);
         for f in &gt.frames {
+            frames += 1;
             let img = image::open(set.join(&f.file)).expect("png decodes").to_luma8();
             for t in f.tags.iter().filter(|t| t.should_be_detected()) {
                 let reading = read_tag(&img, &t.corners).expect("detectable tags lie inside the image");
@@ -104,9 +123,12 @@ fn images_show_the_tags_where_the_truth_puts_them() {
             }
         }
         let need = if is_clean(&set) { tags } else { (tags * 9).div_ceil(10) };
+        assert!(tags > 0, "{}: no detectable tag to read", set.display());
         assert!(decoded >= need, "{}: {decoded}/{tags} detectable tags read back", set.display());
         eprintln!("{}: {decoded}/{tags} detectable tags read back", set.display());
+        checked.push((set_name(&set), frames));
     }
+    assert_every_fixture_frame("tags read back", &checked);
 }
 
 /// The first frame of two sets, rendered again with the parameters of `fixtures/regenerate.sh`,

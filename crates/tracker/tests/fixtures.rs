@@ -6,12 +6,12 @@ use jawtrack_apriltag::ImageView;
 use jawtrack_marker::Marker;
 use jawtrack_pose::median;
 use jawtrack_synth::GroundTruth;
-use jawtrack_test_support::fixture_sets;
+use jawtrack_test_support::{assert_every_fixture_frame, fixture_sets, set_name};
 use jawtrack_tracker::{Flag, Tracker, TrackerConfig};
 use std::io::Write as _;
 
 /// One set's outcome: its name, (translation mm, rotation deg) for every frame with both bodies
-/// solved, and its number of frames.
+/// solved, and the number of frames tracked.
 type SetErrors = (String, Vec<(f64, f64)>, usize);
 
 fn run(oracle: bool) -> Vec<SetErrors> {
@@ -28,7 +28,7 @@ fn run(oracle: bool) -> Vec<SetErrors> {
         let mut config = TrackerConfig::default();
         config.detector.linear_edges = gt.realism.gamma;
         let mut tracker = Tracker::new(marker, config).expect("tracker");
-        let mut errors = Vec::new();
+        let (mut errors, mut tracked) = (Vec::new(), 0);
         for f in &gt.frames {
             let img = image::open(set.join(&f.file)).expect("png").to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
@@ -42,9 +42,9 @@ fn run(oracle: bool) -> Vec<SetErrors> {
             } else {
                 assert!(r.flags.iter().any(|f| matches!(f, Flag::Lost(_) | Flag::NoTags)), "no pose and no flag");
             }
+            tracked += 1;
         }
-        let name = set.file_name().and_then(|n| n.to_str()).unwrap_or("?").to_owned();
-        out.push((name, errors, gt.frames.len()));
+        out.push((set_name(&set), errors, tracked));
     }
     out
 }
@@ -53,7 +53,10 @@ fn run(oracle: bool) -> Vec<SetErrors> {
 fn mandible_in_maxilla_against_ground_truth() {
     for oracle in [true, false] {
         let label = if oracle { "true marker" } else { "nominal marker" };
-        for (name, errors, frames) in run(oracle) {
+        let results = run(oracle);
+        let checked: Vec<(String, usize)> = results.iter().map(|(name, _, n)| (name.clone(), *n)).collect();
+        assert_every_fixture_frame(label, &checked);
+        for (name, errors, frames) in results {
             let (t, r): (Vec<f64>, Vec<f64>) = errors.iter().copied().unzip();
             let (tmax, rmax) = (t.iter().copied().fold(0.0, f64::max), r.iter().copied().fold(0.0, f64::max));
             let _ = writeln!(
@@ -63,6 +66,8 @@ fn mandible_in_maxilla_against_ground_truth() {
                 median(t.iter().copied()).unwrap_or(f64::NAN),
                 median(r.iter().copied()).unwrap_or(f64::NAN),
             );
+            // Every fixture frame shows both markers: the worst error is over all of them.
+            assert_eq!(errors.len(), frames, "{label}, {name}: {} of {frames} frames got a pose", errors.len());
             // No flips (a mirror solution is tens of degrees off), with either marker file.
             assert!(rmax < 5.0, "{label}, {name}: a frame {rmax:.2}° off");
             if oracle {

@@ -16,10 +16,11 @@ const ROWS: usize = 1080;
 
 #[test]
 fn steady_tracking_searches_only_the_expected_region() {
+    let frames = 10;
     let config = SynthConfig {
         realism: Realism::clean(),
         options: SceneOptions { cycles: 1, ..SceneOptions::default() },
-        max_frames: Some(10),
+        max_frames: Some(frames),
         ..SynthConfig::new(SceneKind::Hinge)
     };
     let synth = Synthesizer::new(config).expect("scene");
@@ -44,6 +45,8 @@ fn steady_tracking_searches_only_the_expected_region() {
         assert_eq!(ids, all, "frame {i}");
         searched.push(r.searched.map(|s| (s.width * s.height) as f64 / (w * h) as f64));
     }
+    // Every frame got a pose above; the scene is longer than `frames`, so all were tracked.
+    assert_eq!(searched.len(), frames, "frames tracked");
     // The first frame and every 4th after are searched whole; the rest in under half the frame.
     for (i, s) in searched.iter().enumerate() {
         if i % 4 == 0 {

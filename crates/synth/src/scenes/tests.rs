@@ -258,5 +258,5 @@ fn a_distance_puts_the_static_grid_and_the_chew_camera_there() {
     let chew = scene_frames(SceneKind::Chew, &SceneOptions { distance_mm: Some(250.0), ..SceneOptions::default() }, 1);
     assert!(!chew.is_empty() && chew.iter().all(|f| f.view.distance_mm == 250.0));
     let chew = scene_frames(SceneKind::Chew, &SceneOptions::default(), 1);
-    assert!(chew.iter().all(|f| f.view.distance_mm == 120.0));
+    assert!(!chew.is_empty() && chew.iter().all(|f| f.view.distance_mm == 120.0));
 }
