@@ -16,9 +16,9 @@ use jawtrack_calibration::{
     Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, SeenTag, calibrate,
 };
 use jawtrack_marker::{BodyKind, Marker};
+use jawtrack_recording::{Overwrite, RecordingError, write_file_atomic};
 use nalgebra::UnitQuaternion;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 /// How far a body must turn (°) from every view of it kept for a frame to add another view
@@ -498,50 +498,17 @@ fn io_error(path: &Path, what: &str, e: &std::io::Error) -> JawTrackError {
     JawTrackError::Io { message: format!("{shown}: {what}: {e}"), path: shown }
 }
 
-/// Writes `text` to `path` through a temporary file beside it: renamed over an existing file
-/// with `overwrite`, else linked into place only if nothing is there (atomic where the file
-/// system has hard links).
+/// Writes `text` to `path` whole or not at all (`jawtrack_recording::write_file_atomic`).
 fn write_new_file(path: &Path, text: &str, overwrite: bool) -> Result<(), JawTrackError> {
-    let shown = path.display().to_string();
-    let exists = || JawTrackError::Io {
-        message: format!("{shown} already exists: not replaced (save again and say that it may be replaced)"),
-        path: shown.clone(),
-    };
-    if !overwrite && path.exists() {
-        return Err(exists());
-    }
-    let name = path.file_name().ok_or_else(|| invalid(format!("{shown} is not a file name")))?;
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
-    let temp = folder.join(format!(".{}.{}-{nanos}.tmp", name.to_string_lossy(), std::process::id()));
-    let written = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&temp)
-        .and_then(|mut f| f.write_all(text.as_bytes()).and_then(|()| f.sync_all()));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&temp);
-        return Err(io_error(path, "cannot be written", &e));
-    }
-    let placed = if overwrite {
-        std::fs::rename(&temp, path).map_err(|e| io_error(path, "cannot be written", &e))
-    } else {
-        match std::fs::hard_link(&temp, path) {
-            Ok(()) => Ok(()),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(exists()),
-            // No hard links here: the check above must do.
-            Err(_) => std::fs::rename(&temp, path).map_err(|e| io_error(path, "cannot be written", &e)),
-        }
-    };
-    let _ = std::fs::remove_file(&temp);
-    placed?;
-    if let Ok(dir) = std::fs::File::open(&folder) {
-        let _ = dir.sync_all();
-    }
-    Ok(())
+    let how = if overwrite { Overwrite::Replace } else { Overwrite::Refuse };
+    write_file_atomic(path, text.as_bytes(), how).map_err(|e| match e {
+        RecordingError::Exists { path } => JawTrackError::Io {
+            message: format!("{path} already exists: not replaced (save again and say that it may be replaced)"),
+            path,
+        },
+        RecordingError::Io { source, .. } => io_error(path, "cannot be written", &source),
+        other => JawTrackError::Io { message: other.to_string(), path: path.display().to_string() },
+    })
 }
 
 #[cfg(test)]

@@ -190,6 +190,7 @@ fn kind_name(kind: BodyKind) -> String {
 
 impl Engine {
     pub(crate) fn new(marker: Marker, settings: Settings) -> Result<Self, JawTrackError> {
+        marker.require_both_bodies()?;
         let tracker = Tracker::new(marker, settings.tracker_config()?)?;
         Ok(Engine {
             tracker,

@@ -47,6 +47,15 @@ pub enum MarkerError {
         /// The system's reason.
         reason: String,
     },
+    /// A body the job needs is not in the marker (a jaw pose needs both).
+    #[error(
+        "has no {missing} body; tracking the jaw needs both the maxilla and the mandible (`jawtrack marker` \
+         writes a complete nominal file)"
+    )]
+    MissingBody {
+        /// The bodies missing, in words ("mandible", "maxilla or mandible").
+        missing: String,
+    },
     /// An error inside a named file. Shown whole here and not chained as a source, or reports
     /// that print the chain would say it twice.
     #[error("{path}: {error}")]

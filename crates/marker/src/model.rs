@@ -259,6 +259,13 @@ impl Marker {
         Ok(Marker { edge, bodies })
     }
 
+    /// Refuses a marker without both bodies: a file describing one body reads, but can never
+    /// track a jaw. The CLI's `track` and `check-marker` and the FFI's tracker apply it.
+    pub fn require_both_bodies(&self) -> Result<(), MarkerError> {
+        let missing: Vec<&str> = BodyKind::ALL.iter().filter(|&&k| self.body(k).is_none()).map(|k| k.name()).collect();
+        if missing.is_empty() { Ok(()) } else { Err(MarkerError::MissingBody { missing: missing.join(" or ") }) }
+    }
+
     /// The body of a kind, if the marker has it.
     pub fn body(&self, kind: BodyKind) -> Option<&Body> {
         self.bodies.iter().find(|b| b.kind == kind)

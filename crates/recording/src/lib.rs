@@ -42,7 +42,7 @@ pub use schema::{
     BiteRecord, BodyRecord, CaptureRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader,
     SessionId, TimingsRecord,
 };
-pub use write::{Overwrite, RecordingWriter, create_file};
+pub use write::{Overwrite, RecordingWriter, create_file, write_file_atomic};
 
 /// Why a recording could not be read or written.
 #[derive(Debug, thiserror::Error)]

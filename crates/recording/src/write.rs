@@ -31,6 +31,68 @@ pub fn create_file(path: &Path, overwrite: Overwrite) -> Result<std::fs::File, R
     })
 }
 
+/// Writes `bytes` to `path` whole or not at all: through a temporary file beside it, renamed
+/// over an existing file when `overwrite` says to replace it, else linked into place only if
+/// nothing is there (atomic where the file system has hard links). A failure, or a process
+/// killed midway, leaves the old file or none — never half of the new one. The one writer of
+/// every output that is not a recording (results, calibrations, exports).
+///
+/// # Examples
+///
+/// ```
+/// use jawtrack_recording::{Overwrite, write_file_atomic};
+/// let dir = std::env::temp_dir().join(format!("jawtrack-doc-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let path = dir.join("result.json");
+/// let _ = std::fs::remove_file(&path);
+/// write_file_atomic(&path, b"{}", Overwrite::Refuse).unwrap();
+/// assert!(write_file_atomic(&path, b"[]", Overwrite::Refuse).is_err());
+/// write_file_atomic(&path, b"[]", Overwrite::Replace).unwrap();
+/// assert_eq!(std::fs::read(&path).unwrap(), b"[]");
+/// # std::fs::remove_dir_all(&dir).unwrap();
+/// ```
+pub fn write_file_atomic(path: &Path, bytes: &[u8], overwrite: Overwrite) -> Result<(), RecordingError> {
+    let shown = path.display().to_string();
+    let exists = || RecordingError::Exists { path: shown.clone() };
+    let io = |source: std::io::Error| RecordingError::Io { path: shown.clone(), source };
+    if overwrite == Overwrite::Refuse && path.exists() {
+        return Err(exists());
+    }
+    let Some(name) = path.file_name() else {
+        return Err(io(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name")));
+    };
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    let temp = folder.join(format!(".{}.{}-{nanos}.tmp", name.to_string_lossy(), std::process::id()));
+    let written = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&temp)
+        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&temp);
+        return Err(io(e));
+    }
+    let placed = match overwrite {
+        Overwrite::Replace => std::fs::rename(&temp, path).map_err(io),
+        Overwrite::Refuse => match std::fs::hard_link(&temp, path) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(exists()),
+            // No hard links here: the check above must do.
+            Err(_) => std::fs::rename(&temp, path).map_err(io),
+        },
+    };
+    let _ = std::fs::remove_file(&temp);
+    placed?;
+    if let Ok(dir) = std::fs::File::open(&folder) {
+        let _ = dir.sync_all();
+    }
+    Ok(())
+}
+
 /// Writes one recording.
 pub struct RecordingWriter<W: Write> {
     out: W,
