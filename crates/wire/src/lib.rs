@@ -13,6 +13,7 @@
 //! [`link`] holds the receiver's accounting: sequence gaps, reordering, duplicates and replays.
 
 pub mod link;
+pub mod receiver;
 
 use chacha20poly1305::aead::{Aead, KeyInit, Payload};
 use chacha20poly1305::{XChaCha20Poly1305, XNonce};
