@@ -1,5 +1,5 @@
-//! `jawtrack bench link`: the phone link's targets measured on loopback against a real
-//! `jawtrack receive` process.
+//! `jawtrack-bench link`: the phone link's targets measured on loopback against a real
+//! `jawtrack receive` process (the `jawtrack` built beside this binary).
 //!
 //! 1. Soak: sealed pose datagrams at `--rate` for `--duration`; the receiver must accept every
 //!    one sent, record each (the file read back), and its CPU time over the run is its share of
@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// Arguments of `jawtrack bench link`.
+/// Arguments of `jawtrack-bench link`.
 #[derive(Args)]
 pub(crate) struct LinkBenchArgs {
     /// Datagrams per second in the soak.
@@ -52,7 +52,7 @@ impl Receiver {
     fn start(key: &Key, out: &Path) -> Result<Receiver> {
         let port = UdpSocket::bind("127.0.0.1:0")?.local_addr()?.port();
         // The bench's own scratch recording, replaced on every run: hence --force.
-        let mut child = Command::new(std::env::current_exe().context("finding this program")?)
+        let mut child = Command::new(jawtrack()?)
             .args(["receive", "--listen", &format!("127.0.0.1:{port}"), "--idle-exit", "2", "--force", "--out"])
             .arg(out)
             .env("JAWTRACK_KEY", key.to_hex())
@@ -84,6 +84,19 @@ impl Receiver {
         serde_json::from_str(text.lines().last().context("no summary from the receiver")?)
             .context("the receiver's summary")
     }
+}
+
+/// The `jawtrack` binary built beside this one (`cargo build --release` builds both).
+fn jawtrack() -> Result<PathBuf> {
+    let me = std::env::current_exe().context("finding this program")?;
+    let beside = me.with_file_name(format!("jawtrack{}", std::env::consts::EXE_SUFFIX));
+    if !beside.is_file() {
+        bail!(
+            "no jawtrack binary beside {} to start `jawtrack receive` with: build it first (`cargo build --release`)",
+            me.display()
+        );
+    }
+    Ok(beside)
 }
 
 /// A jaw opening and closing once a second, both bodies tracked.
@@ -122,7 +135,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     let receiver = Receiver::start(&key, &soak_file)?;
     let mut session = Session::new(Security::Sealed(key.clone()));
     let total = (a.rate * duration).round() as u64;
-    let bar = crate::progress::bar("soak", Some(total), "datagrams");
+    let bar = crate::progress_bar("soak", total, "datagrams");
     let (start, period) = (Instant::now(), Duration::from_secs_f64(1.0 / a.rate));
     let mut acks = 0u64;
     for i in 0..total {
@@ -152,7 +165,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     let genuine: Vec<Vec<u8>> = (0..100).map(|i| session.pose_datagram(&packet(i, 30.0))).collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let (mut rejected, mut replays, mut sent) = (0u64, 0u64, 0u64);
-    let bar = crate::progress::bar("garbage", Some(random), "datagrams");
+    let bar = crate::progress_bar("garbage", random, "datagrams");
     let send = |d: &[u8], sent: &mut u64| -> Result<()> {
         // Paced so that loopback's queue never overflows: a datagram the kernel drops would
         // never be counted, and the comparison below would fail.
@@ -202,9 +215,9 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
         && garbage["rejected"].as_u64() == Some(rejected + stale)
         && garbage["received"].as_u64() == Some(sent);
 
-    say!("| measure | target | result |");
-    say!("|---|---|---|");
-    say!(
+    println!("| measure | target | result |");
+    println!("|---|---|---|");
+    println!(
         "| soak: {total} sealed datagrams at {} /s for {duration:.0} s | all accepted and recorded | sent {total}, accepted {}, lost {}, recorded {} frames ({} unreadable lines); {acks} acknowledgements |",
         a.rate,
         soak["accepted"],
@@ -212,17 +225,14 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
         recorded.frames.len(),
         recorded.skipped.len()
     );
-    say!(
+    println!(
         "| receiver CPU during the soak | < 5% of one core | {} ({} s CPU over the {duration:.0} s soak) |",
         cpu_share.map_or("unknown (no /proc)".into(), |c| format!("{:.2}%", c * 100.0)),
         soak["cpu_s"],
     );
-    say!(
+    println!(
         "| {random} random datagrams (1% forged or bit-flipped) + {replays} replays | 0 accepted, all counted | accepted {} (the 101 genuine); the replays refused as duplicates ({}) or stale ({stale}); rejected {} = {rejected} + {stale}; by reason {} |",
-        garbage["accepted"],
-        garbage["duplicated"],
-        garbage["rejected"],
-        garbage["rejected_by_reason"]
+        garbage["accepted"], garbage["duplicated"], garbage["rejected"], garbage["rejected_by_reason"]
     );
     if !(soak_ok && garbage_ok) {
         bail!("the link missed a target (see the table)");

@@ -1,16 +1,19 @@
-//! `jawtrack bench`: the benchmarks a user can run from the product binary, which links no C:
-//! the tracking pipeline's speed and the benchtop accuracy experiments (both in
-//! `jawtrack-tracker-bench`, which adds the C reference in its own binary), and the phone link
-//! against a real receiver process ([`link`]).
+//! `jawtrack-bench`: the benchmarks a user runs, kept out of the product binary: the tracking
+//! pipeline's speed and the benchtop accuracy experiments (both in `jawtrack-tracker-bench`,
+//! whose `bench-accuracy` binary adds the C reference's columns), and the phone link against a
+//! real `jawtrack receive` process ([`link`]).
+//!
+//! `cargo run --release -p jawtrack-bench -- pipeline` (or `accuracy`, `link`); `--help` lists
+//! each one's flags.
 
 mod link;
 
-use anyhow::Result;
-use clap::{Args, Subcommand};
+use clap::{Parser, Subcommand};
 
-/// Arguments of `jawtrack bench`.
-#[derive(Args)]
-pub(crate) struct BenchArgs {
+/// The benchmarks of JawTrack: tracking speed, benchtop accuracy on rendered frames, the phone link.
+#[derive(Parser)]
+#[command(name = "jawtrack-bench", version)]
+struct BenchArgs {
     #[command(subcommand)]
     which: BenchKind,
 }
@@ -31,10 +34,25 @@ enum BenchKind {
     Link(link::LinkBenchArgs),
 }
 
-pub(crate) fn run(a: &BenchArgs) -> Result<()> {
-    match &a.which {
+fn main() {
+    let a = BenchArgs::parse();
+    let done = match &a.which {
         BenchKind::Pipeline(p) => jawtrack_tracker_bench::pipeline::run(p),
         BenchKind::Accuracy(a) => jawtrack_tracker_bench::accuracy::run(a),
         BenchKind::Link(a) => link::run(a),
+    };
+    if let Err(e) = done {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
     }
+}
+
+/// A bar labelled `what` over `len` items called `unit`, on stderr when it is a terminal.
+fn progress_bar(what: &str, len: u64, unit: &str) -> indicatif::ProgressBar {
+    let style =
+        indicatif::ProgressStyle::with_template(&format!("{{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{elapsed}}"))
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    let bar = indicatif::ProgressBar::new(len).with_style(style);
+    bar.set_message(what.to_owned());
+    bar
 }

@@ -3,97 +3,15 @@
 //! protrusion, and a laterotrusion toward each side. The output is printed, or given as one JSON
 //! object.
 
-use crate::export::{SessionArg, load, rest_of};
+use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, registration, warn_if_nominal};
 use crate::numbers::{clean_json, fixed};
-use crate::points::{Anatomy, PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::articulator::name;
 use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Displacement, Movements, Side, Window, co_mi};
-use jawtrack_pose::Pose;
-use jawtrack_recording::Recording;
-use jawtrack_tracker::registration::mean_pose;
+use jawtrack_session::{Anatomy, rest_of};
 use serde_json::{Value, json};
 use std::path::PathBuf;
-
-/// Parses a window, `FROM:TO` in seconds of the frames' `t`.
-pub(crate) fn parse_window(s: &str) -> Result<Window, String> {
-    let (a, b) = s.split_once(':').ok_or_else(|| format!("expected FROM:TO in seconds, got '{s}'"))?;
-    let num = |v: &str| v.trim().parse::<f64>().map_err(|e| format!("'{v}' in '{s}': {e}"));
-    let (from, to) = (num(a)?, num(b)?);
-    if !(from.is_finite() && to.is_finite() && from < to) {
-        return Err(format!("'{s}': FROM must be before TO"));
-    }
-    Ok(Window { from, to })
-}
-
-/// Where each movement was made in a recording, FROM:TO in seconds of the frames' `t`: the
-/// flags `articulator` and `report` share.
-#[derive(Args, Clone, Copy, Debug)]
-pub(crate) struct MovementArgs {
-    /// The protrusion's window, FROM:TO (s): the condylar inclination per side and the
-    /// protrusive incisal guidance.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    pub(crate) protrusion: Option<Window>,
-    /// The laterotrusion toward the patient's left (s): the right condyle's Bennett angle and
-    /// side shift, the lateral guidance toward the left.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    pub(crate) left: Option<Window>,
-    /// The laterotrusion toward the patient's right (s): the left condyle's Bennett angle and
-    /// side shift, the lateral guidance toward the right.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    pub(crate) right: Option<Window>,
-    /// The jaw held in centric occlusion (s): guided back into centric relation and closed to
-    /// the first tooth contact. With it, the CO–MI slide into the bite is measured.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
-    pub(crate) co: Option<Window>,
-    /// The jaw held in maximal intercuspation (s), for --co; default: the closed jaw (--rest-frame,
-    /// else the bite accepted while recording, else the first frame with a jaw pose).
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
-    pub(crate) mi: Option<Window>,
-}
-
-/// The poses of each movement given.
-pub(crate) struct MovementPoses {
-    /// The protrusion, the laterotrusions toward the left and the right.
-    pub(crate) border: [Option<Vec<Pose>>; 3],
-    /// Centric occlusion and maximal intercuspation as held positions: each the mean pose of
-    /// its window (`None` for MI without --mi: the closed jaw).
-    pub(crate) co: Option<Pose>,
-    pub(crate) mi: Option<Pose>,
-}
-
-impl MovementArgs {
-    /// Whether a border movement is given.
-    pub(crate) fn any_border(&self) -> bool {
-        self.protrusion.is_some() || self.left.is_some() || self.right.is_some()
-    }
-
-    /// The poses of each window given in `rec` (named `name`), refusing a window without one.
-    pub(crate) fn poses(&self, rec: &Recording, name: &str) -> Result<MovementPoses> {
-        let windows = [
-            ("--protrusion", self.protrusion),
-            ("--left", self.left),
-            ("--right", self.right),
-            ("--co", self.co),
-            ("--mi", self.mi),
-        ];
-        let mut poses: Vec<Option<Vec<Pose>>> = Vec::new();
-        for (flag, w) in windows {
-            let p = w.map(|w| poses_in(rec, w));
-            if let (Some(w), Some(p)) = (w, &p)
-                && p.is_empty()
-            {
-                bail!("{flag} {}:{}: no frame of {name} in that window has a jaw pose", w.from, w.to);
-            }
-            poses.push(p);
-        }
-        let held = |k: usize| poses[k].as_deref().and_then(mean_pose);
-        let (co, mi) = (held(3), held(4));
-        let mut it = poses.into_iter();
-        Ok(MovementPoses { border: [it.next().flatten(), it.next().flatten(), it.next().flatten()], co, mi })
-    }
-}
 
 /// Arguments of `jawtrack articulator`.
 #[derive(Args)]
@@ -122,27 +40,6 @@ pub(crate) struct ArticulatorArgs {
     json: bool,
 }
 
-/// Warns when `rec` was tracked with the nominal marker, whose tags sit where the ideal solid
-/// puts them and not where the print did: on rendered border movements with a print's usual
-/// error (0.2 mm RMS per tag), `what` (docs/kinematics.md).
-pub(crate) fn warn_if_nominal(rec: &Recording, what: &str) {
-    let marker = rec.header.as_ref().and_then(|h| h.marker.as_ref());
-    let nominal = marker
-        .and_then(|m| jawtrack_marker::Marker::from_json(&m.to_string()).ok())
-        .is_some_and(|m| m.measured_tags().is_empty());
-    if nominal {
-        eprintln!(
-            "warning: this recording was tracked with the nominal marker: against a print's tag errors, {what}; \
-             calibrate the marker (`jawtrack calibrate-marker`) and track again with it"
-        );
-    }
-}
-
-/// The poses in `w`.
-fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
-    rec.frames.iter().filter(|f| w.holds(f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
-}
-
 /// Runs `jawtrack articulator`.
 pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     let name_of = a.recording.display();
@@ -160,7 +57,7 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     warn_if_nominal(&rec, "the condylar inclinations moved 7–22° and the side shifts 1–1.5 mm");
     let rest = rest_of(&rec, a.rest_frame)?
         .with_context(|| format!("{name_of}: no frame has a jaw pose (both markers tracked)"))?;
-    let moved = a.moves.poses(&rec, &name_of.to_string())?;
+    let moved = a.moves.windows().poses(&rec, &name_of.to_string())?;
     let movements = Movements {
         protrusion: moved.border[0].as_deref(),
         toward_left: moved.border[1].as_deref(),

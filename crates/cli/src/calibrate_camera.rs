@@ -2,12 +2,13 @@
 //! short video of the markers waved in front of it (`jawtrack_camera_calibration`), each with
 //! its uncertainty, written as JSON and printed as the flags `jawtrack track` takes.
 
-use crate::frames::{detect_marker_tags, open_frames};
+use crate::progress::detect_marker_tags;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_camera_calibration::{
     CalibratedAt, CameraCalibration, CameraCalibrationOptions, CameraFile, CameraFrame, calibrate_camera,
 };
+use jawtrack_frames::open_frames;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use std::path::PathBuf;

@@ -17,20 +17,20 @@
 //! patient's side, FDI and Universal tooth numbers, a scale bar, the colour scale in mm or %),
 //! and `summary.json` with per-tooth totals.
 
-use crate::export::{SessionArg, load};
+use crate::flags::{SessionArg, load, registration};
 use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
-use jawtrack_occlusion::Mesh;
-use jawtrack_occlusion::contact_map;
-use jawtrack_occlusion::contacts::{Arch, ContactSettings, THRESHOLD_RANGE_MM, tooth_name};
+use jawtrack_occlusion::contacts::{Arch, ContactSettings, THRESHOLD_RANGE_MM};
 use jawtrack_occlusion::dynamics::{self, DynamicsOptions, StepSummary};
-use jawtrack_occlusion::occlusal_view::{View, render, with_legend};
-use jawtrack_occlusion::session::ContactSession;
-use jawtrack_occlusion::teeth::{Tooth, ToothTotals};
+use jawtrack_occlusion::session::{ContactSession, SessionSummary};
+use jawtrack_occlusion::teeth::{Tooth, ToothTotal, ToothTotals};
 use jawtrack_pose::Pose;
-use jawtrack_recording::FrameRecord;
-use jawtrack_tracker::registration::Registration;
+use jawtrack_session::PoseSource;
+use jawtrack_session::anatomy::upper_scan_left;
+use jawtrack_session::arches::{ArchInput, load_arch, tooth_places};
+use jawtrack_session::contacts::write_outputs;
+use jawtrack_session::scan_pose::PosedFrame;
 use nalgebra::Vector3;
 use serde_json::{Value, json};
 use std::io::Write;
@@ -114,47 +114,13 @@ pub(crate) struct ContactsArgs {
     dt: f64,
 }
 
-/// One frame to check: its `frame` number, its time (s) and the lower scan in the upper scan's
-/// frame (`maxilla_scan_from_mandible_scan`).
-type PosedFrame = (u64, f64, Pose);
-
-/// One arch's named parts and their mesh reports (JSON).
-type ArchInput = (Vec<(String, Mesh)>, Vec<Value>);
-
-/// Reads one arch's files (`side`: "maxilla" or "mandible"), printing a line per mesh unless
-/// `quiet`.
-pub(crate) fn load_arch(side: &str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
-    let (mut parts, mut reports) = (Vec::new(), Vec::new());
-    for file in files {
-        let mesh = Mesh::load(file).with_context(|| format!("--{side}"))?;
-        let r = mesh.report();
-        if !quiet {
-            say!("{side} {}: {r}", file.display());
-        }
-        let name = tooth_name(file);
-        let tooth = (files.len() > 1).then(|| name.clone());
-        reports.push(json!({ "file": file.display().to_string(), "tooth": tooth, "report": r }));
-        parts.push((name, mesh));
+/// Reads one arch's meshes, printing a line per mesh unless `quiet`.
+fn read_arch(side: &'static str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
+    let arch = load_arch(side, files)?;
+    if !quiet {
+        arch.lines.iter().for_each(|l| say!("{l}"));
     }
-    Ok((parts, reports))
-}
-
-/// Why a map cannot say where the patient's left is, and what to give.
-pub(crate) const UNSIDED: &str = "the maps cannot say where the patient's left is: name the per-tooth meshes by FDI \
-     number (FDI=NN in the file name) or give --points";
-
-/// Each part's name and centroid: where its number goes on the map (none for a whole arch).
-pub(crate) fn tooth_places(parts: &[(String, Mesh)]) -> Vec<(String, nalgebra::Point3<f64>)> {
-    if parts.len() < 2 {
-        return Vec::new();
-    }
-    parts
-        .iter()
-        .map(|(name, m)| {
-            let n = m.vertices.len().max(1) as f64;
-            (name.clone(), nalgebra::Point3::from(m.vertices.iter().map(|v| v.coords).sum::<Vector3<f64>>() / n))
-        })
-        .collect()
+    Ok(arch)
 }
 
 /// The dynamic mode: the recorded path resolved by the rigid-body simulation; per frame the
@@ -184,34 +150,6 @@ fn dynamic_frames(
     let frames = posed.iter().zip(&path.steps).map(|(&(frame, t, _), s)| (frame, t, s.maxilla_scan_from_mandible_scan));
     let extras = path.steps.iter().map(|s| json!(StepSummary::from(s))).collect();
     Ok((frames.collect(), extras, json!(s)))
-}
-
-/// Where each frame's `maxilla_scan_from_mandible_scan` comes from.
-enum PoseSource {
-    /// `maxilla_from_mandible` through a registration.
-    Registration(Box<Registration>),
-    /// The frames' recorded `maxilla_scan_from_mandible_scan`.
-    Recorded,
-    /// `maxilla_from_mandible` taken as the scan pose.
-    Direct,
-}
-
-impl PoseSource {
-    fn pose(&self, f: &FrameRecord) -> Option<Pose> {
-        match self {
-            PoseSource::Registration(r) => f.maxilla_from_mandible.map(|m| r.maxilla_scan_from_mandible_scan(&m)),
-            PoseSource::Recorded => f.maxilla_scan_from_mandible_scan,
-            PoseSource::Direct => f.maxilla_from_mandible,
-        }
-    }
-
-    fn describe(&self) -> &'static str {
-        match self {
-            PoseSource::Registration(_) => "maxilla_from_mandible through the registration",
-            PoseSource::Recorded => "the recorded maxilla_scan_from_mandible_scan",
-            PoseSource::Direct => "maxilla_from_mandible as the lower scan's pose",
-        }
-    }
 }
 
 /// The dynamic mode's options from the flags.
@@ -255,29 +193,10 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         let flag = if (lo..=hi).contains(&settings.threshold_mm) { "--max-depth" } else { "--threshold" };
         bail!("{flag}: {e}");
     }
-    let source = match &a.registration {
-        Some(p) => PoseSource::Registration(Box::new(
-            Registration::load(p).with_context(|| format!("reading the registration {}", p.display()))?,
-        )),
-        None => PoseSource::Direct,
-    };
+    let registration = registration(a.registration.as_deref())?;
     let rec = load(&a.poses, a.session)?;
-    let source = match source {
-        PoseSource::Direct if rec.frames.iter().any(|f| f.maxilla_scan_from_mandible_scan.is_some()) => {
-            PoseSource::Recorded
-        }
-        // A tracked recording (it has a header) holds marker poses: taken as scan poses they
-        // put the arches tens of millimetres apart and report "no contact" as a finding.
-        PoseSource::Direct if rec.header.is_some() => bail!(
-            "{}: its poses place the mandible's marker in the maxilla's marker, not the scans in \
-             occlusion; give --registration FILE (from `jawtrack register`), or track with \
-             --registration so that every frame carries maxilla_scan_from_mandible_scan",
-            a.poses.display()
-        ),
-        s => s,
-    };
-    let with_pose: Vec<PosedFrame> =
-        rec.frames.iter().filter_map(|f| source.pose(f).map(|p| (f.frame, f.t, p))).collect();
+    let source = PoseSource::for_poses_file(&rec, registration, &a.poses)?;
+    let with_pose = source.posed(&rec);
     let posed: Vec<PosedFrame> = with_pose.iter().copied().step_by(a.every as usize).collect();
     let (skipped_no_pose, outside_stride) = (rec.frames.len() - with_pose.len(), with_pose.len() - posed.len());
     let Some(&(_, _, first_pose)) = posed.first() else {
@@ -290,27 +209,12 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     };
 
     let setup = Instant::now();
-    let (upper_parts, upper_reports) = load_arch("maxilla", &a.maxilla, a.quiet)?;
-    let (lower_parts, lower_reports) = load_arch("mandible", &a.mandible, a.quiet)?;
+    let ArchInput { parts: upper_parts, reports: upper_reports, .. } = read_arch("maxilla", &a.maxilla, a.quiet)?;
+    let ArchInput { parts: lower_parts, reports: lower_reports, .. } = read_arch("mandible", &a.mandible, a.quiet)?;
     let teeth = [tooth_places(&upper_parts), tooth_places(&lower_parts)];
-    let upper_left = match &a.points {
-        Some(p) => Some(crate::points::read(p)?.head_from_scan().inverse().rotation() * Vector3::x()),
-        None => None,
-    };
-    if !a.quiet {
-        say!("indexing both arches for distance queries (a few seconds per 100k triangles)…");
-    }
-    // The two indexes are independent: build them side by side.
-    let (upper, lower) = std::thread::scope(|scope| {
-        let upper = scope.spawn(|| Arch::new(upper_parts, &settings));
-        let lower = Arch::new(lower_parts, &settings);
-        (upper.join(), lower)
-    });
-    let upper = upper.map_err(|_| anyhow::anyhow!("indexing the upper arch failed"))?;
+    let upper_left = upper_scan_left(a.points.as_deref())?;
+    let (upper, lower) = index_arches(upper_parts, lower_parts, &settings, a.quiet)?;
     let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
-    if !a.quiet {
-        say!("indexed in {:.1} s", setup_ms / 1e3);
-    }
 
     let (frames, extras, dynamics_summary) = match a.mode {
         Mode::Kinematic => (posed, Vec::new(), Value::Null),
@@ -357,35 +261,11 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     bar.finish_and_clear();
     let total_s = started.elapsed().as_secs_f64();
 
-    let mut written = vec![path.clone()];
-    let arches = [(&upper, "maxilla"), (&lower, "mandible")];
-    for (k, (arch, name)) in arches.into_iter().enumerate() {
-        for (what, colours) in [("frequency", session.frequency_colours(k)), ("depth", session.depth_colours(k))] {
-            let p = a.out.join(format!("{name}_{what}.ply"));
-            arch.mesh.write_coloured_ply(&p, &colours)?;
-            written.push(p);
-        }
-    }
-    // Occlusal views, each from the other arch's side at the first frame's pose.
-    let views = View::occlusal_pair(&upper.mesh, &lower.mesh, &first_pose, 800);
-    for (k, (arch, name)) in arches.into_iter().enumerate() {
-        let p = a.out.join(format!("{name}_occlusal.png"));
-        let image = with_legend(&render(&arch.mesh, &session.frequency_colours(k), &views[k]));
-        image.save(&p).with_context(|| format!("writing {}", p.display()))?;
-        written.push(p);
-    }
-
     let s = session.summary();
-    // The maps a clinician reads: each arch's occlusal view with its side, teeth and scales.
-    let maps = contact_map::session_maps(&session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left);
-    for m in &maps {
-        let p = a.out.join(format!("{}_{}_map.svg", m.arch, m.what));
-        std::fs::write(&p, &m.svg).with_context(|| format!("writing {}", p.display()))?;
-        written.push(p);
-    }
-    if maps.iter().any(|m| !m.sided) {
-        eprintln!("warning: {UNSIDED}");
-    }
+    let more = write_outputs(&a.out, &session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left)?;
+    more.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+    let mut written = vec![path.clone()];
+    written.extend(more.files);
     let teeth_totals = per_tooth.totals();
     let mut summary = json!({
         "frames": {
@@ -417,10 +297,50 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     std::fs::write(&p, text + "\n").with_context(|| format!("writing {}", p.display()))?;
     written.push(p);
 
+    print_findings(&s, &teeth_totals, rec.frames.len(), skipped_no_pose, settings.threshold_mm, source.describe());
+    say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), setup_ms);
+    for p in &written {
+        say!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// Builds both arches' distance indexes, side by side (they are independent).
+fn index_arches(
+    upper: Vec<(String, jawtrack_occlusion::Mesh)>,
+    lower: Vec<(String, jawtrack_occlusion::Mesh)>,
+    settings: &ContactSettings,
+    quiet: bool,
+) -> Result<(Arch, Arch)> {
+    if !quiet {
+        say!("indexing both arches for distance queries (a few seconds per 100k triangles)…");
+    }
+    let started = Instant::now();
+    let (upper, lower) = std::thread::scope(|scope| {
+        let upper = scope.spawn(|| Arch::new(upper, settings));
+        let lower = Arch::new(lower, settings);
+        (upper.join(), lower)
+    });
+    let upper = upper.map_err(|_| anyhow::anyhow!("indexing the upper arch failed"))?;
+    if !quiet {
+        say!("indexed in {:.1} s", started.elapsed().as_secs_f64());
+    }
+    Ok((upper, lower))
+}
+
+/// Prints what the run found: frames checked, the deepest contact, per-tooth totals.
+fn print_findings(
+    s: &SessionSummary,
+    teeth: &[ToothTotal],
+    read: usize,
+    skipped_no_pose: usize,
+    threshold_mm: f64,
+    source: &str,
+) {
     let skipped =
         if skipped_no_pose > 0 { format!(", {skipped_no_pose} without a pose skipped") } else { String::new() };
-    let (checked, read, near, deep) = (s.frames, rec.frames.len(), s.with_contact, s.penetrating);
-    let t = settings.threshold_mm;
+    let (checked, near, deep) = (s.frames, s.with_contact, s.penetrating);
+    let t = threshold_mm;
     say!("{checked} frames checked of {read}{skipped}; {near} within {t} mm, {deep} penetrating");
     match s.deepest {
         Some(d) if d.depth_mm > 0.0 => {
@@ -439,13 +359,13 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
             eprintln!(
                 "warning: the arches never came within {t} mm in any of the {checked} frames checked: a recording \
                  that includes the bite always touches; check that the scans and the poses ({}) belong together",
-                source.describe()
+                source
             );
         }
     }
-    if !teeth_totals.is_empty() {
+    if !teeth.is_empty() {
         say!("tooth          frames in contact   largest area   deepest");
-        for t in &teeth_totals {
+        for t in teeth {
             let label = t.fdi.and_then(Tooth::fdi).map_or_else(|| t.name.clone(), Tooth::label);
             say!(
                 "{label:<14} {:>17}   {:>9} mm²   {:>7} mm",
@@ -455,9 +375,4 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
             );
         }
     }
-    say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), setup_ms);
-    for p in &written {
-        say!("wrote {}", p.display());
-    }
-    Ok(())
 }

@@ -3,7 +3,8 @@
 //! then tracks the jaw (with the nominal marker file and with the marker as printed), reports
 //! the mandible-in-maxilla error and the motion in plain words, and plots the incisor's path.
 
-use crate::synth::render_with_progress;
+use crate::print::print_scene_summary;
+use crate::progress::{detect_views, render_with_progress};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
@@ -15,7 +16,7 @@ use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_tracker::{Tracker, TrackerConfig};
 
 use jawtrack_plot::{self as plot, Series, Style};
-use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SceneSummary, SynthConfig};
+use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 
@@ -71,8 +72,8 @@ fn calibrate_from_recording(a: &DemoArgs) -> Result<Marker> {
     say!("Rendering a marker-calibration recording: the same printed markers seen from 18 angles…");
     let summary = render_with_progress(config, &dir)?;
     let truth: GroundTruth = serde_json::from_str(&std::fs::read_to_string(dir.join("ground_truth.json"))?)?;
-    let source = crate::frames::open_frames(None, std::slice::from_ref(&dir), None)?;
-    let views = crate::calibrate::detect_views(source, &Marker::default(), &truth.intrinsics, truth.realism.gamma)?;
+    let source = jawtrack_frames::open_frames(None, std::slice::from_ref(&dir), None)?;
+    let views = detect_views(source, &Marker::default(), &truth.intrinsics, truth.realism.gamma)?;
     let mut cal = calibrate(&Marker::default(), &views, &CalibrationOptions::default())?;
     cal.name_recordings(&[dir.display().to_string()]);
     let file = a.out.join("calibrated_marker.json");
@@ -191,7 +192,7 @@ fn write_report(dir: &Path) -> Result<PathBuf> {
     let (Some(&(from, rest)), Some(&(to, _))) = (posed.first(), posed.last()) else {
         bail!("{}: no frame has a jaw pose", poses.display());
     };
-    let standard = crate::points::anatomy(None, None, &rest)?;
+    let standard = jawtrack_session::anatomy(None, None, &rest)?;
     let inputs = jawtrack_report::Inputs {
         recording: &rec,
         recording_name: "poses_calibrated.jsonl".into(),
@@ -295,24 +296,4 @@ fn detect_and_compare(dir: &Path) -> Result<()> {
         pick(&ms, 0.5)
     );
     Ok(())
-}
-
-pub(crate) fn print_scene_summary(scene: SceneKind, out: &Path, s: &SceneSummary) {
-    say!(
-        "{} scene: {} frames in {} ({:.1} s, {:.2} s/frame)",
-        scene.name(),
-        s.frames,
-        out.display(),
-        s.seconds,
-        s.seconds / s.frames.max(1) as f64
-    );
-    say!(
-        "  tags a detector should find per frame: min {}, mean {:.1}, max {}; median tag side {:.0} px",
-        s.detectable_tags.0,
-        s.detectable_tags.1,
-        s.detectable_tags.2,
-        s.median_tag_side_px
-    );
-    say!("  mandible marker travel relative to the maxilla: up to {:.1} mm", s.max_mandible_travel_mm);
-    say!("  ground truth: {}", out.join("ground_truth.json").display());
 }

@@ -2,13 +2,13 @@
 //! (`jawtrack_kinematics::hinge`), in the maxilla marker's frame and, given a registration, in
 //! the upper scan's; printed, or as one JSON object other tools read.
 
-use crate::export::{Rest, SessionArg, load, rest_of};
+use crate::flags::{PointsArg, SessionArg, anatomy, load, registration};
 use crate::numbers::{clean_json, fixed, parse_numbers};
-use crate::points::{PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::{HingeAxis, HingeOptions, hinge};
 use jawtrack_pose::Pose;
+use jawtrack_session::{Rest, rest_of};
 use jawtrack_tracker::Registration;
 use nalgebra::{Point3, Unit, Vector3};
 use serde_json::{Value, json};
@@ -84,7 +84,7 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
     }
     let registration = registration(a.registration.as_deref())?;
     let rec = load(&a.recording, a.session)?;
-    crate::articulator::warn_if_nominal(&rec, "the axis of a rendered 40 mm opening moved 1.7–2.4 mm and 2–3°");
+    crate::flags::warn_if_nominal(&rec, "the axis of a rendered 40 mm opening moved 1.7–2.4 mm and 2–3°");
     let inside = |t: f64| a.from.is_none_or(|f| t >= f) && a.to.is_none_or(|e| t <= e);
     let window: Vec<(u64, Pose)> =
         rec.frames.iter().filter(|f| inside(f.t)).filter_map(|f| Some((f.frame, f.maxilla_from_mandible?))).collect();

@@ -24,14 +24,13 @@ fn stdout_failed(e: &std::io::Error) -> ! {
 }
 
 mod articulator;
-mod bench;
 mod calibrate;
 mod calibrate_camera;
 mod contacts;
 mod demo;
 mod detect;
 mod export;
-mod frames;
+mod flags;
 mod hinge_axis;
 mod link;
 mod marker;
@@ -40,6 +39,7 @@ mod numbers;
 mod output;
 mod plan;
 mod points;
+mod print;
 mod progress;
 mod register;
 mod report;
@@ -81,9 +81,6 @@ enum Command {
     /// Track recorded frames: both marker poses and the mandible in the maxilla, one JSON line
     /// per frame.
     Track(track::TrackArgs),
-    /// Benchmarks: `bench pipeline` times the tracking pipeline and PnP beside OpenCV;
-    /// `bench accuracy` runs the thesis's benchtop experiments on rendered frames.
-    Bench(bench::BenchArgs),
     /// Calibrate the marker from frames of it turned in front of the camera: finds tags glued
     /// turned or on the wrong face, refines every tag's place, writes a marker file.
     CalibrateMarker(calibrate::CalibrateArgs),
@@ -146,7 +143,6 @@ fn main() {
         Command::Synth(a) => synth::run(&a),
         Command::Detect(a) => detect::run(&a),
         Command::Track(a) => track::run(&a),
-        Command::Bench(a) => bench::run(&a),
         Command::CalibrateMarker(a) => calibrate::run(&a),
         Command::CalibrateCamera(a) => calibrate_camera::run(&a),
         Command::Plan(a) => plan::run(&a),

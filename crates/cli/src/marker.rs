@@ -78,7 +78,7 @@ pub(crate) fn harness(a: &HarnessArgs) -> Result<()> {
 
 pub(crate) fn check_marker(file: &Path) -> Result<()> {
     let m = Marker::load(file)?;
-    require_both_bodies(&m, file)?;
+    m.require_both_bodies().map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     say!("{}: valid marker file, edge {} mm", file.display(), m.edge);
     let calibrated = m.is_calibrated();
     if !calibrated {
@@ -125,19 +125,4 @@ fn print_provenance(b: &jawtrack_marker::Body) {
     if !nominal.is_empty() {
         say!("    nominal tags {}: a pose that uses them is flagged {}:uncalibrated_tag", nominal.join(", "), b.kind);
     }
-}
-
-/// A jaw pose needs both markers: a file describing one body reads, but can never track a jaw.
-pub(crate) fn require_both_bodies(m: &Marker, file: &Path) -> Result<()> {
-    let missing: Vec<&str> =
-        jawtrack_marker::BodyKind::ALL.iter().filter(|&&k| m.body(k).is_none()).map(|k| k.name()).collect();
-    if !missing.is_empty() {
-        anyhow::bail!(
-            "{}: has no {} body; tracking the jaw needs both the maxilla and the mandible \
-             (`jawtrack marker` writes a complete nominal file)",
-            file.display(),
-            missing.join(" or ")
-        );
-    }
-    Ok(())
 }

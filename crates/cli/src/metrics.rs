@@ -7,13 +7,14 @@
 //! The recording is read as `export` and `plot` read it (sequence order, displacements from the
 //! rest position); frames without a jaw pose are skipped and counted.
 
-use crate::export::{Rest, SessionArg, load, rest_of};
+use crate::flags::{SessionArg, load};
 use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::metrics::RETRUSION_OPENING_MM;
 use jawtrack_kinematics::{Border, Incisor, Metrics, PlaneView, Sample};
 use jawtrack_plot::{self as plot, Series, Style};
+use jawtrack_session::{Rest, rest_of};
 use nalgebra::Point3;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};

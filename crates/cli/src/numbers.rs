@@ -4,12 +4,8 @@
 use serde_json::Value;
 
 pub(crate) use jawtrack_plot::fixed;
-
-/// `v` in full (the shortest text that reads back the same), -0 as 0.
-pub(crate) fn full(v: f64) -> String {
-    // Adding +0.0 turns -0.0 into 0.0 and leaves every other value as it is.
-    (v + 0.0).to_string()
-}
+#[cfg(test)]
+use jawtrack_session::export::full;
 
 /// `v` with every -0.0 in it made 0.0.
 pub(crate) fn clean_json(v: &mut Value) {

@@ -38,6 +38,12 @@ impl ForceArgs {
         Ok(())
     }
 
+    /// Writes `bytes` to `path` whole or not at all (`jawtrack_recording::write_file_atomic`),
+    /// replacing an existing file only with --force.
+    pub(crate) fn write_file(self, path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+        jawtrack_recording::write_file_atomic(path, bytes, self.overwrite()).map_err(|e| self.explain(e))
+    }
+
     /// `e`, with the way out when it is a refusal to overwrite.
     pub(crate) fn explain(self, e: RecordingError) -> anyhow::Error {
         match e {

@@ -1,18 +1,15 @@
 //! `jawtrack points`: writes or checks the anatomical points file
-//! (`jawtrack_kinematics::anatomy`), and the `--points` flag of the commands that read the
-//! anatomy: with it and a registration the patient's own frame and points replace the standard
-//! harness mounting.
+//! (`jawtrack_kinematics::anatomy`); with it and a registration the patient's own frame and
+//! points replace the standard harness mounting (`jawtrack_session::anatomy`).
 
 use crate::numbers::{fixed, parse_numbers};
 use crate::output::ForceArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use jawtrack_kinematics::AnatomicalPoints;
 use jawtrack_kinematics::anatomy::{BALKWILL_DEG, BONWILL_SIDE_MM, Condyles, OcclusalPlane};
-use jawtrack_kinematics::{AnatomicalPoints, Mounting};
-use jawtrack_pose::Pose;
-use jawtrack_tracker::Registration;
 use nalgebra::{Point3, Vector3};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn parse_occlusal(s: &str) -> Result<OcclusalPlane, String> {
     let v = parse_numbers(s, 9, "IX,IY,IZ,LX,LY,LZ,RX,RY,RZ: the incisal point, the left and the right molar")?;
@@ -61,7 +58,7 @@ pub(crate) struct PointsArgs {
 /// Runs `jawtrack points`.
 pub(crate) fn run(a: &PointsArgs) -> Result<()> {
     if let Some(file) = &a.check {
-        let p = read(file)?;
+        let p = jawtrack_session::read_points(file)?;
         say!("{} is a valid points file", file.display());
         describe(&p);
         return Ok(());
@@ -78,12 +75,6 @@ pub(crate) fn run(a: &PointsArgs) -> Result<()> {
     say!("wrote {}", out.display());
     describe(&p);
     Ok(())
-}
-
-/// Reads a points file, naming it in any error.
-pub(crate) fn read(file: &Path) -> Result<AnatomicalPoints> {
-    let text = std::fs::read_to_string(file).with_context(|| format!("reading the points file {}", file.display()))?;
-    AnatomicalPoints::from_json(&text).with_context(|| format!("{}", file.display()))
 }
 
 /// What the points make, in the head frame they define.
@@ -108,69 +99,4 @@ fn describe(p: &AnatomicalPoints) {
     };
     say!("condyles             left {}  right {} ({whose})", show(at(l)), show(at(r)));
     say!("intercondylar        {} mm", fixed((l - r).norm(), 1));
-}
-
-/// The `--points` flag.
-#[derive(Args, Clone, Debug)]
-pub(crate) struct PointsArg {
-    /// The anatomical points file (`jawtrack points`): the patient's occlusal plane, midline,
-    /// lower incisal point and condyles, picked on the upper scan; needs --registration.
-    /// Default: the standard harness mounting.
-    #[arg(long, value_name = "FILE")]
-    pub(crate) points: Option<PathBuf>,
-}
-
-/// The anatomy a command reads: the mounting, and what it came from, in words for its output.
-pub(crate) struct Anatomy {
-    pub(crate) mounting: Mounting,
-    /// The reference plane angles are measured to.
-    pub(crate) reference_plane: &'static str,
-    /// Where the condyles and the incisal point came from.
-    pub(crate) landmarks: &'static str,
-    /// Whether the condyles were given (not assumed).
-    pub(crate) condyles_given: bool,
-}
-
-/// The anatomy of `points` through `registration`, with the closed jaw at `rest`; the standard
-/// harness mounting without `points`.
-pub(crate) fn anatomy(points: Option<&Path>, registration: Option<&Registration>, rest: &Pose) -> Result<Anatomy> {
-    let Some(file) = points else {
-        return Ok(Anatomy {
-            mounting: Mounting::default(),
-            reference_plane: "the head frame's horizontal plane of the standard harness mounting",
-            landmarks: "the standard harness mounting's condyles and lower incisal point",
-            condyles_given: false,
-        });
-    };
-    let Some(reg) = registration else {
-        bail!(
-            "--points needs --registration: the points are in the upper scan's frame, and the registration \
-             (`jawtrack register`) places that scan on the maxilla marker"
-        );
-    };
-    let p = read(file)?;
-    let given = p.condyles.is_some();
-    let mounting = p.mounting(&reg.maxilla_scan_from_maxilla_marker, rest);
-    if mounting.head_from_maxilla.translation().y > 0.0 {
-        eprintln!(
-            "warning: in the frame of {} the maxilla marker sits below the occlusal plane: are the left and right \
-             molar points swapped?",
-            file.display()
-        );
-    }
-    Ok(Anatomy {
-        mounting,
-        reference_plane: "the occlusal plane of the points file",
-        landmarks: if given {
-            "the points file's condyles and lower incisal point"
-        } else {
-            "the points file's lower incisal point, and the Bonwill triangle's condyles"
-        },
-        condyles_given: given,
-    })
-}
-
-/// Reads `--registration`, naming the file in any error.
-pub(crate) fn registration(path: Option<&Path>) -> Result<Option<Registration>> {
-    path.map(|p| Registration::load(p).with_context(|| format!("registration file {}", p.display()))).transpose()
 }

@@ -1,20 +1,18 @@
 //! `jawtrack report`: one self-contained HTML report of a session (`jawtrack_report`), and a PDF
 //! of it through headless Chromium when asked.
 
-use crate::articulator::{MovementArgs, parse_window};
-use crate::contacts::{UNSIDED, load_arch, tooth_places};
-use crate::export::{SessionArg, load, rest_of};
+use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, parse_window, registration};
 use crate::output::ForceArgs;
-use crate::points::{PointsArg, anatomy, registration};
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args};
 use jawtrack_kinematics::Window;
-use jawtrack_occlusion::contact_map;
-use jawtrack_occlusion::contacts::{Arch, ContactSettings};
-use jawtrack_occlusion::session::ContactSession;
-use jawtrack_occlusion::teeth::ToothTotals;
-use jawtrack_pose::Pose;
+use jawtrack_recording::Recording;
 use jawtrack_report::{Anatomy, Centric, ContactsResult, Inputs, Windows};
+use jawtrack_session::anatomy::upper_scan_left;
+use jawtrack_session::arches::load_arch;
+use jawtrack_session::survey::survey;
+use jawtrack_session::{PoseSource, rest_of};
+use jawtrack_tracker::Registration;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -111,14 +109,14 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
     let rec = load(&a.recording, a.session)?;
     let rest = rest_of(&rec, a.rest_frame)?
         .with_context(|| format!("{name}: no frame has a jaw pose (both markers tracked): nothing to report"))?;
-    let moved = a.moves.poses(&rec, &name.to_string())?;
+    let moved = a.moves.windows().poses(&rec, &name.to_string())?;
     let centric = match (a.moves.co, moved.co) {
         (Some(co_window), Some(co)) => Some(Centric { co, mi: moved.mi.unwrap_or_else(|| rest.pose()), co_window }),
         _ => None,
     };
     let contacts = match &a.contacts {
         Some(dir) => Some(read_contacts(dir)?),
-        None if !a.maxilla.is_empty() => Some(survey_contacts(a, &rec, reg.as_ref())?),
+        None if !a.maxilla.is_empty() => Some(survey_contacts(a, &rec, reg)?),
         None => None,
     };
     let anatomy_of = anatomy(a.points.points.as_deref(), reg.as_ref(), &rest.pose())?;
@@ -160,69 +158,24 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
     Ok(())
 }
 
-/// Checks the occlusal contacts of up to `--contact-frames` frames spread over the session.
-fn survey_contacts(
-    a: &ReportArgs,
-    rec: &jawtrack_recording::Recording,
-    reg: Option<&jawtrack_tracker::Registration>,
-) -> Result<ContactsResult> {
-    if a.contact_frames == 0 {
-        bail!("--contact-frames must be 1 or more");
-    }
-    // The lower scan in the upper scan's frame: through the registration, else as recorded.
-    let posed: Vec<(u64, f64, Pose)> = rec
-        .frames
-        .iter()
-        .filter_map(|f| {
-            let p = match reg {
-                Some(r) => f.maxilla_from_mandible.map(|m| r.maxilla_scan_from_mandible_scan(&m)),
-                None => f.maxilla_scan_from_mandible_scan,
-            }?;
-            Some((f.frame, f.t, p))
-        })
-        .collect();
-    let Some(&(_, _, first_pose)) = posed.first() else {
-        bail!(
-            "--maxilla and --mandible need the scans' poses: give --registration (`jawtrack register`), or a \
-             recording tracked with one"
-        );
-    };
-    let stride = posed.len().div_ceil(a.contact_frames);
-    let settings = ContactSettings::default();
-    let (upper_parts, _) = load_arch("maxilla", &a.maxilla, true)?;
-    let (lower_parts, _) = load_arch("mandible", &a.mandible, true)?;
-    let teeth = [tooth_places(&upper_parts), tooth_places(&lower_parts)];
+/// Checks the occlusal contacts of up to `--contact-frames` frames spread over the session
+/// (`jawtrack_session::survey`).
+fn survey_contacts(a: &ReportArgs, rec: &Recording, reg: Option<Registration>) -> Result<ContactsResult> {
+    let posed = PoseSource::of(rec, reg).map(|s| s.posed(rec)).unwrap_or_default();
+    let upper = load_arch("maxilla", &a.maxilla)?.parts;
+    let lower = load_arch("mandible", &a.mandible)?.parts;
+    let upper_left = upper_scan_left(a.points.points.as_deref())?;
     eprintln!("indexing both arches for the contacts (a few seconds per 100k triangles)…");
-    let (upper, lower) = (Arch::new(upper_parts, &settings), Arch::new(lower_parts, &settings));
-    let mut session = ContactSession::new(&upper, &lower, settings);
-    let mut per_tooth = ToothTotals::default();
-    let checked: Vec<&(u64, f64, Pose)> = posed.iter().step_by(stride).collect();
-    let bar = crate::progress_bar("contacts", checked.len());
-    for (frame, t, pose) in checked {
-        per_tooth.add(&session.check(*frame, *t, pose).regions);
-        bar.inc(1);
-    }
+    let bar = crate::progress_bar("contacts", a.contact_frames.min(posed.len()));
+    let found = survey(upper, lower, &posed, a.contact_frames, upper_left, &mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
     bar.finish_and_clear();
-    let upper_left = match &a.points.points {
-        Some(p) => Some(crate::points::read(p)?.head_from_scan().inverse().rotation() * nalgebra::Vector3::x()),
-        None => None,
-    };
-    let maps = contact_map::session_maps(&session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left);
-    if maps.iter().any(|m| !m.sided) {
-        eprintln!("warning: {UNSIDED}");
+    for w in &found.warnings {
+        eprintln!("warning: {w}");
     }
-    let s = session.summary();
-    let summary = serde_json::json!({
-        "settings": {"mode": "kinematic", "threshold_mm": settings.threshold_mm},
-        "frames": {"checked": s.frames, "with_contact": s.with_contact, "penetrating": s.penetrating},
-        "deepest": s.deepest,
-        "teeth": per_tooth.totals(),
-    });
-    Ok(ContactsResult {
-        folder: format!("checked here: {} of {} frames with a scan pose, every {stride}", s.frames, posed.len()),
-        summary,
-        maps: maps.into_iter().map(|m| (m.caption, m.svg)).collect(),
-    })
+    Ok(ContactsResult { folder: found.checked, summary: found.summary, maps: found.maps })
 }
 
 /// The Chromium to print with: `CHROMIUM`, else the first of the usual names on the PATH.

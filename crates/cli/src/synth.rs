@@ -8,7 +8,7 @@ use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_synth::{Orientation, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
 use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Arguments of `jawtrack synth`.
 #[derive(Args)]
@@ -201,17 +201,7 @@ pub(crate) fn run(a: &SynthArgs) -> Result<()> {
     };
     let Some(out) = &a.out else { bail!("--out DIR is required") };
     let config = synth_config(a, scene)?;
-    let summary = render_with_progress(config, out)?;
-    crate::demo::print_scene_summary(scene, out, &summary);
+    let summary = crate::progress::render_with_progress(config, out)?;
+    crate::print::print_scene_summary(scene, out, &summary);
     Ok(())
-}
-
-pub(crate) fn render_with_progress(config: SynthConfig, out: &Path) -> Result<jawtrack_synth::SceneSummary> {
-    let bar = crate::progress::bar(&format!("rendering {}", config.scene.name()), Some(0), "frames");
-    let summary = jawtrack_synth::write_scene(config, out, |done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    })?;
-    bar.finish_and_clear();
-    Ok(summary)
 }

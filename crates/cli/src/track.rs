@@ -3,19 +3,17 @@
 //! (`jawtrack_recording`), after a header line naming the camera, marker and settings. Every
 //! line is flushed as it is written, so a killed run leaves a readable file.
 
-use crate::frames::{Frame, open_frames};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::ProgressBar;
-use jawtrack_apriltag::Detection;
 use jawtrack_apriltag::DetectorConfig;
-use jawtrack_calibration::{CalibrationFrame, FocalCheck, SeenTag, SessionOptions, check_focal, refine};
 use jawtrack_camera_calibration::CameraFile;
+use jawtrack_frames::{FrameSource, open_frames};
 use jawtrack_marker::Marker;
+use jawtrack_offline::{FocalViews, Kept, Summary, closing_warnings, refine_marker, track_frame};
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
 use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
-use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -170,7 +168,17 @@ pub(crate) struct TrackArgs {
     frames: Vec<PathBuf>,
 }
 
-pub(crate) fn run(a: &TrackArgs) -> Result<()> {
+/// What a run tracks with, from the flags (and `--camera`, `--like`).
+struct Setup {
+    intrinsics: CameraIntrinsics,
+    readout_s: f64,
+    exposure_s: Option<f64>,
+    marker: Marker,
+    registration: Option<Registration>,
+}
+
+/// Checks the flags and reads the camera, marker and registration they name.
+fn setup(a: &TrackArgs) -> Result<Setup> {
     if let Some(fps) = a.fps
         && !(fps.is_finite() && fps > 0.0)
     {
@@ -222,7 +230,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let marker = match (&a.marker, like.marker) {
         (Some(p), _) => {
             let m = Marker::load(p)?;
-            crate::marker::require_both_bodies(&m, p)?;
+            m.require_both_bodies().map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
             m
         }
         (None, Some(m)) => m,
@@ -235,6 +243,11 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         Some(p) => Some(Registration::load(p).with_context(|| format!("registration file {}", p.display()))?),
         None => None,
     };
+    Ok(Setup { intrinsics, readout_s, exposure_s, marker, registration })
+}
+
+pub(crate) fn run(a: &TrackArgs) -> Result<()> {
+    let Setup { intrinsics, readout_s, exposure_s, marker, registration } = setup(a)?;
     let mut source = open_frames(a.video.as_deref(), &a.frames, a.fps)?;
     if a.video.is_none() && a.fps.is_none() {
         eprintln!("note: image files carry no time: frame times assume 30 fps (--fps sets the rate)");
@@ -262,27 +275,15 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     tracker.set_registration(registration);
     // With --refine-marker, a first pass keeps every frame's detections; the refined marker
     // then solves them again, and only that second pass is written.
-    let (mut tracker, passes) = match &a.refine_marker {
-        None => (tracker, None),
+    let kept = match &a.refine_marker {
+        None => None,
         Some(path) => {
-            let mut kept = Vec::new();
-            let bar = crate::progress::bar("tracking (1 of 2)", source.len().map(|n| n as u64), "frames");
-            while let Some(frame) = source.next_frame()? {
-                let tracked = track_frame(&mut tracker, &frame, &intrinsics);
-                let rows = frame.image.as_ref().map_or(0, |i| i.height);
-                kept.push(Kept { name: frame.name, t: frame.t, tracked: tracked.map(|r| Detected::of(r, rows)) });
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-            let recording = match &a.video {
-                Some(v) => v.display().to_string(),
-                None => a.frames.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
-            };
-            let refined =
-                refine_marker(tracker.marker(), &kept, &intrinsics, path, &recording, a.out.as_os_str() == "-")?;
+            let kept = first_pass(&mut tracker, source.as_mut(), &intrinsics)?;
+            let refined = refine(a, tracker.marker(), &kept, &intrinsics, path)?;
             let mut again = Tracker::new(refined, config)?;
             again.set_registration(tracker.registration().cloned());
-            (again, Some(kept))
+            tracker = again;
+            Some(kept)
         }
     };
     let out: Box<dyn Write> = if a.out.as_os_str() == "-" {
@@ -290,17 +291,11 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     } else {
         Box::new(create_file(&a.out, a.force.overwrite()).map_err(|e| a.force.explain(e))?)
     };
-    let mut header = RecordingHeader::new("jawtrack track");
-    header.intrinsics = Some(intrinsics);
-    header.readout_s = Some(readout_s);
-    header.exposure_s = exposure_s;
-    header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
-    header.settings = serde_json::json!({
-        "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
-        "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
-        "refine_marker": a.refine_marker.as_ref().map(|p| p.display().to_string()),
-    });
-    let mut out = RecordingWriter::new(out, header, &a.out.display().to_string())?;
+    let mut out = RecordingWriter::new(
+        out,
+        header(a, &tracker, intrinsics, readout_s, exposure_s),
+        &a.out.display().to_string(),
+    )?;
     let mut summary = Summary::default();
     let mut views = FocalViews::default();
     let mut index = 0;
@@ -313,14 +308,16 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
                     r.to_record(index, Some(name))
                 }
                 Err(why) => {
-                    bar.suspend(|| summary.unreadable(name, &why));
+                    if let Some(w) = summary.skip(&why) {
+                        bar.suspend(|| eprintln!("warning: {name}: {w}"));
+                    }
                     FrameRecord::unreadable(index as u64, Some(name), t)
                 }
             };
             index += 1;
             out.append(&record)
         };
-    match passes {
+    match kept {
         Some(kept) => {
             let bar = crate::progress::bar("tracking (2 of 2)", Some(kept.len() as u64), "frames");
             for k in kept {
@@ -331,7 +328,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             bar.finish_and_clear();
         }
         None => {
-            let bar = crate::progress::bar("tracking", source.len().map(|n| n as u64), "frames");
+            let bar = crate::progress::bar("tracking", source.frame_count().map(|n| n as u64), "frames");
             while let Some(frame) = source.next_frame()? {
                 // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
                 let tracked = track_frame(&mut tracker, &frame, &intrinsics);
@@ -349,228 +346,58 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
         );
     }
     eprintln!("tracked {index} frames: {}; poses in {}", summary.describe(), a.out.display());
-    for line in summary.uncalibrated_lines() {
-        eprintln!("warning: {line}");
-    }
-    if summary.defocused > 0 {
-        eprintln!(
-            "warning: {} of {} frames had a marker out of focus (flagged BODY:defocused: its tags' edges blurred by more \
-             than 0.14 of their cells' width) and give no jaw pose: the phone was nearer than its lens focuses, or far from \
-             where its focus was locked; `jawtrack plan --phone MODEL` says where to hold it",
-            summary.defocused, summary.read
-        );
-    }
-    let check = check_focal(tracker.marker(), &views.frames);
-    let focal = check.filter(FocalCheck::looks_wrong);
-    if let Some(focal) = &focal {
-        eprintln!("warning: {}", crate::calibrate::intrinsics_warning(focal, []));
-    }
-    // A few per cent is what a focus moved since calibration does; only a measured marker (its
-    // print errors known) can tell it.
-    if let Some(moved) =
-        check.filter(|c| focal.is_none() && c.focus_moved() && !tracker.marker().measured_tags().is_empty())
-    {
-        eprintln!(
-            "warning: the focal length that fits is {:.3}× the one given ({moved}): did the focus or the zoom change \
-             since the camera was calibrated? Focusing moves a phone's lens and scales the image (3.5 % between \
-             infinity and 20 cm); every distance is off by about that factor. Calibrate at the focus you record with, \
-             or lock focus where `jawtrack plan` says",
-            moved.best_scale
-        );
-    }
-    for (id, seen, dropped) in tracker.mismatched_tags(5) {
-        if focal.is_some() {
-            eprintln!(
-                "warning: tag {id} disagreed with the marker file in {dropped} of {seen} frames (first check the intrinsics)"
-            );
-            continue;
-        }
-        eprintln!(
-            "warning: tag {id} disagreed with the marker file in {dropped} of the {seen} frames it was seen in and was \
-             left out: is it glued turned or on another face, or is the marker file another print's? \
-             `jawtrack calibrate-marker` finds and corrects such errors"
-        );
+    for w in closing_warnings(&summary, &views, &tracker) {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }
 
-/// One frame tracked, or why it could not be decoded or tracked.
-fn track_frame(tracker: &mut Tracker, frame: &Frame, camera: &CameraIntrinsics) -> Result<FrameResult, String> {
-    let image = frame.image.as_ref().map_err(Clone::clone)?;
-    let view = image.view().map_err(|e| e.to_string())?;
-    tracker.track(&view, camera, frame.t).map_err(|e| e.to_string())
+/// The recording's header: the camera, the marker tracked with and the settings.
+fn header(
+    a: &TrackArgs,
+    tracker: &Tracker,
+    intrinsics: CameraIntrinsics,
+    readout_s: f64,
+    exposure_s: Option<f64>,
+) -> RecordingHeader {
+    let mut header = RecordingHeader::new("jawtrack track");
+    header.intrinsics = Some(intrinsics);
+    header.readout_s = Some(readout_s);
+    header.exposure_s = exposure_s;
+    header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
+    header.settings = serde_json::json!({
+        "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
+        "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
+        "refine_marker": a.refine_marker.as_ref().map(|p| p.display().to_string()),
+    });
+    header
 }
 
-/// A frame of the first pass of `--refine-marker`: its detections, or why it was unreadable.
-struct Kept {
-    name: String,
-    t: f64,
-    tracked: Result<Detected, String>,
+/// The first pass of `--refine-marker`, with a bar.
+fn first_pass(tracker: &mut Tracker, source: &mut dyn FrameSource, intrinsics: &CameraIntrinsics) -> Result<Vec<Kept>> {
+    let bar = crate::progress::bar("tracking (1 of 2)", source.frame_count().map(|n| n as u64), "frames");
+    let kept = jawtrack_offline::first_pass(tracker, source, intrinsics, &mut || bar.inc(1))?;
+    bar.finish_and_clear();
+    Ok(kept)
 }
 
-/// What the first pass detected in a frame, and how.
-struct Detected {
-    detections: Vec<Detection>,
-    /// The frame's height (px): its rows' times under a rolling shutter.
-    rows: usize,
-    detection_s: f64,
-    searched: Option<jawtrack_apriltag::Roi>,
-}
-
-impl Detected {
-    fn of(r: FrameResult, rows: usize) -> Self {
-        Detected { detection_s: r.timings.detection_s, searched: r.searched, detections: r.detections, rows }
-    }
-
-    /// The frame solved again by `tracker`, keeping the first pass's detection figures.
-    fn solve(self, tracker: &mut Tracker, camera: &CameraIntrinsics, t: f64) -> FrameResult {
-        let mut r = tracker.solve(self.detections, camera, t, self.rows);
-        r.timings.detection_s = self.detection_s;
-        r.searched = self.searched;
-        r
-    }
-}
-
-/// Refines `marker` from the first pass's detections, says what changed, writes it to `path`
-/// and returns it.
-fn refine_marker(
+/// Refines `marker` from the first pass, says what changed, writes it to `path` and returns it.
+fn refine(
+    a: &TrackArgs,
     marker: &Marker,
     kept: &[Kept],
-    camera: &CameraIntrinsics,
+    intrinsics: &CameraIntrinsics,
     path: &std::path::Path,
-    recording: &str,
-    to_stderr: bool,
 ) -> Result<Marker> {
-    let frames: Vec<CalibrationFrame> = kept
-        .iter()
-        .filter_map(|k| k.tracked.as_ref().ok())
-        .map(|d| CalibrationFrame {
-            camera: *camera,
-            tags: d.detections.iter().map(|d| SeenTag { id: d.id, corners: d.corners }).collect(),
-        })
-        .collect();
+    let recording = match &a.video {
+        Some(v) => v.display().to_string(),
+        None => a.frames.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+    };
     let started = std::time::Instant::now();
-    let mut refinement = refine(marker, &frames, &SessionOptions::default()).context("refining the marker")?;
-    refinement.name_recording(recording);
+    let refinement = refine_marker(marker, kept, intrinsics, &recording)?;
     // With `--out -` the recording is standard output: the report goes to standard error.
-    crate::calibrate::print_refinement(&refinement, started.elapsed().as_secs_f64(), to_stderr);
+    crate::print::print_refinement(&refinement, started.elapsed().as_secs_f64(), a.out.as_os_str() == "-");
     refinement.marker.save(path).with_context(|| format!("writing {}", path.display()))?;
     eprintln!("wrote the refined marker to {}", path.display());
     Ok(refinement.marker)
-}
-
-/// The marker's tags seen in frames spread over the run, for judging the focal length
-/// ([`check_focal`]) at its end.
-#[derive(Default)]
-struct FocalViews {
-    frames: Vec<CalibrationFrame>,
-    offered: usize,
-}
-
-impl FocalViews {
-    /// Views kept at most: the first `DENSE` frames with three tags of a body, then every
-    /// `STRIDE`-th (a short recording needs them all to see a focus that moved).
-    const MAX: usize = 200;
-    const DENSE: usize = 40;
-    const STRIDE: usize = 5;
-
-    fn add(&mut self, r: &FrameResult, camera: &CameraIntrinsics) {
-        let three = [&r.maxilla, &r.mandible].iter().any(|b| b.as_ref().is_some_and(|b| b.tags.len() >= 3));
-        if !three || self.frames.len() >= Self::MAX {
-            return;
-        }
-        self.offered += 1;
-        if self.offered <= Self::DENSE || (self.offered - 1).is_multiple_of(Self::STRIDE) {
-            let tags = r.detections.iter().map(|d| SeenTag { id: d.id, corners: d.corners }).collect();
-            self.frames.push(CalibrationFrame { camera: *camera, tags });
-        }
-    }
-}
-
-/// Counts over a run, for the closing line.
-#[derive(Default)]
-struct Summary {
-    /// Frames tracked (readable).
-    read: usize,
-    /// Frames skipped as unreadable.
-    unreadable: usize,
-    both: usize,
-    /// Frames with a body flagged `defocused`.
-    defocused: usize,
-    flags: BTreeMap<String, usize>,
-    detection_s: Vec<f64>,
-    /// Per body (maxilla, mandible): frames whose pose used a tag the calibrated marker left
-    /// nominal (flagged `uncalibrated_tag`), and those tags.
-    uncalibrated: [(usize, BTreeSet<u32>); 2],
-}
-
-impl Summary {
-    /// Counts a tracked frame; `uncalibrated` are the marker's tags left nominal by its
-    /// calibration ([`Tracker::uncalibrated_tags`]).
-    fn add(&mut self, r: &FrameResult, uncalibrated: &[u32]) {
-        self.read += 1;
-        for (slot, body) in [&r.maxilla, &r.mandible].into_iter().enumerate() {
-            let used: Vec<u32> = body
-                .iter()
-                .flat_map(|b| &b.tags)
-                .copied()
-                .filter(|id| uncalibrated.binary_search(id).is_ok())
-                .collect();
-            if !used.is_empty() {
-                self.uncalibrated[slot].0 += 1;
-                self.uncalibrated[slot].1.extend(used);
-            }
-        }
-        self.both += usize::from(r.maxilla_from_mandible.is_some());
-        self.defocused += usize::from(r.flags.iter().any(|f| matches!(f, jawtrack_tracker::Flag::Defocused(_))));
-        for f in &r.flags {
-            *self.flags.entry(f.name()).or_default() += 1;
-        }
-        self.detection_s.push(r.timings.detection_s + r.timings.pose_s);
-    }
-
-    /// Counts a skipped frame and says why, for the first few.
-    fn unreadable(&mut self, name: &str, why: &str) {
-        const SAID: usize = 10;
-        self.unreadable += 1;
-        if self.unreadable <= SAID {
-            eprintln!("warning: {name}: {why}; skipped (its line is flagged `unreadable`)");
-        } else if self.unreadable == SAID + 1 {
-            eprintln!("warning: more frames could not be read; the summary counts them");
-        }
-    }
-
-    /// One line per body whose poses rested on nominal tags of a calibrated marker.
-    fn uncalibrated_lines(&self) -> Vec<String> {
-        jawtrack_marker::BodyKind::ALL
-            .iter()
-            .zip(&self.uncalibrated)
-            .filter(|(_, (frames, _))| *frames > 0)
-            .map(|(kind, (frames, ids))| {
-                let ids: Vec<String> = ids.iter().map(u32::to_string).collect();
-                format!(
-                    "{kind}: {frames} frames rest on nominal tag{} {} (flagged {kind}:uncalibrated_tag): \
-                     `--refine-marker` places them from this session, or calibrate with a recording that shows them",
-                    if ids.len() == 1 { "" } else { "s" },
-                    ids.join(", ")
-                )
-            })
-            .collect()
-    }
-
-    fn describe(&mut self) -> String {
-        let flags: Vec<String> = self.flags.iter().map(|(k, v)| format!("{k} ×{v}")).collect();
-        self.detection_s.sort_by(f64::total_cmp);
-        let median = self.detection_s.get(self.detection_s.len() / 2).copied().unwrap_or(0.0);
-        format!(
-            "{}jaw pose in {}; flags: {}; median {:.1} ms per frame",
-            match self.unreadable {
-                0 => String::new(),
-                n => format!("{n} unreadable and skipped; "),
-            },
-            self.both,
-            if flags.is_empty() { "none".to_owned() } else { flags.join(", ") },
-            median * 1e3
-        )
-    }
 }

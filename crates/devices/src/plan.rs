@@ -1,7 +1,7 @@
 //! The capture plan: from what a phone's cameras can do, which camera, format and zoom to film
 //! the markers with, and where to hold the phone.
 //!
-//! The rules, each from the capture benchmark (`jawtrack bench accuracy`, "Capture";
+//! The rules, each from the capture benchmark (`jawtrack-bench accuracy`, "Capture";
 //! `docs/accuracy.md`):
 //! - **Distance.** The lens must focus on the markers, so the phone stands beyond its nearest
 //!   focus, with a margin ([`FOCUS_MARGIN`], at least [`FOCUS_MARGIN_MM`]): a hand drifts, and a

@@ -1,4 +1,4 @@
-//! The benchtop accuracy run behind `jawtrack bench accuracy` and the `bench-accuracy`
+//! The benchtop accuracy run behind `jawtrack-bench accuracy` and the `bench-accuracy`
 //! binary: the 2020 thesis's benchtop experiments on rendered frames with exact ground truth
 //! (`crate::benchtop`), written as a report a clinician can read (`report.md` with PNG plots),
 //! CSV tables, and the same tables for the reference stack on the same frames when OpenCV is
@@ -25,7 +25,7 @@ const DYNAMIC_SE_MM: f64 = 0.1;
 /// Head axes, in the order of the error vectors.
 const AXES: [&str; 3] = ["X (left)", "Y (down)", "Z (back)"];
 
-/// Arguments of `jawtrack bench accuracy` and of the `bench-accuracy` binary.
+/// Arguments of `jawtrack-bench accuracy` and of the `bench-accuracy` binary.
 #[derive(Args)]
 pub struct AccuracyArgs {
     /// Output folder: report.md, CSV tables, PNG and SVG plots. Rendered frames are cached in
@@ -523,7 +523,7 @@ fn report(run: &Run, o: &Options, files: &[PathBuf], out: &Path) -> String {
     let command = if run.reference.is_ok() {
         "cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy --"
     } else {
-        "jawtrack bench accuracy"
+        "jawtrack-bench accuracy"
     };
     let _ = writeln!(
         md,
@@ -777,7 +777,7 @@ mod tests {
         let skipped = report(&empty_run(Err("not built in".into())), &options(), &[], out);
         assert!(skipped.contains("**The reference stack was skipped**: not built in."), "{skipped}");
         assert!(!skipped.contains("- reference:"), "no bite step is reported for a stack that did not run");
-        assert!(skipped.contains("Reproduce: `jawtrack bench accuracy --seed 1 "), "{skipped}");
+        assert!(skipped.contains("Reproduce: `jawtrack-bench accuracy --seed 1 "), "{skipped}");
 
         let with = report(&empty_run(Ok("the C library".into())), &options(), &[], out);
         assert!(with.contains("- reference: no closed-jaw pose, so no bite step."), "{with}");

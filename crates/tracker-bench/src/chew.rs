@@ -1,7 +1,7 @@
 //! The chewing scene under each exposure and rolling shutter asked for: the jaw's error with
 //! our tracker told the readout, ours with the readout ignored, and the reference stack (which
 //! knows nothing of shutters), as mean, 95th percentile and max, overall and by incisor speed,
-//! and plotted against the speed. Shared by `tracker-bench` and `jawtrack bench accuracy`.
+//! and plotted against the speed. Shared by `tracker-bench` and `jawtrack-bench accuracy`.
 
 use anyhow::Result;
 use jawtrack_plot::{self as plot, Series, Style};

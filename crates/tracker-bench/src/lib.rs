@@ -1,7 +1,7 @@
 //! Our tracker against the reference stack — the AprilTag C library then OpenCV's SQPnP — on
 //! the same rendered frames, as a library: the `tracker-bench` binary's per-view comparison
-//! and the benchtop experiments in the 2020 thesis's form (`jawtrack bench accuracy`) both
-//! stand on it. `jawtrack bench pipeline`'s timing of the tracking pipeline lives here too
+//! and the benchtop experiments in the 2020 thesis's form (`jawtrack-bench accuracy`) both
+//! stand on it. `jawtrack-bench pipeline`'s timing of the tracking pipeline lives here too
 //! ([`pipeline`]): it needs no C, but it is benchmark code, not the product's.
 //!
 //! The reference stack is the `reference` feature (on by default): it alone links C. Without

@@ -1,4 +1,4 @@
-//! `jawtrack bench pipeline`: time per frame of the whole tracking pipeline and of its stages
+//! `jawtrack-bench pipeline`: time per frame of the whole tracking pipeline and of its stages
 //! (tag detection, pose), at 1080p and 4K, searching every frame whole and tracking in the
 //! steady state (the region where the markers are expected), one detector thread; and the PnP
 //! time per body, ours beside OpenCV's solvePnP (SQPnP, ITERATIVE) on the same
@@ -21,7 +21,7 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-/// Arguments of `jawtrack bench pipeline`.
+/// Arguments of `jawtrack-bench pipeline`.
 #[derive(Args)]
 pub struct PipelineArgs {
     /// Resolutions to run (comma-separated): 1080p, 4k.
@@ -55,7 +55,7 @@ struct PnpCase {
     prior: Option<Pose>,
 }
 
-/// Runs `jawtrack bench pipeline`.
+/// Runs `jawtrack-bench pipeline`.
 pub fn run(a: &PipelineArgs) -> Result<()> {
     if a.frames < 2 || a.repeat == 0 || a.pnp_repeat == 0 {
         bail!("--frames must be at least 2, --repeat and --pnp-repeat at least 1");
@@ -67,7 +67,7 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
         table.push('\n');
     };
     line(format!(
-        "jawtrack bench pipeline: hinge opening, default realism, {} frames per resolution, median of {} passes, \
+        "jawtrack-bench pipeline: hinge opening, default realism, {} frames per resolution, median of {} passes, \
          1 detector thread",
         a.frames, a.repeat
     ));

@@ -189,8 +189,9 @@ impl LiveState {
         })
     }
 
-    /// A state for replaying `frames` (`jawtrack view`), measured from `rest` (the recording's
-    /// accepted bite) or else from the first frame with a jaw pose.
+    /// A state for replaying `frames` (`jawtrack view`), measured from `rest` (the caller's
+    /// rest position: `jawtrack_session::rest_of`); without one, nothing is measured until the
+    /// Calibrate step sets it.
     pub fn replay(
         options: &ViewerOptions,
         header: Option<Value>,
@@ -198,7 +199,6 @@ impl LiveState {
         rest: Option<Pose>,
     ) -> Result<Self, ViewerError> {
         let mut state = LiveState::new(options, "replay")?;
-        let rest = rest.or_else(|| frames.iter().find_map(|f| f.maxilla_from_mandible));
         // The patient's anatomy needs the closed jaw, known only when replaying.
         if let (Some(points), Some(reg), Some(r)) = (&options.points, &options.registration, rest) {
             state.mounting = points.mounting(&reg.maxilla_scan_from_maxilla_marker, &r);

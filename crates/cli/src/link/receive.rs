@@ -4,13 +4,14 @@
 //! live viewer.
 
 use super::{KeyArgs, key_id};
-use crate::viewer::ViewerArgs;
+use crate::flags::ViewerArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_recording::{RecordingHeader, RecordingWriter};
 use jawtrack_viewer::{LiveServer, LiveState};
-use jawtrack_wire::link::{Counters, Link, LinkConfig, Verdict};
-use jawtrack_wire::{Ack, Key, Message, Security, decode, encode_ack, unix_ms};
+use jawtrack_wire::link::{Counters, LinkConfig};
+use jawtrack_wire::receiver::Receiver;
+use jawtrack_wire::{Key, Security, unix_ms};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -112,11 +113,18 @@ pub(crate) fn process_cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
-    let security = a.key.security()?;
-    if security == Security::Plaintext {
-        eprintln!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
-    }
+/// The recording's header: a receiver records whatever sessions arrive (each frame carries its
+/// phone's), under the key it opened them with.
+fn header(a: &ReceiveArgs, security: &Security) -> RecordingHeader {
+    let mut header = RecordingHeader::new("jawtrack receive");
+    header.session = None;
+    header.key_id = key_id(security);
+    header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
+    header
+}
+
+/// Refuses times that cannot be, naming the flag.
+fn check_times(a: &ReceiveArgs) -> Result<()> {
     if !(a.max_clock_skew.is_finite() && a.max_clock_skew >= 0.0) {
         bail!("--max-clock-skew must be a number of seconds ≥ 0, got {}", a.max_clock_skew);
     }
@@ -127,9 +135,18 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             bail!("{name} must be a positive number of seconds, got {v}");
         }
     }
+    Ok(())
+}
+
+pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
+    let security = a.key.security()?;
+    if security == Security::Plaintext {
+        eprintln!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
+    }
+    check_times(a)?;
     let viewer = a.viewer.options()?;
     if let Some(addr) = a.serve {
-        crate::viewer::warn_if_exposed(addr);
+        crate::flags::warn_if_exposed(addr);
     }
     let socket = UdpSocket::bind(a.listen).with_context(|| format!("listening on {}", a.listen))?;
     if a.qr {
@@ -139,18 +156,14 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
         }
     }
     socket.set_read_timeout(Some(Duration::from_millis(100)))?;
-    let mut header = RecordingHeader::new("jawtrack receive");
-    // A receiver records whatever sessions arrive; each frame carries its phone's.
-    header.session = None;
-    header.key_id = key_id(&security);
-    header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
     // The viewer's port before the file: a run that cannot start leaves no empty recording.
     let live = Arc::new(LiveState::new(&viewer, "live")?);
     let _server = match a.serve {
         Some(addr) => Some(LiveServer::start(addr, live.clone())?),
         None => None,
     };
-    let mut out = RecordingWriter::create(&a.out, header, a.force.overwrite()).map_err(|e| a.force.explain(e))?;
+    let mut out =
+        RecordingWriter::create(&a.out, header(a, &security), a.force.overwrite()).map_err(|e| a.force.explain(e))?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -171,9 +184,7 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
         max_clock_skew_ms: (a.max_clock_skew > 0.0).then_some((a.max_clock_skew * 1e3) as u64),
         ..LinkConfig::default()
     };
-    let mut link = Link::new(config);
-    let receiver_session: u64 = rand::random();
-    let (mut ack_seq, mut last_ack): (u64, Option<(SocketAddr, Instant)>) = (0, None);
+    let mut receiver = Receiver::new(config, security, rand::random());
     let started = Instant::now();
     let (mut last_status, mut last_live, mut last_arrival) = (Instant::now(), Instant::now(), None::<Instant>);
     let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
@@ -196,11 +207,11 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
         }
         if last_live.elapsed() >= Duration::from_millis(500) {
             last_live = Instant::now();
-            live.status(&link.counters(), last_arrival);
+            live.status(&receiver.link().counters(), last_arrival);
         }
         if last_status.elapsed() >= Duration::from_secs(if tty { 1 } else { 10 }) {
             last_status = Instant::now();
-            let c = link.counters();
+            let c = receiver.link().counters();
             if tty {
                 eprint!("\r\x1b[K{}", describe(&c));
             } else {
@@ -215,46 +226,24 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
             Err(e) => return Err(e).context("receiving"),
         };
-        last_arrival = Some(Instant::now());
-        let (header, packet) = match decode(&buf[..n], &security) {
-            Ok(Message::Pose(h, p)) => (h, p),
-            Ok(Message::Ack(..)) => {
-                link.count_rejection("not_a_pose");
-                continue;
-            }
-            Err(e) => {
-                link.reject(&e);
-                continue;
-            }
-        };
-        let now_ms = unix_ms();
-        if let Verdict::Accept { .. } = link.check(&header, now_ms) {
-            let record = packet.to_record(&header, now_ms as f64 / 1e3);
+        let now = Instant::now();
+        last_arrival = Some(now);
+        let got = receiver.datagram(&buf[..n], from, unix_ms(), now);
+        if let Some((record, seq)) = got.frame {
             out.append(&record)?;
-            live.pose(&record, Some(header.seq));
+            live.pose(&record, Some(seq));
         }
-        // Acknowledge at most 10 times a second per phone: enough for a live link light.
-        let due = last_ack.is_none_or(|(peer, t)| peer != from || t.elapsed() >= Duration::from_millis(100));
-        if due && let Some(s) = link.session(header.session) {
-            let ack = Ack {
-                session: s.session,
-                highest_seq: s.highest_seq,
-                accepted: s.accepted,
-                lost: s.lost,
-                rejected: link.counters().rejected_total(),
-            };
-            let datagram = encode_ack((receiver_session, ack_seq, now_ms), &ack, &security);
-            // A phone that vanished is not an error for the receiver.
-            if socket.send_to(&datagram, from).is_ok() {
-                ack_seq += 1;
-                last_ack = Some((from, Instant::now()));
-            }
+        // A phone that vanished is not an error for the receiver.
+        if let Some(ack) = got.ack
+            && socket.send_to(&ack, from).is_ok()
+        {
+            receiver.ack_sent(from, now);
         }
     }
     if tty {
         eprintln!();
     }
-    let c = link.counters();
+    let c = receiver.link().counters();
     eprintln!(
         "stopped after {:.1} s: {}; recording in {}",
         started.elapsed().as_secs_f64(),
@@ -264,6 +253,6 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     for (reason, n) in &c.rejected {
         eprintln!("  rejected as {reason}: {n}");
     }
-    say!("{}", summary_json(&c, ack_seq, started.elapsed().as_secs_f64()));
+    say!("{}", summary_json(&c, receiver.acks_sent(), started.elapsed().as_secs_f64()));
     Ok(())
 }

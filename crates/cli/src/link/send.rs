@@ -43,6 +43,26 @@ pub(crate) struct SendArgs {
     seed: u64,
 }
 
+/// The receiver's acknowledgements: read, refused (not opened by the key), and the last one.
+#[derive(Default)]
+struct Acks {
+    read: u64,
+    refused: u64,
+    last: Option<Ack>,
+}
+
+impl Acks {
+    fn read(&mut self, session: &Session, datagram: &[u8]) {
+        match session.read_ack(datagram) {
+            Ok(ack) => {
+                self.read += 1;
+                self.last = Some(ack);
+            }
+            Err(_) => self.refused += 1,
+        }
+    }
+}
+
 pub(crate) fn run(a: &SendArgs) -> Result<()> {
     let security = a.key.security()?;
     for (name, p) in [("--loss", a.loss), ("--reorder", a.reorder), ("--duplicate", a.duplicate)] {
@@ -68,9 +88,8 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     let mut session = Session::new(security);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
     let bar = crate::progress::bar("sending", Some(total), "datagrams");
-    let (mut sent, mut dropped, mut reordered, mut duplicated, mut acks, mut refused) =
-        (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
-    let mut last_ack: Option<Ack> = None;
+    let (mut sent, mut dropped, mut reordered, mut duplicated) = (0u64, 0u64, 0u64, 0u64);
+    let mut acks = Acks::default();
     let mut held: Option<Vec<u8>> = None;
     let period = Duration::from_secs_f64(1.0 / a.rate);
     let start = Instant::now();
@@ -113,13 +132,7 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
             }
         }
         while let Ok((n, _)) = socket.recv_from(&mut buf) {
-            match session.read_ack(&buf[..n]) {
-                Ok(ack) => {
-                    acks += 1;
-                    last_ack = Some(ack);
-                }
-                Err(_) => refused += 1,
-            }
+            acks.read(&session, &buf[..n]);
         }
         bar.inc(1);
     }
@@ -127,13 +140,7 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     let until = Instant::now() + Duration::from_millis(300);
     while Instant::now() < until {
         match socket.recv_from(&mut buf) {
-            Ok((n, _)) => match session.read_ack(&buf[..n]) {
-                Ok(ack) => {
-                    acks += 1;
-                    last_ack = Some(ack);
-                }
-                Err(_) => refused += 1,
-            },
+            Ok((n, _)) => acks.read(&session, &buf[..n]),
             Err(_) => std::thread::sleep(Duration::from_millis(10)),
         }
     }
@@ -142,8 +149,10 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     eprintln!(
         "sent {total} frames as {sent} datagrams in {elapsed:.1} s (session {:#018x}): dropped {dropped}, reordered {reordered}, duplicated {duplicated}; {}",
         session.id(),
-        match last_ack {
-            Some(ack) => format!("{acks} acknowledgements, the last: {} accepted, {} lost", ack.accepted, ack.lost),
+        match acks.last {
+            Some(ack) => {
+                format!("{} acknowledgements, the last: {} accepted, {} lost", acks.read, ack.accepted, ack.lost)
+            }
             None => "no acknowledgement (is the receiver running, with the same key?)".into(),
         }
     );
@@ -156,9 +165,9 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
             "dropped": dropped,
             "reordered": reordered,
             "duplicated": duplicated,
-            "acks": acks,
-            "acks_refused": refused,
-            "last_ack": last_ack.map(|a| serde_json::json!({"accepted": a.accepted, "lost": a.lost, "highest_seq": a.highest_seq})),
+            "acks": acks.read,
+            "acks_refused": acks.refused,
+            "last_ack": acks.last.map(|a| serde_json::json!({"accepted": a.accepted, "lost": a.lost, "highest_seq": a.highest_seq})),
             "duration_s": elapsed,
         })
     );

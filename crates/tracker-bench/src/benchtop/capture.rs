@@ -1,4 +1,4 @@
-//! The capture part of `jawtrack bench accuracy`: the static grid and the chew scene filmed as
+//! The capture part of `jawtrack-bench accuracy`: the static grid and the chew scene filmed as
 //! a real phone can film them, from where its lens can focus. Rendered with a Pro iPhone's
 //! wide camera ([`jawtrack_synth::Realism::phone_wide`]: a 3.8 mm disc pupil, focus that
 //! breathes, the lens's own blur) at 120–300 mm, in each format (1080p, its native 2× crop, 4K),
@@ -68,7 +68,7 @@ pub enum Focus {
     Stuck,
 }
 
-/// The capture flags of `jawtrack bench accuracy`.
+/// The capture flags of `jawtrack-bench accuracy`.
 #[derive(Args, Debug, Clone)]
 pub struct CaptureArgs {
     /// Distances (mm, comma-separated) of the phone for the static grid; the plan's distance is

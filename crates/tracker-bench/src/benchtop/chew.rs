@@ -1,4 +1,4 @@
-//! The chewing part of `jawtrack bench accuracy`: the chew scene (60 fps) rendered under each
+//! The chewing part of `jawtrack-bench accuracy`: the chew scene (60 fps) rendered under each
 //! exposure and rolling-shutter readout asked for, and on the same frames our tracker told the
 //! readout, ours told nothing of it, and the reference stack when it runs, each with the marker
 //! as printed (the exact geometry, so that only the motion is wrong), against the truth at each
@@ -114,7 +114,7 @@ pub fn run(
     Ok(scenes)
 }
 
-/// The chew flags of `jawtrack bench accuracy`.
+/// The chew flags of `jawtrack-bench accuracy`.
 #[derive(Args, Debug, Clone)]
 pub struct ChewArgs {
     /// Exposures to render the chew scene with (ms, comma-separated), each with every readout.

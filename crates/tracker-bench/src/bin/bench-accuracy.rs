@@ -1,4 +1,4 @@
-//! `bench-accuracy`: the benchtop experiments of `jawtrack bench accuracy`, same flags and
+//! `bench-accuracy`: the benchtop experiments of `jawtrack-bench accuracy`, same flags and
 //! same report, with the reference stack's columns (AprilTag C + OpenCV SQPnP) beside ours.
 //! Run it with `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- …`.
 

@@ -1,0 +1,231 @@
+//! The export formats: a recording turned into a time-ordered CSV, a clean JSON Lines file, the
+//! scans' transforms for dental CAD (CSV or JSON), or OpenSim's `.trc` and `.mot`. A new format
+//! is a variant of [`Format`] and an arm of [`export`].
+
+use crate::anatomy::anatomy;
+use crate::rest::Rest;
+use crate::scan_pose::PoseSource;
+use crate::{SessionError, scan_pose::PosedFrame};
+use jawtrack_kinematics::{Displacement, Incisor};
+use jawtrack_pose::Pose;
+use jawtrack_recording::{FrameRecord, Recording, RecordingHeader};
+use jawtrack_tracker::Registration;
+use std::io::Write;
+use std::path::Path;
+
+/// An export format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// One row per frame: sequence, time, tags, RMS, the mandible in the maxilla (translation
+    /// and quaternion), the incisor and its opening, lateral and protrusive displacement.
+    Csv,
+    /// The recording cleaned: a header line, then every readable frame in sequence order.
+    Jsonl,
+    /// Per frame with the scans' pose, the lower scan in the upper scan's frame as a 4×4
+    /// row-major matrix (`frame,t_s,m00,…,m33`).
+    TransformsCsv,
+    /// The same as one JSON object.
+    TransformsJson,
+    /// OpenSim: the lower incisal point's and both condyles' trajectories (mm).
+    Trc,
+    /// OpenSim: the jaw's coordinates over time from the rest position.
+    Mot,
+}
+
+/// What an export reads besides the recording.
+#[derive(Debug, Default)]
+pub struct Inputs<'a> {
+    /// Where displacements are measured from.
+    pub rest: Option<Rest>,
+    /// The registration the scans' transforms are taken through (else the recorded ones).
+    pub registration: Option<Registration>,
+    /// The anatomical points file (OpenSim formats; needs `registration`).
+    pub points: Option<&'a Path>,
+    /// The recording's name, for messages.
+    pub recording: String,
+    /// The name OpenSim files carry (the output file's name).
+    pub name: String,
+}
+
+/// What an export wrote.
+#[derive(Debug)]
+pub struct Exported {
+    /// In words: "12 frames as OpenSim .trc".
+    pub summary: String,
+    /// What the reader should check (from the anatomy).
+    pub warnings: Vec<String>,
+}
+
+/// `v` in full (the shortest text that reads back the same), -0 as 0: users read a sign as a
+/// direction.
+pub fn full(v: f64) -> String {
+    // Adding +0.0 turns -0.0 into 0.0 and leaves every other value as it is.
+    (v + 0.0).to_string()
+}
+
+/// Writes `rec` as `format` to `out`, and says what it wrote. Nothing is written when the
+/// inputs are refused.
+///
+/// # Examples
+///
+/// ```
+/// use jawtrack_session::export::{Format, Inputs, export};
+/// let rec = jawtrack_recording::read_recording(r#"{"frame":0,"t":0}"#.as_bytes()).unwrap();
+/// let mut out = Vec::new();
+/// export(Format::Csv, &rec, Inputs::default(), &mut out).unwrap();
+/// assert!(String::from_utf8(out).unwrap().starts_with("frame,seq,t,"));
+/// ```
+pub fn export(format: Format, rec: &Recording, inputs: Inputs, out: &mut dyn Write) -> Result<Exported, SessionError> {
+    let written = |e: &dyn std::fmt::Display| SessionError::Write { path: inputs.name.clone(), reason: e.to_string() };
+    let no_pose = || SessionError::NoJawPose { path: inputs.recording.clone(), what: "export" };
+    let mut warnings = Vec::new();
+    let summary = match format {
+        Format::Trc | Format::Mot => {
+            let Some(rest) = inputs.rest.map(Rest::pose) else {
+                return Err(no_pose());
+            };
+            let a = anatomy(inputs.points, inputs.registration.as_ref(), &rest)?;
+            warnings.extend(a.warnings);
+            let frames: Vec<(f64, Option<Pose>)> = rec.frames.iter().map(|f| (f.t, f.maxilla_from_mandible)).collect();
+            let (text, what) = if format == Format::Trc {
+                let rate = frame_rate(&frames);
+                (jawtrack_kinematics::opensim::trc(&a.mounting, &rest, &frames, rate, &inputs.name), "OpenSim .trc")
+            } else {
+                (jawtrack_kinematics::opensim::mot(&a.mounting, &rest, &frames, &inputs.name), "OpenSim .mot")
+            };
+            out.write_all(text.as_bytes()).map_err(|e| written(&e))?;
+            format!("{} frames as {what}", rec.frames.len())
+        }
+        Format::TransformsCsv | Format::TransformsJson => {
+            let has_registration = inputs.registration.is_some();
+            let transforms = PoseSource::required(rec, inputs.registration)?.posed(rec);
+            if transforms.is_empty() {
+                debug_assert!(has_registration, "recorded scan poses exist, so some frame has one");
+                return Err(no_pose());
+            }
+            if format == Format::TransformsCsv {
+                transforms_csv(&transforms, out).map_err(|e| written(&e))?;
+            } else {
+                transforms_json(&transforms, out).map_err(|e| written(&e))?;
+            }
+            format!("{} transforms of {} frames", transforms.len(), rec.frames.len())
+        }
+        Format::Jsonl => {
+            let header = rec.header.clone().unwrap_or_else(|| RecordingHeader::new("jawtrack export"));
+            writeln!(out, "{}", header.to_line()).map_err(|e| written(&e))?;
+            for f in &rec.frames {
+                writeln!(out, "{}", f.to_line()).map_err(|e| written(&e))?;
+            }
+            format!("{} frames", rec.frames.len())
+        }
+        Format::Csv => {
+            csv(rec, inputs.rest.map(Rest::pose), out).map_err(|e| written(&e))?;
+            format!("{} frames", rec.frames.len())
+        }
+    };
+    // Dropping a BufWriter swallows its last write's error: a full disk must not pass.
+    out.flush().map_err(|e| written(&e))?;
+    Ok(Exported { summary, warnings })
+}
+
+/// The frames' rate (frames/s): the inverse of the median interval, 30 when unknown.
+fn frame_rate(frames: &[(f64, Option<Pose>)]) -> f64 {
+    let mut dt: Vec<f64> = frames.windows(2).map(|w| w[1].0 - w[0].0).filter(|d| *d > 0.0).collect();
+    dt.sort_by(f64::total_cmp);
+    dt.get(dt.len() / 2).map_or(30.0, |d| (1.0 / d * 1000.0).round() / 1000.0)
+}
+
+fn transforms_csv(transforms: &[PosedFrame], out: &mut dyn Write) -> Result<(), csv::Error> {
+    let mut w = csv::Writer::from_writer(out);
+    let mut head = vec!["frame".to_string(), "t_s".to_string()];
+    head.extend((0..16).map(|k| format!("m{}{}", k / 4, k % 4)));
+    w.write_record(&head)?;
+    for (frame, t, m) in transforms {
+        let mut row = vec![frame.to_string(), full(*t)];
+        row.extend(m.to_row_major().iter().map(|v| full(*v)));
+        w.write_record(&row)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+fn transforms_json(transforms: &[PosedFrame], out: &mut dyn Write) -> std::io::Result<()> {
+    let frames: Vec<serde_json::Value> = transforms
+        .iter()
+        .map(|(frame, t, m)| serde_json::json!({"frame": frame, "t_s": t, "matrix": m.to_row_major()}))
+        .collect();
+    let doc = serde_json::json!({
+        "version": 1,
+        "units": "mm",
+        "transform": "maxilla_scan_from_mandible_scan",
+        "description": "the lower scan placed in the upper scan's frame at each frame: p_upper = M · [p_lower, 1]",
+        "layout": "row-major 4x4",
+        "frames": frames,
+    });
+    writeln!(out, "{doc}")
+}
+
+/// The CSV's columns.
+const CSV_COLUMNS: [&str; 22] = [
+    "frame",
+    "seq",
+    "t",
+    "received_unix_s",
+    "maxilla_tags",
+    "mandible_tags",
+    "maxilla_rms_px",
+    "mandible_rms_px",
+    "flags",
+    "tx_mm",
+    "ty_mm",
+    "tz_mm",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "incisor_x_mm",
+    "incisor_y_mm",
+    "incisor_z_mm",
+    "opening_mm",
+    "lateral_mm",
+    "protrusive_mm",
+];
+
+fn csv(rec: &Recording, rest: Option<Pose>, out: &mut dyn Write) -> Result<(), csv::Error> {
+    let incisor = Incisor::standard();
+    let mut w = csv::Writer::from_writer(out);
+    w.write_record(CSV_COLUMNS)?;
+    let opt = |v: Option<f64>| v.map(full).unwrap_or_default();
+    for f in &rec.frames {
+        let mut row = vec![
+            f.frame.to_string(),
+            f.seq.map(|s| s.to_string()).unwrap_or_default(),
+            full(f.t),
+            opt(f.received_unix_s),
+            f.maxilla.as_ref().map(|b| b.tags.len().to_string()).unwrap_or_default(),
+            f.mandible.as_ref().map(|b| b.tags.len().to_string()).unwrap_or_default(),
+            opt(f.maxilla.as_ref().map(|b| b.rms_px)),
+            opt(f.mandible.as_ref().map(|b| b.rms_px)),
+            f.flags.join(";"),
+        ];
+        match &f.maxilla_from_mandible {
+            Some(m) => {
+                let (t, q) = (m.translation(), m.rotation());
+                let p = incisor.in_head(m);
+                row.extend([t.x, t.y, t.z, q.w, q.i, q.j, q.k, p.x, p.y, p.z].map(full));
+                let d = rest.map(|r| incisor.displacement(m, &r));
+                row.extend([d.map(|d| d.opening), d.map(|d| d.lateral), d.map(|d| d.protrusive)].map(opt));
+            }
+            None => row.extend(std::iter::repeat_n(String::new(), CSV_COLUMNS.len() - 9)),
+        }
+        w.write_record(&row)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// The standard incisor's time and displacement from `rest`, per frame with a jaw pose.
+pub fn displacements(frames: &[FrameRecord], rest: &Pose) -> Vec<(f64, Displacement)> {
+    let incisor = Incisor::standard();
+    frames.iter().filter_map(|f| f.maxilla_from_mandible.map(|m| (f.t, incisor.displacement(&m, rest)))).collect()
+}
