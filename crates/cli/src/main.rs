@@ -24,6 +24,7 @@ fn stdout_failed(e: &std::io::Error) -> ! {
 }
 
 mod articulator;
+mod bench;
 mod calibrate;
 mod calibrate_camera;
 mod contacts;
@@ -131,6 +132,9 @@ enum Command {
     /// (centroid, area, depth, tooth), and writes contacts.jsonl, contact-frequency and depth
     /// PLYs and occlusal PNG views.
     Contacts(contacts::ContactsArgs),
+    /// Run a benchmark (`pipeline`, `accuracy`, `link`): starts `jawtrack-bench`, a separate
+    /// program built beside this one, so that the product links no benchmark.
+    Bench(bench::BenchArgs),
 }
 
 fn main() {
@@ -162,6 +166,7 @@ fn main() {
         Command::Articulator(a) => articulator::run(&a),
         Command::Report(a) => report::run(&a),
         Command::Contacts(a) => contacts::run(&a),
+        Command::Bench(a) => bench::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -600,3 +600,33 @@ fn results_are_never_overwritten_unless_forced() {
         ok(&jawtrack(&[&args[..], &["--force"]].concat()));
     }
 }
+
+/// `jawtrack bench` starts the benchmark program it is pointed at (or the one beside it) with
+/// the arguments unchanged, and passes its exit status on.
+#[test]
+fn bench_forwards_its_arguments_and_exit_status() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let fake = dir.path().join("fake-bench.sh");
+    std::fs::write(&fake, "#!/bin/sh\necho \"args: $*\"\nexit 3\n").expect("written");
+    let mut perms = std::fs::metadata(&fake).expect("metadata").permissions();
+    std::os::unix::fs::PermissionsExt::set_mode(&mut perms, 0o755);
+    std::fs::set_permissions(&fake, perms).expect("executable");
+    let o = Command::new(env!("CARGO_BIN_EXE_jawtrack"))
+        .args(["bench", "pipeline", "--threads", "1,2", "--frames", "4"])
+        .env("JAWTRACK_BENCH", &fake)
+        .output()
+        .expect("jawtrack runs");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "args: pipeline --threads 1,2 --frames 4");
+}
+
+/// Without a benchmark program the message says how to build one.
+#[test]
+fn bench_without_the_benchmark_program_says_how_to_build_it() {
+    let o = Command::new(env!("CARGO_BIN_EXE_jawtrack"))
+        .args(["bench", "pipeline"])
+        .env("JAWTRACK_BENCH", "/nonexistent/jawtrack-bench")
+        .output()
+        .expect("jawtrack runs");
+    refused(&o, "JAWTRACK_BENCH names /nonexistent/jawtrack-bench, which is not a file");
+}
