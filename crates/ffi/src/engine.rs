@@ -1,7 +1,8 @@
 //! One tracker behind both doors: runs a frame, turns the tracker's result into the records
 //! the app reads (with the overlay already in the preview's coordinates), keeps the frame's
 //! detections for a marker calibration ([`TrackedView`]), offers the tracker's intercuspation
-//! step, and converts results back into the recording schema for the recorder and the link.
+//! step, and keeps each result's line of the recording schema (the tracker's one conversion)
+//! for the recorder and the link, which take it here rather than back from the app.
 
 use crate::error::invalid;
 use crate::{Intrinsics, JawTrackError, Settings};
@@ -9,7 +10,7 @@ use jawtrack_apriltag::ImageView;
 use jawtrack_calibration::SeenTag;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
-use jawtrack_recording::{BiteRecord, BodyRecord, FrameRecord, TimingsRecord};
+use jawtrack_recording::{BiteRecord, FrameRecord};
 use jawtrack_tracker::{BodyResult, Flag, Tracker, TrackerConfig};
 use nalgebra::{Point3, Vector3};
 use std::collections::VecDeque;
@@ -175,6 +176,8 @@ pub(crate) struct Engine {
     pub(crate) settings: Settings,
     frame: u64,
     pub(crate) last: Option<FrameResult>,
+    /// The last frame's line of the recording schema, `None` when the last frame failed.
+    pub(crate) last_record: Option<FrameRecord>,
     /// The last frame's detections, `None` when the last frame could not be tracked.
     pub(crate) view: Option<TrackedView>,
     times: VecDeque<f64>,
@@ -197,6 +200,7 @@ impl Engine {
             settings,
             frame: 0,
             last: None,
+            last_record: None,
             view: None,
             times: VecDeque::new(),
             luma: Vec::new(),
@@ -217,6 +221,7 @@ impl Engine {
         self.tracker.set_registration(None);
         self.frame = 0;
         self.last = None;
+        self.last_record = None;
         self.view = None;
         self.times.clear();
     }
@@ -232,8 +237,11 @@ impl Engine {
         t: f64,
         exposure_s: Option<f64>,
     ) -> Result<FrameResult, JawTrackError> {
-        // A frame that fails leaves no view: a calibration must not take the one before twice.
+        // A frame that fails leaves no view and no result: a calibration must not take the one
+        // before twice, nor a recording or the link send it again.
         self.view = None;
+        self.last = None;
+        self.last_record = None;
         if !t.is_finite() {
             return Err(JawTrackError::frame(format!("frame time {t} is not a number")));
         }
@@ -319,6 +327,11 @@ impl Engine {
             pose_ms: r.timings.pose_s * 1e3,
             fps,
         };
+        let mut record = r.to_record(0, None);
+        record.frame = self.frame;
+        record.exposure_s = exposure_s;
+        record.lens_position = self.lens_position;
+        self.last_record = Some(record);
         self.frame += 1;
         self.view = Some(TrackedView {
             camera,
@@ -348,50 +361,6 @@ fn pose_of(m: &[f64], what: &str) -> Result<Pose, JawTrackError> {
     let m: [f64; 16] =
         m.try_into().map_err(|_| invalid(format!("{what}: a 4×4 matrix has 16 numbers, got {}", m.len())))?;
     Ok(Pose::from_row_major(&m, what)?)
-}
-
-/// A result as a line of the recording schema.
-pub(crate) fn record_of(r: &FrameResult) -> Result<FrameRecord, JawTrackError> {
-    let body = |b: &Option<BodyPose>, what: &str| -> Result<Option<BodyRecord>, JawTrackError> {
-        let Some(b) = b else { return Ok(None) };
-        if b.covariance.len() != 36 {
-            return Err(invalid(format!("{what}: a covariance has 36 numbers, got {}", b.covariance.len())));
-        }
-        Ok(Some(BodyRecord {
-            camera_from_body: pose_of(&b.camera_from_body, what)?,
-            tags: b.tags.clone(),
-            rejected_tags: b.rejected_tags.clone(),
-            rms_px: b.rms_px,
-            cov: Some(b.covariance.clone()),
-            blur_px: b.blur_px,
-            cell_px: Some(b.cell_px),
-        }))
-    };
-    Ok(FrameRecord {
-        frame: r.frame,
-        session: None,
-        path: None,
-        t: r.t,
-        exposure_s: r.exposure_s,
-        lens_position: r.lens_position,
-        maxilla: body(&r.maxilla, "camera_from_maxilla")?,
-        mandible: body(&r.mandible, "camera_from_mandible")?,
-        maxilla_from_mandible: r
-            .maxilla_from_mandible
-            .as_deref()
-            .map(|m| pose_of(m, "maxilla_from_mandible"))
-            .transpose()?,
-        maxilla_scan_from_mandible_scan: r
-            .maxilla_scan_from_mandible_scan
-            .as_deref()
-            .map(|m| pose_of(m, "maxilla_scan_from_mandible_scan"))
-            .transpose()?,
-        flags: r.flags.clone(),
-        searched: None,
-        timings_s: Some(TimingsRecord { detection: r.detection_ms / 1e3, pose: r.pose_ms / 1e3 }),
-        seq: None,
-        received_unix_s: None,
-    })
 }
 
 /// The camera from AVFoundation's intrinsic matrix (`matrix_float3x3`, column-major: fx at
@@ -515,8 +484,10 @@ mod tests {
         assert_eq!((r.exposure_s, engine.tracker.config().exposure_s), (None, default_exposure));
         let r = engine.track(&view, &intrinsics, 0.1, Some(0.002)).expect("tracked");
         assert_eq!((r.exposure_s, engine.tracker.config().exposure_s), (Some(0.002), 0.002));
-        assert_eq!(record_of(&r).expect("a record").exposure_s, Some(0.002));
+        let record = engine.last_record.as_ref().expect("a record");
+        assert_eq!((record.frame, record.exposure_s), (r.frame, Some(0.002)));
         let e = engine.track(&view, &intrinsics, 0.2, Some(-1.0)).expect_err("refused").to_string();
         assert!(e.contains("exposure"), "{e}");
+        assert!(engine.last.is_none() && engine.last_record.is_none(), "a failed frame leaves nothing to record");
     }
 }

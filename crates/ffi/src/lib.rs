@@ -42,12 +42,12 @@ pub use settings::{
     validate_app_settings, validate_settings,
 };
 
-use engine::{Engine, record_of};
+use engine::Engine;
 use error::invalid;
 use jawtrack_apriltag::ImageView;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
+use jawtrack_recording::{FrameRecord, Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_wire::{Key, PosePacket, Security, Session};
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -181,6 +181,23 @@ impl Tracker {
     }
 }
 
+impl Tracker {
+    /// Frame `frame`'s line of the recording schema, converted once when it was tracked; it
+    /// must be the last frame tracked, so that what is recorded and sent is what was shown.
+    fn record_of_frame(&self, frame: u64) -> Result<FrameRecord, JawTrackError> {
+        match &lock(&self.engine).last_record {
+            Some(r) if r.frame == frame => Ok(r.clone()),
+            Some(r) => Err(invalid(format!(
+                "frame {frame} is not the last frame tracked ({}): record and send each frame right after tracking it",
+                r.frame
+            ))),
+            None => Err(invalid(format!(
+                "frame {frame}: the tracker holds no result (nothing tracked since it started or was reset, or the last frame failed)"
+            ))),
+        }
+    }
+}
+
 impl Drop for Tracker {
     fn drop(&mut self) {
         c_api::unregister(self.handle);
@@ -251,9 +268,11 @@ impl Recorder {
         Ok(Arc::new(Recorder { writer: Mutex::new(Some(writer)), frames: Mutex::new(0), path }))
     }
 
-    /// Appends a frame.
-    pub fn append(&self, result: FrameResult) -> Result<(), JawTrackError> {
-        let record = record_of(&result)?;
+    /// Appends frame `frame` as `tracker` tracked it: its last result, taken inside the
+    /// library (the app never hands a result back to be re-read). Refused when `frame` is not
+    /// the tracker's last frame, or that frame failed.
+    pub fn append(&self, tracker: &Tracker, frame: u64) -> Result<(), JawTrackError> {
+        let record = tracker.record_of_frame(frame)?;
         let mut writer = lock(&self.writer);
         let w = writer.as_mut().ok_or_else(|| invalid(format!("{}: the recording is closed", self.path)))?;
         w.append(&record)?;
@@ -335,9 +354,10 @@ impl LinkEncoder {
         self.key_id.clone()
     }
 
-    /// The next datagram, carrying `result`.
-    pub fn encode(&self, result: FrameResult) -> Result<Vec<u8>, JawTrackError> {
-        let packet = PosePacket::from_record(&record_of(&result)?);
+    /// The next datagram, carrying frame `frame` as `tracker` tracked it (its last result,
+    /// taken inside the library). Refused when `frame` is not the tracker's last frame.
+    pub fn encode(&self, tracker: &Tracker, frame: u64) -> Result<Vec<u8>, JawTrackError> {
+        let packet = PosePacket::from_record(&tracker.record_of_frame(frame)?);
         Ok(lock(&self.session).pose_datagram(&packet))
     }
 

@@ -32,10 +32,13 @@ def frames():
 
 
 class Bindings(unittest.TestCase):
-    def track_all(self, tracker):
+    def track_all(self, tracker, each=None):
+        """Tracks every fixture frame; `each(result)` runs right after each one."""
         results = []
         for i, (w, h, pixels) in enumerate(frames()):
             results.append(tracker.track_luma(pixels, w, h, w, INTRINSICS, i / 30.0, 0.002))
+            if each:
+                each(results[-1])
         return results
 
     def test_tracker_gives_the_rust_poses_and_the_overlay(self):
@@ -96,7 +99,7 @@ class Bindings(unittest.TestCase):
         info = jawtrack.RecordingInfo(device="test", intrinsics=INTRINSICS, marker_json=None, settings_json=None,
                                       key_id=None, readout_s=None)
         rec = jawtrack.Recorder.open(str(path), info)
-        rec.append(after)
+        rec.append(tracker, after.frame)
         rec.append_bite(cal)
         rec.close()
         lines = [json.loads(l) for l in path.read_text().splitlines()]
@@ -261,14 +264,21 @@ class Bindings(unittest.TestCase):
         info = jawtrack.RecordingInfo(device="test", intrinsics=INTRINSICS, marker_json=tracker.marker_json(),
                                       settings_json='{"fps": 30}', key_id=None, readout_s=0.0051)
         rec = jawtrack.Recorder.open(str(path), info)
-        results = self.track_all(tracker)
-        for r in results:
-            rec.append(r)
+
+        def append(r):
+            rec.append(tracker, r.frame)
             # Flushed per frame: the file already holds every line appended.
             self.assertEqual(len(path.read_text().splitlines()), 1 + rec.frames_written())
+
+        results = self.track_all(tracker, append)
+        self.assertEqual(rec.frames_written(), len(results))
+        # Only the frame just tracked: an older one is refused, not recorded as if it were new.
+        with self.assertRaises(jawtrack.JawTrackError.InvalidArgument) as e:
+            rec.append(tracker, results[0].frame)
+        self.assertIn("not the last frame tracked", e.exception.message)
         rec.close()
         with self.assertRaises(jawtrack.JawTrackError.InvalidArgument):
-            rec.append(results[0])
+            rec.append(tracker, results[-1].frame)
         lines = [json.loads(l) for l in path.read_text().splitlines()]
         self.assertEqual(lines[0]["recording"]["source"], "JawTrack iOS")
         self.assertEqual(lines[0]["recording"]["settings"], {"fps": 30})
@@ -279,6 +289,8 @@ class Bindings(unittest.TestCase):
             got = line["maxilla_from_mandible"]
             self.assertTrue(all(math.isclose(a, b, abs_tol=1e-9) for a, b in zip(got, r.maxilla_from_mandible)))
             self.assertEqual(len(line["maxilla"]["cov"]), 36)
+        # The tracker's own line, as `jawtrack track` writes it: the region searched included.
+        self.assertTrue(any(line.get("searched") for line in lines[2:]), "no frame recorded its search region")
         with self.assertRaises(jawtrack.JawTrackError.Io) as e:
             jawtrack.Recorder.open(str(OUT / "no-such-folder" / "x.jsonl"), info)
         self.assertTrue(e.exception.path.endswith("x.jsonl"), e.exception.path)
@@ -293,7 +305,7 @@ class Bindings(unittest.TestCase):
         tracker = jawtrack.Tracker(jawtrack.default_settings(), None)
         r = self.track_all(tracker)[-1]
         enc = jawtrack.LinkEncoder(KEY, False)
-        first, second = enc.encode(r), enc.encode(r)
+        first, second = enc.encode(tracker, r.frame), enc.encode(tracker, r.frame)
         self.assertEqual(len(first), 264)
         magic, version, kind, security, _, session, seq, _ = struct.unpack("<4sBBBBQQQ", first[:32])
         self.assertEqual((magic, version, kind, security, session, seq), (b"JAWT", 1, 1, 1, enc.session_id(), 0))

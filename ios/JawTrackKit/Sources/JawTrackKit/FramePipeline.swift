@@ -244,7 +244,7 @@ public final class FramePipeline {
         record(frame, intrinsics: intrinsics, tracker: tracker, camera: camera, report: &report)
         if let link, let result = report.result {
             do {
-                try link.send(result)
+                try link.send(frame: result.frame, of: tracker)
             } catch {
                 report.problem = userText(error)
             }
@@ -312,7 +312,7 @@ public final class FramePipeline {
             return
         }
         do {
-            try session.append(result)
+            try session.append(frame: result.frame, of: tracker)
             report.recordedFrames = session.framesWritten
         } catch {
             recording = .idle

@@ -131,10 +131,11 @@ public final class LinkSession: @unchecked Sendable {
         }
     }
 
-    /// Seals `result` into the next datagram and sends it, or drops it while not connected.
-    /// Throws only when the result cannot be encoded.
-    public func send(_ result: FrameResult) throws {
-        let datagram = try encoder.encode(result: result)
+    /// Seals frame `frame`, the one `tracker` just tracked, into the next datagram and sends it,
+    /// or drops it while not connected. The library takes the result from the tracker itself.
+    /// Throws only when that frame is not the tracker's last (a frame is sent as it is tracked).
+    public func send(frame: UInt64, of tracker: Tracker) throws {
+        let datagram = try encoder.encode(tracker: tracker, frame: frame)
         queue.async {
             guard !self.stopped, self.ready, let transport = self.transport else {
                 self.dropped += 1

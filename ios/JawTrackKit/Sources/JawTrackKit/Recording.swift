@@ -156,9 +156,10 @@ public final class RecordingSession {
         files = RecordingFiles(poses: poses, video: videoURL, videoProblem: nil)
     }
 
-    /// Appends a frame's result to the poses file.
-    public func append(_ result: FrameResult) throws {
-        try recorder.append(result: result)
+    /// Appends frame `frame`, the one `tracker` just tracked, to the poses file; the library
+    /// takes the result from the tracker itself.
+    public func append(frame: UInt64, of tracker: Tracker) throws {
+        try recorder.append(tracker: tracker, frame: frame)
     }
 
     /// Writes the rest position the bite step accepted into the poses file.

@@ -21,25 +21,21 @@ final class LinkTests: XCTestCase {
         return Golden(keyHex: try XCTUnwrap(doc["key_hex"] as? String), keyId: try XCTUnwrap(doc["key_id"] as? String), vectors: vectors)
     }
 
-    /// The golden pose (crates/wire/tests/golden.rs) as the tracker would report it.
-    private func goldenResult() -> FrameResult {
-        let covariance = [Double](repeating: 0, count: 36)
-        return FrameResult(
-            frame: 375, t: 12.5, exposureS: nil,
-            maxilla: BodyPose(
-                cameraFromBody: pose(axisAngle: (0, 0.5, 0), translation: (-20, 10, 100)),
-                covariance: covariance, tags: [0, 1, 2], rejectedTags: [], rmsPx: 0.25, blurPx: nil, cellPx: 0
-            ),
-            mandible: BodyPose(
-                cameraFromBody: pose(axisAngle: (0.25, 0.5, 0), translation: (-20, 50, 100)),
-                covariance: covariance, tags: [12, 13], rejectedTags: [], rmsPx: 0.5, blurPx: nil, cellPx: 0
-            ),
-            maxillaFromMandible: pose(axisAngle: (0.25, 0, 0), translation: (0, 40, 0)),
-            maxillaScanFromMandibleScan: nil,
-            flags: ["mandible:single_tag"],
-            overlay: Overlay(tags: [], axes: []),
-            detectionMs: 1, poseMs: 1, fps: 30
+    /// A tracker that has just tracked the first fixture frame (both jaws in view, at 12.5 s),
+    /// and that frame's result: the link takes the result from the tracker, not from the app.
+    private func tracked() throws -> (Tracker, FrameResult) {
+        let set = try FixtureSet.load()
+        let image = set.frames[0]
+        let k = set.intrinsics
+        let tracker = try Tracker(settings: defaultSettings(), markerJson: nil)
+        let result = try tracker.trackLuma(
+            luma: Data(image.pixels), width: UInt32(image.width), height: UInt32(image.height),
+            bytesPerRow: UInt32(image.width),
+            intrinsics: Intrinsics(fx: k[0], fy: k[1], cx: k[2], cy: k[3], k1: k[4], k2: k[5]),
+            t: 12.5, exposureS: nil
         )
+        XCTAssertNotNil(result.maxillaFromMandible, "the fixture frame shows both jaws")
+        return (tracker, result)
     }
 
     private var transports: [MemoryTransport] = []
@@ -77,12 +73,13 @@ final class LinkTests: XCTestCase {
         let encoder = try LinkEncoder(keyHex: golden.keyHex, insecurePlaintext: false)
         XCTAssertEqual(encoder.keyId(), golden.keyId)
         let session = try link(encoder)
-        try session.send(goldenResult())
+        let (tracker, result) = try tracked()
+        try session.send(frame: result.frame, of: tracker)
         session.queue.sync {}
         XCTAssertEqual(session.dropped, 1, "dropped while the connection is not ready")
         transports[0].become(.ready)
         for _ in 0..<3 {
-            try session.send(goldenResult())
+            try session.send(frame: result.frame, of: tracker)
         }
         session.queue.sync {}
         let sent = transports[0].sent
@@ -96,28 +93,38 @@ final class LinkTests: XCTestCase {
         }
     }
 
-    func testAPlaintextDatagramCarriesTheGoldenBody() throws {
+    func testAPlaintextDatagramCarriesTheLibrarysBodyInTheGoldenLayout() throws {
         let golden = try golden()
         let encoder = try LinkEncoder(keyHex: nil, insecurePlaintext: true)
         let session = try link(encoder)
         transports[0].become(.ready)
-        try session.send(goldenResult())
+        let (tracker, result) = try tracked()
+        try session.send(frame: result.frame, of: tracker)
         session.queue.sync {}
         let ours = try XCTUnwrap(transports[0].sent.first)
-        let reference = try XCTUnwrap(golden.vectors["pose_plaintext"])
-        XCTAssertEqual(ours.count, reference.count)
-        XCTAssertEqual(ours.prefix(8), reference.prefix(8))
+        let layout = try XCTUnwrap(golden.vectors["pose_plaintext"])
+        XCTAssertEqual(ours.count, layout.count)
+        XCTAssertEqual(ours.prefix(8), layout.prefix(8), "magic JAWT, version, pose, plaintext, reserved")
         XCTAssertEqual(ours.f64(at: 32), 12.5)
-        XCTAssertEqual(ours.u64(at: 40), 375)
-        XCTAssertEqual(ours.u32(at: 48), reference.u32(at: 48), "the same bodies present")
-        XCTAssertEqual(ours.u32(at: 52), reference.u32(at: 52), "the same flags")
-        for slot in 0..<21 {
-            XCTAssertEqual(ours.f64(at: 56 + 8 * slot), reference.f64(at: 56 + 8 * slot), accuracy: 1e-12, "pose number \(slot)")
-        }
-        for body in 0..<2 {
-            XCTAssertEqual(ours.u32(at: 224 + 12 * body), reference.u32(at: 224 + 12 * body), "tag mask")
-            XCTAssertEqual(ours[ours.startIndex + 228 + 12 * body], reference[reference.startIndex + 228 + 12 * body], "tag count")
-            XCTAssertEqual(ours.f32(at: 232 + 12 * body), reference.f32(at: 232 + 12 * body), "RMS")
+        XCTAssertEqual(ours.u64(at: 40), result.frame)
+        XCTAssertEqual(ours.u32(at: 48), 7, "both bodies and the jaw present")
+        // The body is the library's encoding of the tracker's result, carried unchanged.
+        let direct = try LinkEncoder(keyHex: nil, insecurePlaintext: true).encode(tracker: tracker, frame: result.frame)
+        XCTAssertEqual(ours.count, direct.count)
+        XCTAssertEqual(ours.dropFirst(32), direct.dropFirst(32))
+        let relative = try XCTUnwrap(result.maxillaFromMandible)
+        // Poses from byte 56, seven numbers each (w, x, y, z, then the translation); the jaw third.
+        XCTAssertEqual(ours.f64(at: 56 + 8 * (14 + 4)), relative[3], accuracy: 1e-9, "maxilla_from_mandible x")
+    }
+
+    func testOnlyTheFrameJustTrackedIsSent() throws {
+        let session = try link(try LinkEncoder(keyHex: nil, insecurePlaintext: true))
+        let (tracker, result) = try tracked()
+        XCTAssertThrowsError(try session.send(frame: result.frame + 1, of: tracker)) { error in
+            guard case JawTrackError.InvalidArgument = error else {
+                return XCTFail("expected InvalidArgument, got \(error)")
+            }
+            XCTAssertTrue(userText(error).contains("not the last frame tracked"), userText(error))
         }
     }
 

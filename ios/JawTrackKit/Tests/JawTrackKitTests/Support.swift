@@ -353,17 +353,3 @@ extension Data {
         Data((0..<8).map { UInt8(truncatingIfNeeded: value >> (8 * UInt64($0))) })
     }
 }
-
-/// A 4×4 row-major pose from an axis-angle rotation (rad) and a translation (mm).
-func pose(axisAngle r: (Double, Double, Double), translation t: (Double, Double, Double)) -> [Double] {
-    let angle = (r.0 * r.0 + r.1 * r.1 + r.2 * r.2).squareRoot()
-    let (x, y, z) = angle > 0 ? (r.0 / angle, r.1 / angle, r.2 / angle) : (1, 0, 0)
-    let (c, s) = (cos(angle), sin(angle))
-    let v = 1 - c
-    return [
-        c + x * x * v, x * y * v - z * s, x * z * v + y * s, t.0,
-        y * x * v + z * s, c + y * y * v, y * z * v - x * s, t.1,
-        z * x * v - y * s, z * y * v + x * s, c + z * z * v, t.2,
-        0, 0, 0, 1,
-    ]
-}
