@@ -29,6 +29,7 @@
 mod adjust;
 mod focal;
 mod session;
+mod views;
 
 use adjust::{Adjustment, adjust};
 pub use focal::{FOCUS_MOVED, FocalCheck, check_focal};
@@ -36,6 +37,7 @@ use jawtrack_marker::{BodyKind, BodyProvenance, Marker, MarkerError, PrintError,
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};
 use nalgebra::{Isometry3, Matrix3, Point2, Point3, Rotation3, Unit, Vector2, Vector3};
 pub use session::{BodyRefinement, Kept, Refinement, SessionOptions, refine};
+pub use views::{BodyOutcome, MIN_TURN_DEG, ViewOutcome, ViewSelector};
 
 /// A tag seen in a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,29 +3,21 @@
 //! the app hands no pixels over twice), says which tags still need views, solves with
 //! `jawtrack_calibration::calibrate` and writes the calibrated marker file.
 //!
-//! At 30–60 fps neighbouring frames repeat one another, and a view counted per frame would make
-//! "three views" a tenth of a second of the marker held still. So a frame adds a view of a body
-//! only when the body has turned by at least 5° (`MIN_TURN_DEG`) from every view of it kept so
-//! far, or shows a tag that no view kept within that turn showed: views count the angles a tag
-//! was seen from, which is what places it.
+//! Which frames are new views is the calibration library's rule
+//! ([`jawtrack_calibration::ViewSelector`]): a body must have turned, or show a tag it had not.
 
 use crate::engine::TrackedView;
 use crate::error::invalid;
 use crate::{JawTrackError, Tracker, lock};
 use jawtrack_calibration::{
-    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, SeenTag, calibrate,
+    Calibration, CalibrationFrame, CalibrationOptions, Finding, FocalCheck, MIN_TURN_DEG, ViewSelector, calibrate,
 };
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_recording::{Overwrite, RecordingError, write_file_atomic};
-use nalgebra::UnitQuaternion;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
-/// How far a body must turn (°) from every view of it kept for a frame to add another view
-/// (unless it shows a tag those views did not); [`CalibrationProgress::min_turn_deg`] says it.
-pub(crate) const MIN_TURN_DEG: f64 = 5.0;
-
-/// What the last frame gave one body.
+/// What the last frame gave one body ([`jawtrack_calibration::ViewOutcome`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, uniffi::Enum)]
 pub enum ViewOutcome {
     /// A new view of the body.
@@ -37,6 +29,18 @@ pub enum ViewOutcome {
     SameView,
     /// Two tags or more, but the tracker did not solve the body, so its turn is unknown.
     NotTracked,
+}
+
+impl From<jawtrack_calibration::ViewOutcome> for ViewOutcome {
+    fn from(o: jawtrack_calibration::ViewOutcome) -> Self {
+        use jawtrack_calibration::ViewOutcome as V;
+        match o {
+            V::Added => ViewOutcome::Added,
+            V::TooFewTags => ViewOutcome::TooFewTags,
+            V::SameView => ViewOutcome::SameView,
+            V::NotTracked => ViewOutcome::NotTracked,
+        }
+    }
 }
 
 /// One body's views so far.
@@ -155,20 +159,13 @@ pub struct MarkerCalibrationResult {
     pub marker_json: String,
 }
 
-/// A view of one body kept: its turn and the tags it showed (sorted).
-#[derive(Debug, Clone)]
-struct Kept {
-    rotation: UnitQuaternion<f64>,
-    ids: Vec<u32>,
-}
-
 /// Everything behind the lock.
 #[derive(Debug, Clone)]
 struct State {
     /// The views: each frame's tags of the bodies it added a view of.
     frames: Vec<CalibrationFrame>,
-    /// Per body of the marker, the views kept.
-    kept: Vec<Vec<Kept>>,
+    /// Which frames were new views of each body.
+    selector: ViewSelector,
     /// Per body, what the last frame gave it and how many of its tags it showed.
     last: Vec<Option<(ViewOutcome, u32)>>,
     /// The last frame added a view.
@@ -182,11 +179,11 @@ struct State {
 }
 
 impl State {
-    fn new(bodies: usize) -> Self {
+    fn new(marker: &Marker) -> Self {
         State {
             frames: Vec::new(),
-            kept: vec![Vec::new(); bodies],
-            last: vec![None; bodies],
+            selector: ViewSelector::new(marker),
+            last: vec![None; marker.bodies.len()],
             added: false,
             note: String::new(),
             generation: 0,
@@ -228,7 +225,7 @@ impl Calibrator {
             Some(text) => starting_marker(Marker::from_json(&text)?)?,
             None => Marker::default(),
         };
-        let state = Mutex::new(State::new(marker.bodies.len()));
+        let state = Mutex::new(State::new(&marker));
         Ok(Arc::new(Calibrator { marker, min_views: min_views as usize, state }))
     }
 
@@ -246,7 +243,7 @@ impl Calibrator {
 
     /// Forgets the views and the solve: a new calibration.
     pub fn reset(&self) {
-        *lock(&self.state) = State::new(self.marker.bodies.len());
+        *lock(&self.state) = State::new(&self.marker);
     }
 
     /// Calibrates the marker from the views so far. Refused while no tag has enough views
@@ -304,43 +301,26 @@ impl Calibrator {
             state.note = "no frame to add: the tracker has tracked none, or its last frame failed".into();
             return self.progress_of(&state);
         };
-        let mut tags = Vec::new();
+        let rotations: Vec<_> = view.poses.iter().map(|(k, p)| (*k, p.rotation())).collect();
+        let (outcomes, frame) = state.selector.offer(view.camera, &view.tags, &rotations);
         let mut words = Vec::new();
-        for (b, body) in self.marker.bodies.iter().enumerate() {
-            let mut seen: Vec<&SeenTag> = view.tags.iter().filter(|s| body.tags.iter().any(|t| t.id == s.id)).collect();
-            seen.sort_by_key(|s| s.id);
-            seen.dedup_by_key(|s| s.id);
-            let ids: Vec<u32> = seen.iter().map(|s| s.id).collect();
-            let pose = view.poses.iter().find(|(k, _)| *k == body.kind).map(|(_, p)| p.rotation());
-            let outcome = match pose {
-                _ if ids.len() < 2 => ViewOutcome::TooFewTags,
-                None => ViewOutcome::NotTracked,
-                Some(rotation) => {
-                    let near = |k: &Kept| k.rotation.angle_to(&rotation).to_degrees() < MIN_TURN_DEG;
-                    let covered = |k: &Kept| ids.iter().all(|id| k.ids.binary_search(id).is_ok());
-                    if state.kept[b].iter().any(|k| near(k) && covered(k)) {
-                        ViewOutcome::SameView
-                    } else {
-                        state.kept[b].push(Kept { rotation, ids: ids.clone() });
-                        tags.extend(seen.iter().map(|s| **s));
-                        ViewOutcome::Added
-                    }
+        for (b, o) in outcomes.iter().enumerate() {
+            state.last[b] = Some((o.outcome.into(), count(o.tags_seen)));
+            let name = o.body.name();
+            words.push(match o.outcome {
+                jawtrack_calibration::ViewOutcome::Added => {
+                    format!("{name}: view {} added", state.selector.views(o.body))
                 }
-            };
-            state.last[b] = Some((outcome, count(ids.len())));
-            let name = body.kind.name();
-            words.push(match outcome {
-                ViewOutcome::Added => format!("{name}: view {} added", state.kept[b].len()),
-                ViewOutcome::TooFewTags => {
-                    format!("{name}: {} tag(s) seen, a view needs two or more", ids.len())
+                jawtrack_calibration::ViewOutcome::TooFewTags => {
+                    format!("{name}: {} tag(s) seen, a view needs two or more", o.tags_seen)
                 }
-                ViewOutcome::SameView => format!("{name}: seen from this angle already"),
-                ViewOutcome::NotTracked => format!("{name}: not tracked in this frame"),
+                jawtrack_calibration::ViewOutcome::SameView => format!("{name}: seen from this angle already"),
+                jawtrack_calibration::ViewOutcome::NotTracked => format!("{name}: not tracked in this frame"),
             });
         }
-        state.added = !tags.is_empty();
-        if state.added {
-            state.frames.push(CalibrationFrame { camera: view.camera, tags });
+        state.added = frame.is_some();
+        if let Some(frame) = frame {
+            state.frames.push(frame);
             state.generation += 1;
         }
         state.note = words.join("; ");
@@ -358,7 +338,7 @@ impl Calibrator {
                     id: t.id,
                     body: body_name(body.kind),
                     face: count(t.face),
-                    views: count(state.kept[b].iter().filter(|k| k.ids.binary_search(&t.id).is_ok()).count()),
+                    views: count(state.selector.tag_views(body.kind, t.id)),
                 })
                 .collect();
             body_tags.sort_by_key(|t| t.id);
@@ -366,7 +346,7 @@ impl Calibrator {
                 body_tags.iter().filter(|t| (t.views as usize) < self.min_views).map(|t| t.id).collect();
             bodies.push(BodyViews {
                 body: body_name(body.kind),
-                views: count(state.kept[b].len()),
+                views: count(state.selector.views(body.kind)),
                 last: state.last[b].map(|(o, _)| o),
                 last_tags: state.last[b].map_or(0, |(_, n)| n),
                 tags_ready: count(body_tags.len() - needs_views.len()),

@@ -3,9 +3,10 @@
 
 use super::*;
 use crate::{Intrinsics, default_settings};
+use jawtrack_calibration::SeenTag;
 use jawtrack_marker::{PrintError, TagProvenance};
 use jawtrack_pose::{CameraIntrinsics, Pose};
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Point3, UnitQuaternion, Vector3};
 
 fn camera() -> CameraIntrinsics {
     CameraIntrinsics::pinhole(1500.0, 1500.0, 959.5, 539.5)
