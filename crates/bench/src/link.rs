@@ -12,7 +12,7 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_pose::Pose;
-use jawtrack_wire::{BodyPose, Key, PosePacket, Security, Session, encode_pose, unix_ms};
+use jawtrack_wire::{Key, PacketBody, PosePacket, Security, Session, encode_pose, unix_ms};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use serde_json::Value;
@@ -103,7 +103,7 @@ fn jawtrack() -> Result<PathBuf> {
 fn packet(i: u64, rate: f64) -> PosePacket {
     let t = i as f64 / rate;
     let angle = 0.2 * (0.5 - 0.5 * (std::f64::consts::TAU * t).cos());
-    let body = |y: f64| BodyPose {
+    let body = |y: f64| PacketBody {
         camera_from_body: Pose::from_axis_angle(Vector3::new(0.0, 0.3, 0.0), Vector3::new(0.0, y, 100.0)),
         tags_mask: 0b111,
         tag_count: 3,

@@ -278,7 +278,7 @@ fn checked_len(
 
 fn summarise(r: &crate::FrameResult) -> JtFrameSummary {
     let m16 = |v: &[f64]| -> [f64; 16] { v.try_into().unwrap_or([0.0; 16]) };
-    let body = |b: &Option<crate::BodyPose>| match b {
+    let body = |b: &Option<crate::BodyResult>| match b {
         Some(b) => JtBody {
             found: true,
             camera_from_body: m16(&b.camera_from_body),

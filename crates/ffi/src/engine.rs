@@ -11,16 +11,16 @@ use jawtrack_calibration::SeenTag;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use jawtrack_recording::{BiteRecord, FrameRecord};
-use jawtrack_tracker::{BodyResult, Flag, Tracker, TrackerConfig};
+use jawtrack_tracker::{Flag, Tracker, TrackerConfig};
 use nalgebra::{Point3, Vector3};
 use std::collections::VecDeque;
 
 /// Length of the axes drawn on each body (mm).
 const AXIS_MM: f64 = 10.0;
 
-/// One body in a frame's result.
+/// One body in a frame's result (the tracker's `BodyResult`, for the app).
 #[derive(Debug, Clone, PartialEq, uniffi::Record)]
-pub struct BodyPose {
+pub struct BodyResult {
     /// Maps the body's marker frame into the camera frame: 4×4 row-major, mm.
     pub camera_from_body: Vec<f64>,
     /// 6×6 covariance of (rotation vector [rad], translation [mm]), row-major.
@@ -86,9 +86,9 @@ pub struct FrameResult {
     /// How long the sensor exposed the frame (s), when the camera said; recorded with it.
     pub exposure_s: Option<f64>,
     /// The upper jaw's marker, if solved.
-    pub maxilla: Option<BodyPose>,
+    pub maxilla: Option<BodyResult>,
     /// The lower jaw's marker, if solved.
-    pub mandible: Option<BodyPose>,
+    pub mandible: Option<BodyResult>,
     /// The mandible marker in the maxilla marker's frame, 4×4 row-major.
     pub maxilla_from_mandible: Option<Vec<f64>>,
     /// The lower scan in the upper scan (after the intercuspation step), 4×4 row-major.
@@ -294,7 +294,7 @@ impl Engine {
                 Some(AxisOverlay { body: kind_name(kind), origin, ends: ends?.concat() })
             })
             .collect();
-        let body = |b: &BodyResult| BodyPose {
+        let body = |b: &jawtrack_tracker::BodyResult| BodyResult {
             camera_from_body: b.camera_from_body.to_row_major().to_vec(),
             covariance: b.covariance.transpose().iter().copied().collect(),
             tags: b.tags.clone(),

@@ -33,7 +33,7 @@ pub use calibrator::{
 };
 pub use capture::{ReadoutChoice, next_exposure_cap, readout_for};
 pub use engine::{
-    AxisOverlay, BodyPose, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
+    AxisOverlay, BodyResult, FrameResult, IntercuspationResult, Overlay, TagOverlay, intrinsics_from_camera_matrix,
 };
 pub use error::JawTrackError;
 pub use plan::{CaptureFormat, CaptureGuidance, CapturePlanner, GuidanceKind, PlanChoice};

@@ -214,7 +214,7 @@ pub struct Header {
 
 /// One body's pose in a pose datagram.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BodyPose {
+pub struct PacketBody {
     /// Maps the body's marker frame into the camera frame (mm).
     pub camera_from_body: Pose,
     /// Tags used, bit `i` for tag id `i` (ids below 32).
@@ -233,9 +233,9 @@ pub struct PosePacket {
     /// The frame's index in the session.
     pub frame: u64,
     /// The upper jaw's marker, if solved.
-    pub maxilla: Option<BodyPose>,
+    pub maxilla: Option<PacketBody>,
     /// The lower jaw's marker, if solved.
-    pub mandible: Option<BodyPose>,
+    pub mandible: Option<PacketBody>,
     /// The mandible marker in the maxilla marker's frame.
     pub maxilla_from_mandible: Option<Pose>,
     /// Quality flags, bit `i` for [`Flag::ALL`]`[i]` (names this build does not know are not
@@ -273,7 +273,7 @@ pub enum Message {
 impl PosePacket {
     /// The packet for a recorded (or just tracked) frame.
     pub fn from_record(r: &FrameRecord) -> PosePacket {
-        let body = |b: &BodyRecord| BodyPose {
+        let body = |b: &BodyRecord| PacketBody {
             camera_from_body: b.camera_from_body,
             tags_mask: b.tags.iter().filter(|&&id| id < 32).fold(0, |m, &id| m | 1 << id),
             tag_count: b.tags.len().min(255) as u8,
@@ -297,7 +297,7 @@ impl PosePacket {
     /// The frame's line in a recording. Packets carry no covariance, rejected tags, blur or
     /// timings (a `defocused` body is a flag), and list tags only below id 32.
     pub fn to_record(&self, header: &Header, received_unix_s: f64) -> FrameRecord {
-        let body = |b: &BodyPose| BodyRecord {
+        let body = |b: &PacketBody| BodyRecord {
             camera_from_body: b.camera_from_body,
             tags: (0..32).filter(|i| b.tags_mask & (1 << i) != 0).collect(),
             rejected_tags: Vec::new(),
@@ -508,13 +508,13 @@ fn read_pose_body(b: &[u8]) -> Result<PosePacket, WireError> {
         }
         Ok(Pose::from_parts(UnitQuaternion::new_normalize(q), Vector3::new(v[4], v[5], v[6])))
     };
-    let body_at = |slot: usize, what: &str| -> Result<BodyPose, WireError> {
+    let body_at = |slot: usize, what: &str| -> Result<PacketBody, WireError> {
         let o = 192 + slot * 12;
         let rms_px = f32::from_le_bytes(b[o + 8..o + 12].try_into().unwrap_or([0; 4]));
         if !(rms_px.is_finite() && rms_px >= 0.0) {
             return Err(WireError::Malformed(format!("{what}'s RMS error {rms_px}")));
         }
-        Ok(BodyPose { camera_from_body: pose_at(slot, what)?, tags_mask: u32_at(o), tag_count: b[o + 4], rms_px })
+        Ok(PacketBody { camera_from_body: pose_at(slot, what)?, tags_mask: u32_at(o), tag_count: b[o + 4], rms_px })
     };
     Ok(PosePacket {
         t,
@@ -587,7 +587,7 @@ mod tests {
     }
 
     fn packet() -> PosePacket {
-        let body = |x: f64| BodyPose {
+        let body = |x: f64| PacketBody {
             camera_from_body: Pose::from_axis_angle(Vector3::new(0.1, -0.2, x), Vector3::new(x, -3.0, 110.0)),
             tags_mask: 0b1011,
             tag_count: 3,

@@ -4,7 +4,7 @@
 //! in the commit: a changed datagram breaks every phone in the field.
 
 use jawtrack_pose::Pose;
-use jawtrack_wire::{Ack, BodyPose, Key, Message, PosePacket, Security, decode, encode_ack, encode_pose};
+use jawtrack_wire::{Ack, Key, Message, PacketBody, PosePacket, Security, decode, encode_ack, encode_pose};
 use nalgebra::Vector3;
 use serde_json::{Value, json};
 
@@ -18,13 +18,13 @@ fn packet() -> PosePacket {
     PosePacket {
         t: 12.5,
         frame: 375,
-        maxilla: Some(BodyPose {
+        maxilla: Some(PacketBody {
             camera_from_body: Pose::from_axis_angle(Vector3::new(0.0, 0.5, 0.0), Vector3::new(-20.0, 10.0, 100.0)),
             tags_mask: 0b0000_0000_0111,
             tag_count: 3,
             rms_px: 0.25,
         }),
-        mandible: Some(BodyPose {
+        mandible: Some(PacketBody {
             camera_from_body: Pose::from_axis_angle(Vector3::new(0.25, 0.5, 0.0), Vector3::new(-20.0, 50.0, 100.0)),
             tags_mask: 0b0011 << 12,
             tag_count: 2,

@@ -50,7 +50,7 @@ public struct TrackingStatus: Equatable {
         defocused = result.defocused
     }
 
-    private static func jaw(_ pose: BodyPose?, detected: Int) -> Jaw {
+    private static func jaw(_ pose: BodyResult?, detected: Int) -> Jaw {
         guard let pose else {
             return Jaw(tags: detected, solved: false)
         }

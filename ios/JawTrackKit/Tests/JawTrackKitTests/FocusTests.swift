@@ -40,7 +40,7 @@ final class FocusTests: XCTestCase {
     }
 
     /// A solved body (for the jaws' colours).
-    private let body = BodyPose(
+    private let body = BodyResult(
         cameraFromBody: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 220, 0, 0, 0, 1], covariance: Array(repeating: 0, count: 36),
         tags: [1, 2], rejectedTags: [], rmsPx: 0.1, blurPx: 1, cellPx: 17
     )
