@@ -4,12 +4,14 @@
 //!
 //! Results are converted to JawTrack's pixel convention (centre of the top-left pixel at
 //! (0, 0); the C library reports +0.5 px) and keep the library's corner order (bottom-left,
-//! bottom-right, top-right, top-left of the upright tag).
+//! bottom-right, top-right, top-left of the upright tag). [`ReferenceDetector`] is a
+//! [`TagDetector`] backend, so it runs through the same calls as ours.
 
 // The one crate allowed to call C: every unsafe block below says why it is sound.
 #![allow(unsafe_code)]
 
 use apriltag_sys as sys;
+use jawtrack_apriltag::{DetectError, Detection, ImageView, TagDetector};
 
 /// Detector settings with the C library's meaning.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,6 +68,9 @@ pub struct ReferenceDetection {
     pub center: [f64; 2],
     /// Corners (px, our convention) in the library's order.
     pub corners: [[f64; 2]; 4],
+    /// Homography from tag coordinates ([−1, 1]², y down) to pixels (our convention),
+    /// row-major 3×3.
+    pub homography: [f64; 9],
 }
 
 /// Why the C library was not called.
@@ -175,12 +180,24 @@ impl ReferenceDetector {
             let items = (*dets).data.cast::<*mut sys::apriltag_detection_t>();
             for i in 0..n {
                 let d = &**items.add(i);
+                // The library's H maps to its pixels (+0.5); shifting its first two rows by half
+                // its third maps to ours. H is a 3×3 row-major matd_t when present.
+                let mut homography = [0.0; 9];
+                if let Some(h) = d.H.as_ref().filter(|h| h.nrows == 3 && h.ncols == 3 && !h.data.is_null()) {
+                    let c = std::slice::from_raw_parts(h.data, 9);
+                    for col in 0..3 {
+                        homography[col] = c[col] - 0.5 * c[6 + col];
+                        homography[3 + col] = c[3 + col] - 0.5 * c[6 + col];
+                        homography[6 + col] = c[6 + col];
+                    }
+                }
                 out.push(ReferenceDetection {
                     id: u32::try_from(d.id).unwrap_or(u32::MAX),
                     hamming: u32::try_from(d.hamming).unwrap_or(u32::MAX),
                     margin: d.decision_margin,
                     center: [d.c[0] - 0.5, d.c[1] - 0.5],
                     corners: d.p.map(|p| [p[0] - 0.5, p[1] - 0.5]),
+                    homography,
                 });
             }
             sys::apriltag_detections_destroy(dets);
@@ -196,6 +213,32 @@ impl Drop for ReferenceDetector {
             sys::apriltag_detector_destroy(self.td);
             sys::tag36h11_destroy(self.family);
         }
+    }
+}
+
+impl TagDetector for ReferenceDetector {
+    fn backend_name(&self) -> &'static str {
+        "apriltag-c"
+    }
+
+    /// The library's tags as [`Detection`]s; it measures no blur (`blur_px` is `None`).
+    fn detect_tags(&mut self, frame: &ImageView<'_>) -> Result<Vec<Detection>, DetectError> {
+        let found = self.detect(frame.data(), frame.width(), frame.height(), frame.stride()).map_err(|e| match e {
+            ReferenceError::BadImage(s) => DetectError::BadImage(s),
+            ReferenceError::Setup(s) => DetectError::BadConfig(s.to_owned()),
+        })?;
+        Ok(found
+            .into_iter()
+            .map(|d| Detection {
+                id: d.id,
+                hamming: d.hamming,
+                decision_margin: d.margin,
+                center: d.center,
+                corners: d.corners,
+                homography: d.homography,
+                blur_px: None,
+            })
+            .collect())
     }
 }
 

@@ -61,6 +61,11 @@ impl<'a> ImageView<'a> {
         self.stride
     }
 
+    /// The buffer as given: pixel (x, y) at `y * stride + x` (for a backend that reads it whole).
+    pub fn data(&self) -> &'a [u8] {
+        self.data
+    }
+
     /// Row `y` (exactly `width` pixels). Panics past the last row, like slice indexing.
     pub fn row(&self, y: usize) -> &'a [u8] {
         &self.data[y * self.stride..y * self.stride + self.width]

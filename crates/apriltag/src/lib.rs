@@ -20,7 +20,11 @@
 //!
 //! With `nthreads` > 1, quad fitting and decoding run on a thread pool ([`workers`]), with the
 //! same results as one thread.
+//!
+//! [`TagDetector`] is what any detector backend offers; ours and the C library's
+//! (`jawtrack-apriltag-reference`) implement it.
 
+mod backend;
 mod codes;
 
 pub mod clusters;
@@ -36,6 +40,7 @@ pub mod quads;
 pub mod threshold;
 pub mod workers;
 
+pub use backend::TagDetector;
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};
 pub use detector::{Detection, Detector};
