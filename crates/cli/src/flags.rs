@@ -5,9 +5,9 @@ use anyhow::{Context, Result};
 use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::{Recording, SessionId};
+use jawtrack_registration::Registration;
 use jawtrack_session::movements::MovementWindows;
 use jawtrack_session::{Anatomy, SessionError};
-use jawtrack_tracker::Registration;
 use std::path::{Path, PathBuf};
 
 /// `--session`, for the commands that read a recording: one session's frames. A file holding

@@ -1,5 +1,5 @@
 //! `jawtrack register`: where a marker sits in the scan of its printed harness, by ICP of the
-//! body's dodecahedron onto the scan (`jawtrack_occlusion::register`), written into the
+//! body's dodecahedron onto the scan (`jawtrack_registration::icp`), written into the
 //! registration file `jawtrack track --registration` reads. Each run fills in one body's
 //! entry, keeping whatever else the file holds, so the maxilla and the mandible are
 //! registered into one file one after the other.
@@ -8,9 +8,9 @@ use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_occlusion::Mesh;
-use jawtrack_occlusion::register::{Acceptance, IcpOptions, IcpResult, centred_init, marker_surface_samples, register};
 use jawtrack_pose::Pose;
-use jawtrack_tracker::Registration;
+use jawtrack_registration::Registration;
+use jawtrack_registration::icp::{Acceptance, IcpOptions, IcpResult, centred_init, marker_surface_samples, register};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 

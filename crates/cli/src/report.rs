@@ -7,12 +7,12 @@ use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args};
 use jawtrack_kinematics::Window;
 use jawtrack_recording::Recording;
+use jawtrack_registration::Registration;
 use jawtrack_report::{Anatomy, Centric, ContactsResult, Inputs, Windows};
 use jawtrack_session::anatomy::upper_scan_left;
 use jawtrack_session::arches::load_arch;
 use jawtrack_session::survey::survey;
 use jawtrack_session::{PoseSource, rest_of};
-use jawtrack_tracker::Registration;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -13,7 +13,8 @@ use jawtrack_marker::Marker;
 use jawtrack_offline::{FocalViews, Kept, Summary, closing_warnings, refine_marker, track_frame};
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
-use jawtrack_tracker::{FrameResult, Registration, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use jawtrack_registration::Registration;
+use jawtrack_tracker::{FrameResult, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

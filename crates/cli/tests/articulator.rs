@@ -145,9 +145,9 @@ fn tilted_anatomy(dir: &Path, tilt_deg: f64) -> (PathBuf, PathBuf, nalgebra::Uni
         "--out",
         s(&file),
     ]));
-    let reg = jawtrack_tracker::Registration {
+    let reg = jawtrack_registration::Registration {
         maxilla_scan_from_maxilla_marker: scan_from_head * m.head_from_maxilla,
-        ..jawtrack_tracker::Registration::identity()
+        ..jawtrack_registration::Registration::identity()
     };
     let reg_file = dir.join("registration.json");
     std::fs::write(&reg_file, reg.to_json()).expect("write");

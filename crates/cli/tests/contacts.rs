@@ -396,7 +396,7 @@ fn a_registration_maps_marker_poses_to_scan_poses() {
     let lower = lower_obj(dir.path(), 0.2, 60);
     // The mandible marker sits 5 mm below the lower scan's origin (and the maxilla marker at
     // the upper scan's); tracked 5 mm below the maxilla marker, the scans are in occlusion.
-    let mut reg = jawtrack_tracker::registration::Registration::identity();
+    let mut reg = jawtrack_registration::Registration::identity();
     reg.mandible_scan_from_mandible_marker =
         jawtrack_pose::Pose::from_axis_angle(nalgebra::Vector3::zeros(), nalgebra::Vector3::new(0.0, 0.0, -5.0));
     let reg_path = dir.path().join("reg.json");

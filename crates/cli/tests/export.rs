@@ -190,7 +190,7 @@ fn two_sessions_in_one_file_are_never_mixed() {
 #[test]
 fn transforms_for_cad_are_the_lower_scan_in_the_upper_scan_s_frame() {
     use jawtrack_pose::Pose;
-    use jawtrack_tracker::Registration;
+    use jawtrack_registration::Registration;
     use nalgebra::Vector3;
     let dir = tempfile::tempdir().expect("temp dir");
     let poses = tracked_hinge(dir.path());

@@ -5,7 +5,7 @@
 
 use jawtrack_occlusion::Mesh;
 use jawtrack_pose::Pose;
-use jawtrack_tracker::Registration;
+use jawtrack_registration::Registration;
 use nalgebra::{Point3, Vector3};
 use std::path::{Path, PathBuf};
 mod common;

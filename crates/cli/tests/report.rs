@@ -150,9 +150,9 @@ fn a_contacts_folder_puts_its_maps_and_teeth_in_the_report() {
     // The same contacts checked by the report itself, the scans placed through a registration
     // that puts the lower scan in its bite at the closed jaw.
     let rest = Rig::default().mounting.maxilla_from_mandible_rest();
-    let reg = jawtrack_tracker::Registration {
+    let reg = jawtrack_registration::Registration {
         mandible_scan_from_mandible_marker: rest,
-        ..jawtrack_tracker::Registration::identity()
+        ..jawtrack_registration::Registration::identity()
     };
     let reg_file = dir.path().join("registration.json");
     std::fs::write(&reg_file, reg.to_json()).expect("write");

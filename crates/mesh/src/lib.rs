@@ -1,6 +1,6 @@
 //! The one triangle mesh of JawTrack, in millimetres: tooth scans read by
-//! `jawtrack-occlusion` and the printable marker body built by `jawtrack-harness` are both a
-//! [`Mesh`].
+//! `jawtrack-occlusion` and `jawtrack-registration` and the printable marker body built by
+//! `jawtrack-harness` are all a [`Mesh`].
 //!
 //! - this file: the [`Mesh`] type and its geometry (corners, area normals, area, volume,
 //!   bounds, transforms, concatenation, Z-order);
@@ -9,11 +9,17 @@
 //!   [`Mesh::report`] (degenerate triangles, non-manifold and boundary edges, boundary loops,
 //!   components);
 //! - `write`: binary STL to any writer ([`Mesh::write_stl`]) or file, vertex-coloured PLY;
-//! - `error`: [`MeshError`], why a mesh could not be read, written or used.
+//! - `error`: [`MeshError`], why a mesh could not be read, written or used;
+//! - [`distance`]: exact signed distances from points to a mesh's surface, within a reach
+//!   (the contact queries of `jawtrack-occlusion`, the marker-to-scan ICP of
+//!   `jawtrack-registration`);
+//! - [`scenes`]: test meshes with known answers, and synthetic arches for benchmarks.
 
 mod check;
+pub mod distance;
 mod error;
 mod read;
+pub mod scenes;
 mod write;
 
 pub use check::{DisjointSets, MeshReport, PLAUSIBLE_EXTENT_MM};

@@ -5,7 +5,7 @@
 use crate::SessionError;
 use jawtrack_kinematics::{AnatomicalPoints, Mounting};
 use jawtrack_pose::Pose;
-use jawtrack_tracker::Registration;
+use jawtrack_registration::Registration;
 use nalgebra::Vector3;
 use std::path::Path;
 

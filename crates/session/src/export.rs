@@ -9,7 +9,7 @@ use crate::{SessionError, scan_pose::PosedFrame};
 use jawtrack_kinematics::{Displacement, Incisor};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{FrameRecord, Recording, RecordingHeader};
-use jawtrack_tracker::Registration;
+use jawtrack_registration::Registration;
 use std::io::Write;
 use std::path::Path;
 

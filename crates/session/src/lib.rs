@@ -99,7 +99,7 @@ pub enum SessionError {
         /// The file.
         path: String,
         /// Why.
-        source: jawtrack_tracker::RegistrationError,
+        source: jawtrack_registration::RegistrationError,
     },
     /// The points file could not be read.
     #[error("the points file {path}: {reason}")]

@@ -6,7 +6,7 @@ use crate::SessionError;
 use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
-use jawtrack_tracker::registration::mean_pose;
+use jawtrack_registration::mean_pose;
 
 /// The windows given, each with the flag that gave it (for messages).
 #[derive(Debug, Clone, Copy, Default)]

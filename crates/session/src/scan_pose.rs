@@ -6,7 +6,7 @@
 use crate::SessionError;
 use jawtrack_pose::Pose;
 use jawtrack_recording::{FrameRecord, Recording};
-use jawtrack_tracker::Registration;
+use jawtrack_registration::Registration;
 
 /// One frame with the scans' pose: its `frame` number, its time (s) and
 /// `maxilla_scan_from_mandible_scan`.

@@ -27,14 +27,12 @@
 pub mod bite;
 mod flicker;
 pub mod oblique;
-pub mod registration;
 pub mod roi;
 pub mod sharpness;
 pub mod smoothing;
 
 pub use bite::{Bite, BiteRefusal, BiteRule, BiteWindow};
 pub use jawtrack_recording::Flag;
-pub use registration::{IntercuspationCalibration, Registration, RegistrationError, calibrate_intercuspation};
 pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX, THIN_RATIO};
 pub use smoothing::{Smoother, SmootherConfig};
 
@@ -45,6 +43,7 @@ use jawtrack_pose::{
     BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, solve_pnp,
 };
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
+use jawtrack_registration::{IntercuspationCalibration, Registration, calibrate_intercuspation};
 use nalgebra::{Matrix6, Point2, Point3};
 use roi::{BodyState, Timed};
 use std::time::Instant;

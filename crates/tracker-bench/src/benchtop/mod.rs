@@ -37,9 +37,10 @@ use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, SeenTag, calibrate};
 use jawtrack_marker::Marker;
 use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_registration::{Registration, calibrate_intercuspation};
 use jawtrack_synth::SceneKind;
 use jawtrack_synth::scenes::{JawMotion, View};
-use jawtrack_tracker::{Registration, Tracker, TrackerConfig, calibrate_intercuspation};
+use jawtrack_tracker::{Tracker, TrackerConfig};
 use std::path::PathBuf;
 
 /// An orientation error above this is a flip (°).

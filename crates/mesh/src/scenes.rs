@@ -6,7 +6,7 @@
 //!   much of their occlusal surfaces is within a fraction of a millimetre: alone, a worst
 //!   case for the contact query; on crowns with buccal and lingual walls, closer to a scan.
 
-use crate::mesh::Mesh;
+use crate::Mesh;
 use nalgebra::Point3;
 
 /// A flat square of side `size` (mm) at height `z`, centred on the z axis, `n` × `n` cells,

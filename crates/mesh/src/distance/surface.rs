@@ -6,7 +6,7 @@
 use super::Nearest;
 use super::bend::bend_towards;
 use super::triangle::{Feature, closest_on_triangle};
-use crate::mesh::Mesh;
+use crate::Mesh;
 use nalgebra::{Point3, Vector3};
 
 /// Per-triangle data for the sign where the nearest point is on an edge or a corner: their
@@ -65,7 +65,7 @@ impl Surface {
                 Point3::from((a.coords + b.coords + c.coords) / 3.0)
             })
             .collect();
-        let original = crate::mesh::z_order(&centres, 0.5);
+        let original = crate::z_order(&centres, 0.5);
         let reordered = Mesh {
             vertices: mesh.vertices.clone(),
             triangles: original.iter().map(|&t| mesh.triangles[t as usize]).collect(),

@@ -22,9 +22,9 @@
 //! the guess (reached from too far off, possibly a copy with other faces), fits badly, or
 //! found too little of the surface in the scan.
 
-use crate::distance::SurfaceIndex;
-use crate::mesh::Mesh;
 use jawtrack_marker::{BodyKind, Dodecahedron, Marker};
+use jawtrack_mesh::Mesh;
+use jawtrack_mesh::distance::SurfaceIndex;
 use jawtrack_pose::Pose;
 use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector3, Vector6};
 

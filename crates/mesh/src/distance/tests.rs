@@ -3,7 +3,7 @@
 //! bumpy sheets and on a sphere seen from both sides.
 
 use super::*;
-use crate::mesh::Mesh;
+use crate::Mesh;
 
 fn bumpy(n: usize) -> Mesh {
     // A height field z = sin·cos over 10 × 10 mm, normals up (+z).

@@ -6,11 +6,11 @@
 
 use jawtrack_harness::{HarnessParams, body_mesh};
 use jawtrack_marker::{BodyKind, Marker};
-use jawtrack_occlusion::register::{
+use jawtrack_mesh::{Mesh, scenes};
+use jawtrack_pose::Pose;
+use jawtrack_registration::icp::{
     Acceptance, IcpOptions, IcpResult, RegisterError, SurfaceSample, centred_init, marker_surface_samples, register,
 };
-use jawtrack_occlusion::{Mesh, scenes};
-use jawtrack_pose::Pose;
 use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
 use std::time::Instant;

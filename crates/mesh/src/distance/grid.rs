@@ -4,7 +4,7 @@
 //! within the focus may find anything in) that let a query skip most of it.
 
 use super::surface::Surface;
-use crate::mesh::Mesh;
+use crate::Mesh;
 use nalgebra::{Point3, Vector3};
 
 /// Nodes per block edge of the sparse grid.

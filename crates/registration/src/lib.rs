@@ -1,0 +1,23 @@
+//! Registration: where each marker sits in its arch's intra-oral scan, so that the tracked jaw
+//! motion (marker against marker) becomes the motion of the lower tooth scan against the upper.
+//!
+//! - `file`, re-exported here: the registration file ([`Registration`], written by `jawtrack
+//!   register`, read by `track --registration`, the clinical commands, the viewer and the app),
+//!   its maths (`maxilla_from_mandible` to `maxilla_scan_from_mandible_scan`) and the
+//!   maximal-intercuspation correction ([`calibrate_intercuspation`]);
+//! - [`icp`] (feature `icp`, on by default): the marker-to-scan ICP that finds where a marker's
+//!   frame sits in a scan of its printed harness, and judges the fit.
+//!
+//! The tracker applies a registration and the readers of recordings (session, viewer) use one,
+//! so this crate sits below them and links no tag detector. The ICP needs `jawtrack-mesh`; the
+//! tracker, and through it the iPhone library, depend on this crate without the `icp` feature
+//! and so link no mesh code.
+
+mod file;
+#[cfg(feature = "icp")]
+pub mod icp;
+
+pub use file::{
+    IntercuspationCalibration, REGISTRATION_VERSION, Registration, RegistrationError, Units, calibrate_intercuspation,
+    mean_pose,
+};
