@@ -117,7 +117,7 @@ pub struct FrameResult {
 }
 
 /// The intercuspation step's outcome: the bite accepted (by the tracker's one rule,
-/// `jawtrack_tracker::bite`) and the registration correction it made.
+/// `jawtrack_registration::bite`) and the registration correction it made.
 #[derive(Debug, Clone, PartialEq, uniffi::Record)]
 pub struct IntercuspationResult {
     /// The time of the last frame of the held bite (s, the frames' clock).

@@ -9,8 +9,9 @@ use jawtrack_calibration::CalibrationError;
 use jawtrack_marker::MarkerError;
 use jawtrack_pose::GeometryError;
 use jawtrack_recording::RecordingError;
+use jawtrack_registration::BiteRefusal;
 use jawtrack_registration::RegistrationError;
-use jawtrack_tracker::{BiteRefusal, TrackError};
+use jawtrack_tracker::TrackError;
 use jawtrack_wire::{KeyError, WireError};
 
 /// What went wrong, as the app sees it. Every variant's `message` is written for people.

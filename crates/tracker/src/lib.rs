@@ -24,14 +24,12 @@
 //! ([`TrackerConfig::readout_s`]) every corner is carried from its row's time to the frame's
 //! before the bodies are solved, so both are reported at the same instant.
 
-pub mod bite;
 mod flicker;
 pub mod oblique;
 pub mod roi;
 pub mod sharpness;
 pub mod smoothing;
 
-pub use bite::{Bite, BiteRefusal, BiteRule, BiteWindow};
 pub use jawtrack_recording::Flag;
 pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX, THIN_RATIO};
 pub use smoothing::{Smoother, SmootherConfig};
@@ -43,7 +41,9 @@ use jawtrack_pose::{
     BodyPose, CameraIntrinsics, Observation, PnpError, PnpOptions, Pose, RollingShutter, Velocity, solve_pnp,
 };
 use jawtrack_recording::{BodyRecord, FrameRecord, TimingsRecord};
-use jawtrack_registration::{IntercuspationCalibration, Registration, calibrate_intercuspation};
+use jawtrack_registration::{
+    Bite, BiteRefusal, BiteRule, BiteWindow, IntercuspationCalibration, Registration, calibrate_intercuspation,
+};
 use nalgebra::{Matrix6, Point2, Point3};
 use roi::{BodyState, Timed};
 use std::time::Instant;

@@ -7,9 +7,10 @@ use jawtrack_apriltag::{Detection, ImageView};
 use jawtrack_marker::{BodyKind, BodyProvenance, Marker, TagProvenance};
 use jawtrack_pose::pnp::{pose_jacobian, projection_jacobian};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
+use jawtrack_registration::BiteRefusal;
 use jawtrack_registration::Registration;
 use jawtrack_synth::{Realism, SceneKind, SceneOptions, SynthConfig, Synthesizer};
-use jawtrack_tracker::{BiteRefusal, Flag, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use jawtrack_tracker::{Flag, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector2, Vector3};
 
 /// Rows of the frames the hand-made detections stand for (a global shutter ignores them).

@@ -9,7 +9,7 @@
 //! computed here, not in the browser (`jawtrack_kinematics`), from the rest position, which
 //! the "Calibrate" button sets to the mean of the last frames while the patient bites in
 //! maximal intercuspation, if the tracker's one rule accepts them as a held bite
-//! (`jawtrack_tracker::bite`); the first frame until then. Replayed, the recording's own rest
+//! (`jawtrack_registration::bite`); the first frame until then. Replayed, the recording's own rest
 //! (its last bite line) is used when it has one. Bites accepted live are handed to the
 //! receiver ([`LiveState::take_bites`]) to be written into the recording.
 
@@ -24,7 +24,7 @@ use jawtrack_marker::{BodyKind, DEFAULT_EDGE_MM, Dodecahedron, Marker};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{BiteRecord, FrameRecord, SessionId};
 use jawtrack_registration::Registration;
-use jawtrack_tracker::{BiteRule, BiteWindow};
+use jawtrack_registration::{BiteRule, BiteWindow};
 use jawtrack_wire::link::Counters;
 use serde_json::{Value, json};
 use std::net::SocketAddr;

@@ -7,8 +7,8 @@
 //! the step is accepted only over a short window of enough frames, spanning enough time, in
 //! which the jaw stayed within a small spread ([`BiteRule`]).
 
+use crate::mean_pose;
 use jawtrack_pose::Pose;
-use jawtrack_registration::mean_pose;
 use std::collections::VecDeque;
 
 /// When a bite is accepted.
