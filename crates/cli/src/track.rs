@@ -143,8 +143,8 @@ pub(crate) struct TrackArgs {
     linear_edges: bool,
     /// Search only where the markers are expected once tracked (the whole frame every 30
     /// frames and whenever a body is missing); `false` searches every frame whole.
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    roi: bool,
+    #[arg(long, alias = "roi", default_value_t = true, action = clap::ArgAction::Set)]
+    region_search: bool,
     /// Smooth the jaw pose (One-Euro filter; never more than one frame of lag).
     #[arg(long)]
     smooth: bool,
@@ -260,7 +260,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
             linear_edges: a.linear_edges,
             ..DetectorConfig::default()
         },
-        search: SearchConfig { roi: a.roi, ..SearchConfig::default() },
+        search: SearchConfig { region_search: a.region_search, ..SearchConfig::default() },
         smoother: a.smooth.then(SmootherConfig::default),
         readout_s,
         exposure_s: exposure_s.unwrap_or(TrackerConfig::default().exposure_s),
@@ -367,7 +367,7 @@ fn header(
     header.exposure_s = exposure_s;
     header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
     header.settings = serde_json::json!({
-        "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "roi": a.roi,
+        "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "region_search": a.region_search,
         "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
         "refine_marker": a.refine_marker.as_ref().map(|p| p.display().to_string()),
     });

@@ -49,7 +49,7 @@ fn main() {
     let k = JtIntrinsics { fx: 1500.0, fy: 1500.0, cx: 959.5, cy: 539.5, k1: 0.0, k2: 0.0 };
     let config = TrackerConfig {
         detector: DetectorConfig { quad_decimate: 2.0, nthreads: 1, linear_edges: true, ..DetectorConfig::default() },
-        search: SearchConfig { roi: true, ..SearchConfig::default() },
+        search: SearchConfig { region_search: true, ..SearchConfig::default() },
         ..TrackerConfig::default()
     };
     let n = frames.len();

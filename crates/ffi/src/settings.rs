@@ -87,7 +87,7 @@ impl Settings {
                 linear_edges: self.linear_edges,
                 ..DetectorConfig::default()
             },
-            search: SearchConfig { roi: self.region_search, ..SearchConfig::default() },
+            search: SearchConfig { region_search: self.region_search, ..SearchConfig::default() },
             smoother: self.smooth.then(SmootherConfig::default),
             readout_s: self.readout_s,
             ..TrackerConfig::default()

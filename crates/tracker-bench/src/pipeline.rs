@@ -101,7 +101,7 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
         for roi in [false, true] {
             let config = TrackerConfig {
                 detector: DetectorConfig { nthreads: 1, ..DetectorConfig::default() },
-                search: SearchConfig { roi, ..SearchConfig::default() },
+                search: SearchConfig { region_search: roi, ..SearchConfig::default() },
                 ..TrackerConfig::default()
             };
             // times[frame] = (detection, pose) per pass

@@ -52,7 +52,7 @@ use std::time::Instant;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SearchConfig {
     /// Search only where the markers are expected once both are tracked.
-    pub roi: bool,
+    pub region_search: bool,
     /// Search the whole frame at least every this many frames (new tags, a second pair).
     pub full_frame_every: usize,
     /// The expected region grows by this fraction of its larger side on each side.
@@ -63,7 +63,7 @@ pub struct SearchConfig {
 
 impl Default for SearchConfig {
     fn default() -> Self {
-        SearchConfig { roi: true, full_frame_every: 30, margin: 0.1, min_margin_px: 32.0 }
+        SearchConfig { region_search: true, full_frame_every: 30, margin: 0.1, min_margin_px: 32.0 }
     }
 }
 
@@ -463,7 +463,7 @@ impl Tracker {
     /// Where both markers are expected, when both are tracked and a full search is not due.
     fn expected_region(&self, frame: &ImageView<'_>, camera: &CameraIntrinsics, t: f64) -> Option<Roi> {
         let s = &self.config.search;
-        if !s.roi || self.since_full + 1 >= s.full_frame_every {
+        if !s.region_search || self.since_full + 1 >= s.full_frame_every {
             return None;
         }
         let recent = |b: &BodyState| b.last().is_some_and(|l| self.recent(l.0, t));

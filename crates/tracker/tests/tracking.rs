@@ -61,8 +61,10 @@ fn steady_tracking_searches_only_the_expected_region() {
 }
 
 fn tracker_full_frame_ids(view: &ImageView<'_>, camera: &CameraIntrinsics) -> Vec<u32> {
-    let config =
-        TrackerConfig { search: SearchConfig { roi: false, ..SearchConfig::default() }, ..TrackerConfig::default() };
+    let config = TrackerConfig {
+        search: SearchConfig { region_search: false, ..SearchConfig::default() },
+        ..TrackerConfig::default()
+    };
     let mut t = Tracker::new(Marker::default(), config).expect("tracker");
     let r = t.track(view, camera, 0.0).expect("tracks");
     r.detections.iter().map(|d| d.id).collect()
@@ -421,7 +423,7 @@ fn new_settings_keep_the_motion() {
     let mut other = smoothing;
     other.detector.nthreads = 2;
     other.pnp.max_iterations = 60;
-    other.search.roi = false;
+    other.search.region_search = false;
     other.max_rms_px = 3.0;
     let r = lone_frame(Some(other));
     assert_eq!(r.flags, unchanged.flags);

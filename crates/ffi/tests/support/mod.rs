@@ -28,7 +28,7 @@ pub fn frames() -> Vec<PathBuf> {
 pub fn rust_poses() -> Vec<Option<[f64; 16]>> {
     let config = TrackerConfig {
         detector: DetectorConfig { quad_decimate: 2.0, nthreads: 1, linear_edges: true, ..DetectorConfig::default() },
-        search: SearchConfig { roi: true, ..SearchConfig::default() },
+        search: SearchConfig { region_search: true, ..SearchConfig::default() },
         ..TrackerConfig::default()
     };
     let mut tracker = Tracker::new(Marker::default(), config).expect("tracker");
