@@ -7,9 +7,10 @@ use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, registrat
 use crate::numbers::{clean_json, fixed};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use jawtrack_kinematics::Anatomy;
 use jawtrack_kinematics::articulator::name;
 use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Displacement, Movements, Side, Window, co_mi};
-use jawtrack_session::{Anatomy, rest_of};
+use jawtrack_session::rest_of;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 

@@ -196,13 +196,9 @@ fn write_report(dir: &Path) -> Result<PathBuf> {
     let inputs = jawtrack_report::Inputs {
         recording: &rec,
         recording_name: "poses_calibrated.jsonl".into(),
-        anatomy: jawtrack_report::Anatomy {
-            mounting: standard.mounting,
-            reference_plane: standard.reference_plane.into(),
-            landmarks: standard.landmarks.into(),
-            points_file: None,
-            registration_file: None,
-        },
+        anatomy: standard,
+        points_file: None,
+        registration_file: None,
         rest,
         rest_words: "the first frame (the jaw closed)".into(),
         windows: jawtrack_report::Windows {

@@ -2,12 +2,13 @@
 //! and the glue that turns them into the libraries' calls and prints their warnings.
 
 use anyhow::{Context, Result};
+use jawtrack_kinematics::Anatomy;
 use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::{Recording, SessionId};
 use jawtrack_registration::Registration;
+use jawtrack_session::SessionError;
 use jawtrack_session::movements::MovementWindows;
-use jawtrack_session::{Anatomy, SessionError};
 use std::path::{Path, PathBuf};
 
 /// `--session`, for the commands that read a recording: one session's frames. A file holding

@@ -8,7 +8,7 @@ use clap::{ArgAction, Args};
 use jawtrack_kinematics::Window;
 use jawtrack_recording::Recording;
 use jawtrack_registration::Registration;
-use jawtrack_report::{Anatomy, Centric, ContactsResult, Inputs, Windows};
+use jawtrack_report::{Centric, ContactsResult, Inputs, Windows};
 use jawtrack_session::anatomy::upper_scan_left;
 use jawtrack_session::arches::load_arch;
 use jawtrack_session::survey::survey;
@@ -124,13 +124,9 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
     let inputs = Inputs {
         recording: &rec,
         recording_name: a.recording.file_name().map_or_else(|| name.to_string(), |f| f.to_string_lossy().into()),
-        anatomy: Anatomy {
-            mounting: anatomy_of.mounting,
-            reference_plane: anatomy_of.reference_plane.into(),
-            landmarks: anatomy_of.landmarks.into(),
-            points_file: file(&a.points.points),
-            registration_file: file(&a.registration),
-        },
+        anatomy: anatomy_of,
+        points_file: file(&a.points.points),
+        registration_file: file(&a.registration),
         rest: rest.pose(),
         rest_words: rest.describe(),
         windows: Windows {

@@ -13,6 +13,35 @@
 use crate::{KinematicsError, Mounting};
 use jawtrack_pose::Pose;
 use nalgebra::{Matrix3, Point3, Rotation3, UnitQuaternion, Vector3};
+
+/// The anatomy a measure is read in: the mounting, and in words what it came from, for every
+/// output that prints a number measured in it (`jawtrack_session::anatomy` chooses it).
+#[derive(Debug, Clone)]
+pub struct Anatomy {
+    /// The head frame, condyles and incisal point on the maxilla marker.
+    pub mounting: Mounting,
+    /// The reference plane angles are measured to.
+    pub reference_plane: &'static str,
+    /// Where the condyles and the incisal point came from.
+    pub landmarks: &'static str,
+    /// Whether the condyles were given (not assumed).
+    pub condyles_given: bool,
+    /// What the reader should check (e.g. swapped molar points).
+    pub warnings: Vec<String>,
+}
+
+impl Anatomy {
+    /// The standard harness mounting, for a session without the patient's points.
+    pub fn standard() -> Self {
+        Anatomy {
+            mounting: Mounting::default(),
+            reference_plane: "the head frame's horizontal plane of the standard harness mounting",
+            landmarks: "the standard harness mounting's condyles and lower incisal point",
+            condyles_given: false,
+            warnings: Vec::new(),
+        }
+    }
+}
 use serde::{Deserialize, Serialize};
 
 /// The version of the points file this crate reads and writes.

@@ -35,7 +35,7 @@ pub mod opensim;
 pub mod point;
 pub mod views;
 
-pub use anatomy::AnatomicalPoints;
+pub use anatomy::{AnatomicalPoints, Anatomy};
 pub use articulator::{ArticulatorOptions, ArticulatorValues, Movements};
 pub use border::Border;
 pub use centric::{CoMi, co_mi};

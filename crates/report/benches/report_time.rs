@@ -5,10 +5,10 @@
 //!
 //! `cargo bench -p jawtrack-report --bench report_time [-- --seconds S --fps F --repeat N]`
 
-use jawtrack_kinematics::{Mounting, Window};
+use jawtrack_kinematics::{Anatomy, Window};
 use jawtrack_pose::median;
 use jawtrack_recording::{RecordingHeader, read_recording};
-use jawtrack_report::{Anatomy, Centric, Inputs, Windows, render};
+use jawtrack_report::{Centric, Inputs, Windows, render};
 use jawtrack_synth::scenes::{Guidance, Rig};
 use serde_json::json;
 use std::time::Instant;
@@ -41,13 +41,9 @@ fn main() {
         let inputs = Inputs {
             recording: &rec,
             recording_name: "bench.jsonl".into(),
-            anatomy: Anatomy {
-                mounting: Mounting::default(),
-                reference_plane: "the standard plane".into(),
-                landmarks: "the standard landmarks".into(),
-                points_file: None,
-                registration_file: None,
-            },
+            anatomy: Anatomy::standard(),
+            points_file: None,
+            registration_file: None,
             rest,
             rest_words: "frame 0".into(),
             windows: Windows {

@@ -10,7 +10,7 @@
 mod html;
 mod sections;
 
-use jawtrack_kinematics::Mounting;
+use jawtrack_kinematics::Anatomy;
 pub use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
@@ -29,21 +29,6 @@ pub struct Windows {
     pub right: Option<Window>,
 }
 
-/// The anatomy the numbers are read with, and where it came from, in words.
-#[derive(Debug, Clone)]
-pub struct Anatomy {
-    /// The head frame, condyles and lower incisal point.
-    pub mounting: Mounting,
-    /// The plane angles are measured to.
-    pub reference_plane: String,
-    /// Where the condyles and the incisal point came from.
-    pub landmarks: String,
-    /// The points file, if one was given.
-    pub points_file: Option<String>,
-    /// The registration file, if one was given.
-    pub registration_file: Option<String>,
-}
-
 /// What the report is made from.
 #[derive(Debug, Clone)]
 pub struct Inputs<'a> {
@@ -51,8 +36,12 @@ pub struct Inputs<'a> {
     pub recording: &'a Recording,
     /// Its file name, as the report names it.
     pub recording_name: String,
-    /// The anatomy.
+    /// The anatomy the numbers are read in.
     pub anatomy: Anatomy,
+    /// The points file, if one was given.
+    pub points_file: Option<String>,
+    /// The registration file, if one was given.
+    pub registration_file: Option<String>,
     /// The closed jaw every displacement is measured from (`maxilla_from_mandible`).
     pub rest: Pose,
     /// Where the closed jaw came from, in words ("the bite accepted at 1.20 s").

@@ -150,10 +150,10 @@ fn session(inputs: &Inputs) -> String {
         ("Camera", camera),
         ("Shutter", shutter),
         ("Marker", marker_words(inputs)),
-        ("Registration", file(&a.registration_file)),
-        ("Anatomical points", file(&a.points_file)),
-        ("Reference plane", esc(&a.reference_plane)),
-        ("Condyles and incisal point", esc(&a.landmarks)),
+        ("Registration", file(&inputs.registration_file)),
+        ("Anatomical points", file(&inputs.points_file)),
+        ("Reference plane", esc(a.reference_plane)),
+        ("Condyles and incisal point", esc(a.landmarks)),
         ("Closed jaw (rest)", esc(&inputs.rest_words)),
     ])
 }
@@ -209,7 +209,7 @@ fn quality_warnings(inputs: &Inputs, with_pose: usize) -> Vec<String> {
             rec.skipped.len()
         ));
     }
-    if inputs.anatomy.points_file.is_none() {
+    if inputs.points_file.is_none() {
         w.push(
             "no anatomical points: the standard harness mounting stands in for the patient's occlusal plane and \
              condyles (jawtrack points, then --points)"
@@ -510,7 +510,7 @@ fn articulator_section(inputs: &Inputs) -> String {
          from the laterotrusion toward the other side. A dash: that movement was not given.</p>",
         fixed(o.over_mm, 0),
         esc(&windows.join(", ")),
-        esc(&inputs.anatomy.reference_plane)
+        esc(inputs.anatomy.reference_plane)
     );
     s
 }
@@ -629,8 +629,8 @@ fn definitions(inputs: &Inputs) -> String {
          <li><b>Kinematic hinge axis</b>: the finite screw axis shared by the displacements of early opening \
          (turns ≤ 12° from the closed jaw).</li>\
          </ul>",
-        esc(&a.reference_plane),
+        esc(a.reference_plane),
         esc(&inputs.rest_words),
-        esc(&a.landmarks)
+        esc(a.landmarks)
     )
 }

@@ -1,9 +1,9 @@
 //! The report of a rehearsed clinical session with exact poses (`synth`'s `ClinicalSession`):
 //! every section is on the page, and the numbers it prints are the programmed ones.
 
-use jawtrack_kinematics::{Mounting, Window};
+use jawtrack_kinematics::{Anatomy, Mounting, Window};
 use jawtrack_recording::{Recording, RecordingHeader, read_recording};
-use jawtrack_report::{Anatomy, Centric, Inputs, Windows, render};
+use jawtrack_report::{Centric, Inputs, Windows, render};
 use jawtrack_synth::scenes::guided::ClinicalSession;
 use jawtrack_synth::scenes::{Guidance, Rig};
 use serde_json::{Value, json};
@@ -32,13 +32,9 @@ fn inputs<'a>(rec: &'a Recording, name: &str, rest: jawtrack_pose::Pose) -> Inpu
     Inputs {
         recording: rec,
         recording_name: name.into(),
-        anatomy: Anatomy {
-            mounting: Mounting::default(),
-            reference_plane: "the standard plane".into(),
-            landmarks: "the standard landmarks".into(),
-            points_file: None,
-            registration_file: None,
-        },
+        anatomy: Anatomy::standard(),
+        points_file: None,
+        registration_file: None,
         rest,
         rest_words: "frame 0".into(),
         windows: Windows::default(),
@@ -152,8 +148,8 @@ fn quality_numbers_are_the_recording_s() {
     let rec = read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording");
     let rest = session.poses[0].1;
     let mut inputs = inputs(&rec, "q.jsonl", rest);
-    inputs.anatomy.points_file = Some("points.json".into());
-    inputs.anatomy.registration_file = Some("reg.json".into());
+    inputs.points_file = Some("points.json".into());
+    inputs.registration_file = Some("reg.json".into());
     let r = render(&inputs);
     assert_eq!(r.warnings.len(), 3, "{:?}", r.warnings);
     assert!(r.warnings[0].contains("only 9 of 20 frames (45 %)"), "{:?}", r.warnings);

@@ -3,26 +3,11 @@
 //! mounting — and the words that say which, for every output.
 
 use crate::SessionError;
-use jawtrack_kinematics::{AnatomicalPoints, Mounting};
+use jawtrack_kinematics::{AnatomicalPoints, Anatomy};
 use jawtrack_pose::Pose;
 use jawtrack_registration::Registration;
 use nalgebra::Vector3;
 use std::path::Path;
-
-/// The anatomy a command reads: the mounting, and what it came from, in words for its output.
-#[derive(Debug, Clone)]
-pub struct Anatomy {
-    /// The head frame, condyles and incisal point on the maxilla marker.
-    pub mounting: Mounting,
-    /// The reference plane angles are measured to.
-    pub reference_plane: &'static str,
-    /// Where the condyles and the incisal point came from.
-    pub landmarks: &'static str,
-    /// Whether the condyles were given (not assumed).
-    pub condyles_given: bool,
-    /// What the reader should check (e.g. swapped molar points).
-    pub warnings: Vec<String>,
-}
 
 /// Reads a points file (`jawtrack points`), naming it in any error.
 pub fn read_points(file: &Path) -> Result<AnatomicalPoints, SessionError> {
@@ -63,13 +48,7 @@ pub fn anatomy(
     rest: &Pose,
 ) -> Result<Anatomy, SessionError> {
     let Some(file) = points else {
-        return Ok(Anatomy {
-            mounting: Mounting::default(),
-            reference_plane: "the head frame's horizontal plane of the standard harness mounting",
-            landmarks: "the standard harness mounting's condyles and lower incisal point",
-            condyles_given: false,
-            warnings: Vec::new(),
-        });
+        return Ok(Anatomy::standard());
     };
     let Some(reg) = registration else {
         return Err(SessionError::PointsNeedRegistration);

@@ -32,7 +32,7 @@ pub mod rest;
 pub mod scan_pose;
 pub mod survey;
 
-pub use anatomy::{Anatomy, anatomy, read_points, read_registration};
+pub use anatomy::{anatomy, read_points, read_registration};
 pub use open::{Opened, open};
 pub use rest::{Rest, rest_of};
 pub use scan_pose::PoseSource;
