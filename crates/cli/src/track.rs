@@ -10,7 +10,7 @@ use jawtrack_apriltag::DetectorConfig;
 use jawtrack_camera_calibration::CameraFile;
 use jawtrack_frames::{FrameSource, open_frames};
 use jawtrack_marker::Marker;
-use jawtrack_offline::{FocalViews, Kept, Summary, closing_warnings, refine_marker, track_frame};
+use jawtrack_offline::{FocalViews, Kept, RecordedCapture, Summary, closing_warnings, refine_marker, track_frame};
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
 use jawtrack_registration::Registration;
@@ -18,68 +18,14 @@ use jawtrack_tracker::{FrameResult, SearchConfig, SmootherConfig, Tracker, Track
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// What `--like` takes from a recording: its header's camera, timing and marker.
-#[derive(Default)]
-struct Like {
-    intrinsics: Option<CameraIntrinsics>,
-    readout_s: Option<f64>,
-    exposure_s: Option<f64>,
-    marker: Option<Marker>,
-    /// Where focus was locked (the header's capture plan), else the frames' median lens position.
-    lens_position: Option<f64>,
-    /// The capture plan's zoom.
-    zoom: Option<f64>,
-}
-
-impl Like {
-    fn read(path: Option<&Path>) -> Result<Like> {
-        let Some(path) = path else { return Ok(Like::default()) };
-        let recording = jawtrack_recording::open(path)?;
-        let Some(h) = recording.header else {
-            bail!("--like {}: the recording has no header line to take the camera from", path.display())
-        };
-        // The app records each frame's exposure; the header's is a session-wide one.
-        let mut exposures: Vec<f64> = recording.frames.iter().filter_map(|f| f.exposure_s).collect();
-        exposures.sort_by(f64::total_cmp);
-        let marker = match &h.marker {
-            Some(m) => Some(
-                Marker::from_json(&m.to_string()).with_context(|| format!("--like {}: its marker", path.display()))?,
-            ),
-            None => None,
-        };
-        let mut positions: Vec<f64> = recording.frames.iter().filter_map(|f| f.lens_position).collect();
-        positions.sort_by(f64::total_cmp);
-        if let (Some(lo), Some(hi)) = (positions.first(), positions.last())
-            && hi - lo > jawtrack_camera_calibration::LENS_POSITION_MOVED
-        {
-            eprintln!(
-                "warning: like {}: the lens position moved from {lo:.3} to {hi:.3} during the recording: focus was not \
-                 locked, so the focal length changed with it (up to 3.5 %); the app locks focus before recording",
-                path.display()
-            );
-        }
-        let like = Like {
-            intrinsics: h.intrinsics,
-            readout_s: h.readout_s,
-            exposure_s: h.exposure_s.or_else(|| exposures.get(exposures.len() / 2).copied()),
-            marker,
-            lens_position: h
-                .capture
-                .as_ref()
-                .and_then(|c| c.lens_position)
-                .or_else(|| positions.get(positions.len() / 2).copied()),
-            zoom: h.capture.as_ref().map(|c| c.zoom),
-        };
-        eprintln!(
-            "note: like {}: intrinsics {}, readout {}, exposure {}, marker {} (each unless given)",
-            path.display(),
-            if like.intrinsics.is_some() { "taken" } else { "not in it" },
-            like.readout_s.map_or("not in it".into(), |r| format!("{:.2} ms", r * 1e3)),
-            like.exposure_s.map_or("not in it".into(), |e| format!("{:.2} ms", e * 1e3)),
-            if like.marker.is_some() { "taken" } else { "not in it" },
-        );
-        Ok(like)
-    }
+/// What `--like` takes from a recording, said on standard error.
+fn like(path: Option<&Path>) -> Result<RecordedCapture> {
+    let Some(path) = path else { return Ok(RecordedCapture::default()) };
+    let recording = jawtrack_recording::open(path)?;
+    let like = RecordedCapture::of(&recording).with_context(|| format!("--like {}", path.display()))?;
+    like.warnings.iter().for_each(|w| eprintln!("warning: like {}: {w}", path.display()));
+    eprintln!("note: like {}: {} (each unless given)", path.display(), like.describe());
+    Ok(like)
 }
 
 /// Arguments of `jawtrack track`.
@@ -195,7 +141,7 @@ fn setup(a: &TrackArgs) -> Result<Setup> {
     {
         bail!("--exposure-ms must be a number of milliseconds above 0 and under 1000, got {e}");
     }
-    let like = Like::read(a.like.as_deref())?;
+    let like = like(a.like.as_deref())?;
     let camera = a.camera.as_deref().map(CameraFile::load).transpose()?;
     let intrinsics = match (a.intrinsics, &camera, like.intrinsics) {
         (Some(k), ..) => k,

@@ -3,7 +3,8 @@
 //! with a refined marker, a first pass keeps every frame's detections, the marker is refined
 //! from them (`jawtrack_calibration::refine`), and a second pass solves them again with it.
 //! Over the run, frames are kept for judging the focal length ([`FocalViews`]) and counted
-//! ([`Summary`]); [`closing_warnings`] says what the counts call for.
+//! ([`Summary`]); [`closing_warnings`] says what the counts call for. [`RecordedCapture`] is
+//! what re-tracking a recording's video takes from the recording.
 //!
 //! # Examples
 //!
@@ -28,9 +29,11 @@
 //! # Ok(()) }
 //! ```
 
+mod like;
 mod passes;
 mod summary;
 
+pub use like::RecordedCapture;
 pub use passes::{Detected, Kept, first_pass, refine_marker, track_frame};
 pub use summary::{FocalViews, Summary, closing_warnings, intrinsics_warning};
 
@@ -43,4 +46,10 @@ pub enum OfflineError {
     /// The marker could not be refined from the first pass.
     #[error("refining the marker: {0}")]
     Refine(#[from] jawtrack_calibration::CalibrationError),
+    /// A recording to take the camera from has no header.
+    #[error("the recording has no header line to take the camera from")]
+    NoHeader,
+    /// A recording's marker is not a valid marker file.
+    #[error("its marker: {0}")]
+    Marker(jawtrack_marker::MarkerError),
 }
