@@ -11,7 +11,7 @@
 #![allow(unsafe_code)]
 
 use apriltag_sys as sys;
-use jawtrack_apriltag::{DetectError, Detection, ImageView, TagDetector};
+use jawtrack_apriltag::{DetectError, Detection, ImageView, TagDetector, TagFamily};
 
 /// Detector settings with the C library's meaning.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,7 +58,7 @@ impl Default for ReferenceParams {
 /// One tag found by the C library.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ReferenceDetection {
-    /// tag36h11 id.
+    /// Id in the detector's family.
     pub id: u32,
     /// Bits corrected.
     pub hamming: u32,
@@ -93,15 +93,54 @@ impl std::fmt::Display for ReferenceError {
 
 impl std::error::Error for ReferenceError {}
 
-/// A tag36h11 detector of the C library.
+/// A detector of the C library, for one tag family.
 pub struct ReferenceDetector {
     td: *mut sys::apriltag_detector_t,
     family: *mut sys::apriltag_family_t,
+    destroy: unsafe extern "C" fn(*mut sys::apriltag_family_t),
+}
+
+type FamilyCalls =
+    (unsafe extern "C" fn() -> *mut sys::apriltag_family_t, unsafe extern "C" fn(*mut sys::apriltag_family_t));
+
+/// The C library's constructor and destructor of the family that has this name.
+fn family_calls(name: &str) -> Option<FamilyCalls> {
+    match name {
+        "tag36h11" => Some((sys::tag36h11_create, sys::tag36h11_destroy)),
+        "tag25h9" => Some((sys::tag25h9_create, sys::tag25h9_destroy)),
+        "tag16h5" => Some((sys::tag16h5_create, sys::tag16h5_destroy)),
+        _ => None,
+    }
+}
+
+/// The C library's own description of a family: what [`TagFamily`] must equal.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReferenceFamily {
+    /// The codewords, index = tag id.
+    pub codes: Vec<u64>,
+    /// The cell of each bit, most significant first.
+    pub bit_cells: Vec<(u8, u8)>,
+    /// Minimum Hamming distance.
+    pub min_hamming: u32,
+    /// Cells across the black-border square.
+    pub width_at_border: usize,
+    /// Cells across the whole tag.
+    pub total_width: usize,
+    /// Whether the border is light inside dark.
+    pub reversed_border: bool,
 }
 
 impl ReferenceDetector {
     /// Creates a detector for tag36h11 with these settings.
     pub fn new(params: &ReferenceParams) -> Result<Self, ReferenceError> {
+        Self::with_family(params, &TagFamily::TAG36H11)
+    }
+
+    /// Creates a detector for `family` (tag36h11, tag25h9 or tag16h5) with these settings.
+    pub fn with_family(params: &ReferenceParams, family: &TagFamily) -> Result<Self, ReferenceError> {
+        let Some((create, destroy)) = family_calls(family.name) else {
+            return Err(ReferenceError::Setup("the C library is wrapped for tag36h11, tag25h9 and tag16h5 only"));
+        };
         if !(0..=2).contains(&params.max_hamming) {
             return Err(ReferenceError::Setup("max_hamming must be 0, 1 or 2"));
         }
@@ -112,10 +151,10 @@ impl ReferenceDetector {
             if td.is_null() {
                 return Err(ReferenceError::Setup("apriltag_detector_create failed"));
             }
-            let family = sys::tag36h11_create();
+            let family = create();
             if family.is_null() {
                 sys::apriltag_detector_destroy(td);
-                return Err(ReferenceError::Setup("tag36h11_create failed"));
+                return Err(ReferenceError::Setup("the family's constructor failed"));
             }
             sys::apriltag_detector_add_family_bits(td, family, params.max_hamming);
             (*td).quad_decimate = params.quad_decimate;
@@ -126,7 +165,27 @@ impl ReferenceDetector {
             (*td).qtp.min_white_black_diff = params.min_white_black_diff;
             (*td).qtp.deglitch = i32::from(params.deglitch);
             (*td).debug = params.debug;
-            Ok(ReferenceDetector { td, family })
+            Ok(ReferenceDetector { td, family, destroy })
+        }
+    }
+
+    /// The family as the C library holds it.
+    pub fn family(&self) -> ReferenceFamily {
+        // SAFETY: `family` was created in `new` and lives until Drop; its arrays hold `ncodes`
+        // codes and `nbits` coordinates, as the library's constructors allocate them.
+        unsafe {
+            let f = &*self.family;
+            let codes = std::slice::from_raw_parts(f.codes, f.ncodes as usize).to_vec();
+            let xs = std::slice::from_raw_parts(f.bit_x, f.nbits as usize);
+            let ys = std::slice::from_raw_parts(f.bit_y, f.nbits as usize);
+            ReferenceFamily {
+                codes,
+                bit_cells: xs.iter().zip(ys).map(|(&x, &y)| (x as u8, y as u8)).collect(),
+                min_hamming: f.h,
+                width_at_border: f.width_at_border as usize,
+                total_width: f.total_width as usize,
+                reversed_border: f.reversed_border,
+            }
         }
     }
 
@@ -211,7 +270,7 @@ impl Drop for ReferenceDetector {
         // SAFETY: both pointers were created in `new` and are freed exactly once here.
         unsafe {
             sys::apriltag_detector_destroy(self.td);
-            sys::tag36h11_destroy(self.family);
+            (self.destroy)(self.family);
         }
     }
 }

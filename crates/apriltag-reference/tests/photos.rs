@@ -6,7 +6,7 @@
 //! orientation of our pattern may fit. This pins the codebook, the bit layout and the corner
 //! order to the reference's, independently of our own detector.
 
-use jawtrack_apriltag::Tag36h11;
+use jawtrack_apriltag::TagFamily;
 use jawtrack_synth::render::{INK_ALBEDO, tag_texture};
 use jawtrack_test_support::{read_tag, say_skipped, shared_data};
 
@@ -31,13 +31,13 @@ fn rendered_tags_match_the_reference_decoding_of_real_photos() {
             let id = det["id"].as_u64().expect("id") as u32;
             let hamming = det["hamming"].as_u64().expect("hamming") as usize;
             let corners: [[f64; 2]; 4] = serde_json::from_value(det["corners"].clone()).expect("corners");
-            let ours = Tag36h11::bitmap(id).expect("tag36h11 id");
+            let ours = TagFamily::TAG36H11.bitmap(id).expect("tag36h11 id");
             let Some(reading) = read_tag(&img, &corners) else { continue };
             // Compare with the renderer's texture in each of the four orientations.
             let mut mismatches = [0usize; 4];
             let mut pattern = ours;
             for m in mismatches.iter_mut() {
-                for &(x, y) in Tag36h11::bit_cells() {
+                for &(x, y) in TagFamily::TAG36H11.bit_cells {
                     let (x, y) = (usize::from(x), usize::from(y));
                     let (_, _, albedo) =
                         tag_texture(&pattern, -1.0 + (x as f64 + 0.5) / 4.0, -1.0 + (y as f64 + 0.5) / 4.0)

@@ -2,6 +2,7 @@
 //! and benchmarks compare like with like; each says what it trades.
 
 use crate::DetectError;
+use crate::family::TagFamily;
 
 /// A rectangle of the full frame to search (px); detections keep full-frame coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -117,6 +118,8 @@ pub struct DetectorConfig {
     pub quad: QuadThreshold,
     /// Search only this rectangle.
     pub roi: Option<Roi>,
+    /// The tag family to find (tag36h11 by default; see [`TagFamily`]).
+    pub family: TagFamily,
 }
 
 impl Default for DetectorConfig {
@@ -136,6 +139,7 @@ impl Default for DetectorConfig {
             max_hamming: 2,
             quad: QuadThreshold::default(),
             roi: None,
+            family: TagFamily::TAG36H11,
         }
     }
 }
@@ -168,6 +172,7 @@ impl DetectorConfig {
                 self.max_hamming
             ));
         }
+        self.family.validate().map_err(DetectError::BadConfig)?;
         let q = &self.quad;
         if q.max_nmaxima == 0 {
             return bad("quad.max_nmaxima must be at least 1".into());

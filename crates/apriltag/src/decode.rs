@@ -1,18 +1,11 @@
-//! Decoding a sampled 36-bit pattern to a tag id: a table of every codeword and every pattern
-//! within `max_hamming` bit flips of one (587 × 667 entries at 2), looked up for each of the
-//! pattern's four rotations. tag36h11's minimum distance of 11 keeps those balls disjoint.
+//! Decoding a sampled pattern to a tag id: a table of every codeword of a family and every
+//! pattern within `max_hamming` bit flips of one (587 × 667 entries for tag36h11 at 2), looked
+//! up for each of the pattern's four rotations. A family's minimum distance of 5 or more keeps
+//! those balls disjoint.
 
 use crate::DetectError;
-use crate::family::Tag36h11;
+use crate::family::{TagFamily, permute};
 use std::collections::HashMap;
-
-const MASK: u64 = (1 << 36) - 1;
-
-/// The codeword turned a quarter turn clockwise (as seen in the upright tag image): the bit
-/// layout is four identical quadrants of 9 bits, so a turn moves each quadrant to the next.
-pub fn rotate_cw(code: u64) -> u64 {
-    ((code >> 9) | (code << 27)) & MASK
-}
 
 /// A decoded pattern.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -30,22 +23,30 @@ pub struct Decoded {
 pub struct CodeTable {
     map: HashMap<u64, (u16, u8)>,
     max_hamming: u32,
+    /// The family's quarter turn as a bit permutation ([`TagFamily::rotation_cw`]).
+    turn: Vec<u8>,
+    mask: u64,
 }
 
 impl CodeTable {
-    /// Builds the table for tag36h11; `max_hamming` above 2 is refused.
-    pub fn new(max_hamming: u32) -> Result<Self, DetectError> {
-        if max_hamming > 2 {
-            return Err(DetectError::BadConfig(format!("max_hamming {max_hamming} is refused: at most 2")));
+    /// Builds the table for `family`; `max_hamming` above 2, or above what the family's
+    /// distance keeps unambiguous, is refused, as is a layout the detector cannot read.
+    pub fn new(family: &TagFamily, max_hamming: u32) -> Result<Self, DetectError> {
+        family.validate().map_err(DetectError::BadConfig)?;
+        if max_hamming > 2 || 2 * max_hamming >= family.min_hamming {
+            return Err(DetectError::BadConfig(format!(
+                "max_hamming {max_hamming} is refused for {} (distance {}): at most 2, and under half the distance",
+                family.name, family.min_hamming
+            )));
         }
-        let per_code = [1, 1 + 36, 1 + 36 + 630][max_hamming as usize];
-        let mut map = HashMap::with_capacity(Tag36h11::COUNT * per_code);
-        for id in 0..Tag36h11::COUNT as u32 {
-            let code = Tag36h11::code(id).unwrap_or_default();
+        let nbits = family.nbits();
+        let per_code = [1, 1 + nbits, 1 + nbits + nbits * (nbits - 1) / 2][max_hamming as usize];
+        let mut map = HashMap::with_capacity(family.count() * per_code);
+        for (id, &code) in family.codes.iter().enumerate() {
             let id = id as u16;
             map.insert(code, (id, 0));
             if max_hamming >= 1 {
-                for i in 0..36 {
+                for i in 0..nbits {
                     map.insert(code ^ (1 << i), (id, 1));
                     if max_hamming >= 2 {
                         for j in 0..i {
@@ -55,7 +56,8 @@ impl CodeTable {
                 }
             }
         }
-        Ok(CodeTable { map, max_hamming })
+        let mask = if nbits == 64 { u64::MAX } else { (1 << nbits) - 1 };
+        Ok(CodeTable { map, max_hamming, turn: family.rotation_cw(), mask })
     }
 
     /// The bit errors this table corrects.
@@ -65,12 +67,12 @@ impl CodeTable {
 
     /// Decodes a sampled pattern (read in the image's orientation), trying all four turns.
     pub fn decode(&self, sampled: u64) -> Option<Decoded> {
-        let mut code = sampled & MASK;
+        let mut code = sampled & self.mask;
         for rotation in 0..4 {
             if let Some(&(id, hamming)) = self.map.get(&code) {
                 return Some(Decoded { id: u32::from(id), hamming: u32::from(hamming), rotation });
             }
-            code = rotate_cw(code);
+            code = permute(code, &self.turn);
         }
         None
     }
@@ -81,18 +83,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn rotation_matches_the_printed_pattern() {
-        for id in [0, 1, 17, 586] {
-            let bm = Tag36h11::bitmap(id).expect("id");
-            assert_eq!(rotate_cw(bm.code()), bm.rotated_cw().code(), "tag {id}");
-            let c = bm.code();
-            assert_eq!(rotate_cw(rotate_cw(rotate_cw(rotate_cw(c)))), c);
-        }
-    }
-
-    #[test]
     fn decodes_every_tag_in_every_turn_with_up_to_two_errors() {
-        let table = CodeTable::new(2).expect("table");
         let mut x = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = || {
             x ^= x << 13;
@@ -100,29 +91,50 @@ mod tests {
             x ^= x << 17;
             x
         };
-        for id in 0..Tag36h11::COUNT as u32 {
-            let code = Tag36h11::code(id).expect("id");
-            let (i, j) = ((next() % 36) as u32, (next() % 36) as u32);
-            let damaged = code ^ (1 << i) ^ (1 << j);
-            let hamming = if i == j { 0 } else { 2 };
-            // As seen turned by r quarter turns counter-clockwise, i.e. needing r clockwise.
-            let mut seen = damaged;
-            for r in 0..4u32 {
-                let want = Decoded { id, hamming, rotation: r };
-                assert_eq!(table.decode(seen), Some(want), "tag {id}, turn {r}");
-                seen = rotate_cw(rotate_cw(rotate_cw(seen)));
+        let mut checked = 0;
+        for f in TagFamily::ALL {
+            let table = CodeTable::new(&f, 2).expect("table");
+            let nbits = f.nbits() as u64;
+            for id in 0..f.count() as u32 {
+                let code = f.code(id).expect("id");
+                let (i, j) = ((next() % nbits) as u32, (next() % nbits) as u32);
+                let damaged = code ^ (1 << i) ^ (1 << j);
+                let hamming = if i == j { 0 } else { 2 };
+                // As seen turned by r quarter turns counter-clockwise, i.e. needing r clockwise.
+                let mut seen = damaged;
+                for r in 0..4u32 {
+                    let want = Decoded { id, hamming, rotation: r };
+                    assert_eq!(table.decode(seen), Some(want), "{} {id}, turn {r}", f.name);
+                    seen = f.rotate_cw(f.rotate_cw(f.rotate_cw(seen)));
+                    checked += 1;
+                }
             }
+            // Three errors are beyond a table of two: never read as the tag, and not at all
+            // where the distance (6 or more) keeps them out of every other tag's ball too.
+            let code = f.code(5).expect("id");
+            let three = table.decode(code ^ 0b111);
+            assert_ne!(three.map(|d| d.id), Some(5), "{}", f.name);
+            if f.min_hamming >= 6 {
+                assert_eq!(three, None, "{}", f.name);
+            }
+            assert_eq!(CodeTable::new(&f, 0).expect("table").decode(code ^ 1), None);
         }
-        // Three errors are beyond a table of two.
-        let code = Tag36h11::code(5).expect("id");
-        assert_eq!(table.decode(code ^ 0b111), None);
-        assert_eq!(CodeTable::new(0).expect("table").decode(code ^ 1), None);
-        assert!(CodeTable::new(3).is_err());
+        assert_eq!(checked, 4 * (587 + 35 + 30));
+        assert!(CodeTable::new(&TagFamily::TAG36H11, 3).is_err());
+    }
+
+    #[test]
+    fn a_family_is_not_decoded_as_another() {
+        let table = CodeTable::new(&TagFamily::TAG36H11, 2).expect("table");
+        for f in [TagFamily::TAG25H9, TagFamily::TAG16H5] {
+            let hits = f.codes.iter().filter(|&&c| table.decode(c).is_some()).count();
+            assert_eq!(hits, 0, "{} codes read as tag36h11", f.name);
+        }
     }
 
     #[test]
     fn random_patterns_rarely_decode() {
-        let table = CodeTable::new(2).expect("table");
+        let table = CodeTable::new(&TagFamily::TAG36H11, 2).expect("table");
         let mut x = 12345u64;
         let hits = (0..100_000)
             .filter(|_| {

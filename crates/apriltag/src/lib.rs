@@ -1,5 +1,5 @@
 //! AprilTag detection for JawTrack, after the AprilRobotics C library's structure: the
-//! tag36h11 family ([`family`]), borrowed frames ([`image`]), the detector's settings
+//! tag families as data (tag36h11, tag25h9, tag16h5: [`family`]), borrowed frames ([`image`]), the detector's settings
 //! ([`config`]), decoding sampled patterns to ids ([`decode`]), and the pipeline's stages
 //! ported one by one and checked against C: [`preprocess`] (decimation), [`threshold`],
 //! [`components`], [`clusters`], [`quads`], and in [`detector`] edge refinement, decoding
@@ -25,7 +25,6 @@
 //! (`jawtrack-apriltag-reference`) implement it.
 
 mod backend;
-mod codes;
 
 pub mod clusters;
 pub mod components;
@@ -44,7 +43,7 @@ pub use backend::TagDetector;
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};
 pub use detector::{Detection, Detector};
-pub use family::{Tag36h11, TagBitmap};
+pub use family::{TagBitmap, TagFamily};
 pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra, luma_from_bgra_into};
 

@@ -7,7 +7,7 @@
 //! refinement applies. (On perfectly sharp, pixel-aligned edges, which no lens makes, the
 //! gradient-peak refinement is off by up to 0.25 px.)
 
-use jawtrack_apriltag::{Detection, Detector, DetectorConfig, ImageView, Tag36h11};
+use jawtrack_apriltag::{Detection, Detector, DetectorConfig, ImageView, TagFamily};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use std::io::Write as _;
 
@@ -40,7 +40,7 @@ fn draw(width: usize, height: usize, id: u32, side: f64, centre: [f64; 2], deg: 
 
 /// [`draw`] on a background of the given linear reflectance.
 fn draw_on(background: f64, width: usize, height: usize, id: u32, side: f64, centre: [f64; 2], deg: f64) -> Drawn {
-    let bm = Tag36h11::bitmap(id).expect("id");
+    let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
     let cell = side / 10.0;
     let (s, c) = deg.to_radians().sin_cos();
     // Tag cells (u right, v down, origin at the centre) to pixels and back.

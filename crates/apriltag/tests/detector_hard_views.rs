@@ -14,7 +14,7 @@
 //! 2.5 px off. Now every view C finds is found, never more than 0.5 px farther from the truth
 //! than C's corners, and the median worst corner is within 0.75 px of the truth.
 
-use jawtrack_apriltag::{Detector, DetectorConfig, ImageView, Tag36h11};
+use jawtrack_apriltag::{Detector, DetectorConfig, ImageView, TagFamily};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
 use std::io::Write as _;
 
@@ -84,7 +84,7 @@ struct Scene {
 /// Draws tag `id` through `h`: reflectance averaged over 8 × 8 points per pixel, blurred by
 /// the lens in linear light, encoded as sRGB.
 fn draw(id: u32, h: &[f64; 9], blur: f64) -> Scene {
-    let bm = Tag36h11::bitmap(id).expect("id");
+    let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
     let back = invert(h);
     let reflectance = |x: f64, y: f64| -> f64 {
         let [u, v] = apply(&back, x, y);

@@ -8,7 +8,7 @@
 
 use crate::body::{checked_post, face_2d};
 use crate::{HarnessError, HarnessParams, common_tag_size};
-use jawtrack_apriltag::Tag36h11;
+use jawtrack_apriltag::TagFamily;
 use jawtrack_marker::{BodyKind, Dodecahedron, Marker, MarkerError, Tag};
 use nalgebra::{Vector2, Vector3};
 use std::fmt::Write as _;
@@ -246,7 +246,7 @@ fn draw_tag(
     origin: Vector2<f64>,
     notch: Option<&[Vector3<f64>]>,
 ) -> Result<(), HarnessError> {
-    let bitmap = Tag36h11::bitmap(tag.id).ok_or(HarnessError::UnknownTag(tag.id))?;
+    let bitmap = TagFamily::TAG36H11.bitmap(tag.id).ok_or(HarnessError::UnknownTag(tag.id))?;
     let face = &solid.faces()[tag.face];
     // Face points in page coordinates: the face's 2D frame (x right, y toward the apex, both as
     // on the page) shifted to this tag's place.
@@ -262,7 +262,7 @@ fn draw_tag(
     let _ = writeln!(svg, r##"<path class="face" d="{d}" fill="#ffffff" stroke="none"/>"##);
 
     // The black-border square centred on the face; cell row 0 at the top (tag y = −size/2).
-    let cell = tag.size / 8.0;
+    let cell = tag.size / bitmap.width() as f64;
     let corner = origin - Vector2::new(tag.size / 2.0, tag.size / 2.0);
     let _ = writeln!(
         svg,
@@ -275,9 +275,9 @@ fn draw_tag(
     // All white cells in one path: a renderer fills one path in one pass, so cells sharing an
     // edge leave no anti-aliasing seam between them, as separate rectangles could.
     let mut white = String::new();
-    for (y, row) in bitmap.white.iter().enumerate() {
-        for (x, &is_white) in row.iter().enumerate() {
-            if is_white {
+    for y in 0..bitmap.width() {
+        for x in 0..bitmap.width() {
+            if bitmap.is_white(x, y) {
                 let x0 = corner.x + x as f64 * cell;
                 let y0 = corner.y + y as f64 * cell;
                 let _ =
@@ -541,7 +541,12 @@ mod tests {
                     assert!(!white[cy][cx], "cell drawn twice");
                     white[cy][cx] = true;
                 }
-                assert_eq!(white, Tag36h11::bitmap(id).expect("known id").white, "tag {id} cells");
+                let bm = TagFamily::TAG36H11.bitmap(id).expect("known id");
+                for (y, row) in white.iter().enumerate() {
+                    for (x, &w) in row.iter().enumerate() {
+                        assert_eq!(w, bm.is_white(x, y), "tag {id} cell ({x}, {y})");
+                    }
+                }
 
                 // Labels outside the pentagon: the id above its top, "apex" below its apex.
                 let top = pent.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);

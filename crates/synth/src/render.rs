@@ -8,7 +8,7 @@
 //! once (a rank-1 lattice, shifted per pixel), which places an edge of any direction to a few
 //! hundredths of a pixel in one row and far better along a whole edge.
 
-use jawtrack_apriltag::{Tag36h11, TagBitmap};
+use jawtrack_apriltag::{TagBitmap, TagFamily};
 use jawtrack_marker::{Body, Dodecahedron};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Point2, Vector2, Vector3};
@@ -172,7 +172,7 @@ impl Prepared {
                                 x: pose.transform_vector(&x),
                                 y: pose.transform_vector(&y),
                                 inv_half: 2.0 / size,
-                                bitmap: Tag36h11::bitmap(t.id)?,
+                                bitmap: TagFamily::TAG36H11.bitmap(t.id)?,
                             })
                         });
                         FaceC { normal, offset: normal.dot(&center), shade: shade(&normal, &light, scene.ambient), tag }
@@ -333,8 +333,10 @@ pub fn tag_texture(bitmap: &TagBitmap, u: f64, v: f64) -> Option<(usize, usize, 
     if u.abs() > 1.0 || v.abs() > 1.0 {
         return None;
     }
-    let cx = (((u + 1.0) * 4.0) as usize).min(7);
-    let cy = (((v + 1.0) * 4.0) as usize).min(7);
+    let n = bitmap.width();
+    let half = n as f64 / 2.0;
+    let cx = (((u + 1.0) * half) as usize).min(n - 1);
+    let cy = (((v + 1.0) * half) as usize).min(n - 1);
     Some((cx, cy, if bitmap.is_white(cx, cy) { PAPER_ALBEDO } else { INK_ALBEDO }))
 }
 
@@ -553,7 +555,7 @@ mod tests {
                 continue; // keep faces seen within 60° of head-on
             }
             let shade = (0.35 + 0.65 * n.dot(&Vector3::new(0.0, 0.0, -1.0)).max(0.0)) as f32;
-            let bm = Tag36h11::bitmap(tag.id).expect("id");
+            let bm = TagFamily::TAG36H11.bitmap(tag.id).expect("id");
             for cy in 0..8 {
                 for cx in 0..8 {
                     let (u, v) = (-1.0 + (cx as f64 + 0.5) / 4.0, -1.0 + (cy as f64 + 0.5) / 4.0);

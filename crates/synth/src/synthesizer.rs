@@ -722,8 +722,9 @@ mod tests {
         let mut read = 0;
         for t in frame.truth.tags.iter().filter(|t| t.should_be_detected()) {
             let reading = jawtrack_test_support::read_tag(&img, &t.corners).expect("inside");
-            let bm = jawtrack_apriltag::Tag36h11::bitmap(t.id).expect("id");
-            let wrong = jawtrack_apriltag::Tag36h11::bit_cells()
+            let bm = jawtrack_apriltag::TagFamily::TAG36H11.bitmap(t.id).expect("id");
+            let wrong = jawtrack_apriltag::TagFamily::TAG36H11
+                .bit_cells
                 .iter()
                 .filter(|&&(x, y)| bm.is_white(x.into(), y.into()) != reading.is_white(x.into(), y.into()))
                 .count();

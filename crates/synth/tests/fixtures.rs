@@ -1,7 +1,7 @@
 //! The recorded frame fixtures in `fixtures/`: complete, self-consistent, in agreement with
 //! their images, and reproducible from the command in `fixtures/README.md`.
 
-use jawtrack_apriltag::Tag36h11;
+use jawtrack_apriltag::TagFamily;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer};
 use jawtrack_test_support::{assert_every_fixture_frame, fixture_sets, read_tag, set_name};
@@ -103,8 +103,9 @@ fn images_show_the_tags_where_the_truth_puts_them() {
             let img = image::open(set.join(&f.file)).expect("png decodes").to_luma8();
             for t in f.tags.iter().filter(|t| t.should_be_detected()) {
                 let reading = read_tag(&img, &t.corners).expect("detectable tags lie inside the image");
-                let bm = Tag36h11::bitmap(t.id).expect("id");
-                let errors = Tag36h11::bit_cells()
+                let bm = TagFamily::TAG36H11.bitmap(t.id).expect("id");
+                let errors = TagFamily::TAG36H11
+                    .bit_cells
                     .iter()
                     .filter(|&&(x, y)| bm.is_white(x.into(), y.into()) != reading.is_white(x.into(), y.into()))
                     .count();

@@ -21,7 +21,7 @@
 //! side along the motion is not smeared, so a tag's blur is the second-sharpest of its sides:
 //! what the lens did, which is what [`crate::Detection::blur_px`] reports.
 
-use crate::family::{Tag36h11, TagBitmap};
+use crate::family::TagBitmap;
 use crate::image::ImageView;
 use nalgebra::{SMatrix, SVector};
 
@@ -43,7 +43,8 @@ const STEP_PX: f64 = 0.5;
 /// … at eight places along the side, from a cell in from either end (the corners' other side
 /// comes in nearer), to fit the side's line …
 const ALONG: [f64; 8] = [1.25, 2.0, 2.75, 3.5, 4.5, 5.25, 6.0, 6.75];
-/// … or at six of those places, to measure the side's blur alone.
+/// … or at six of those places, to measure the side's blur alone. Both are for an 8-cell
+/// square; other widths place them alike between one cell in from either end ([`along`]).
 const ALONG_BLUR: [f64; 6] = [1.75, 2.75, 3.75, 4.25, 5.25, 6.25];
 /// A window reaches this many σ (plus [`REACH_PX`]) either side of the side's edge.
 const REACH_SIGMAS: f64 = 4.0;
@@ -51,11 +52,14 @@ const REACH_PX: f64 = 2.0;
 /// Levenberg–Marquardt iterations at most per window.
 const ITERATIONS: usize = 10;
 
+/// Cells across the widest black-border square the model holds (tag36h11's).
+pub(super) const MAX_CELLS: usize = 8;
 /// Bands across the side, going inward: beyond the quiet zone, the quiet zone, then the black
-/// border square's eight rows.
-const BANDS: usize = 10;
-/// Columns along the side: the quiet zone before the first, the eight, the quiet zone after.
-const COLUMNS: usize = 10;
+/// border square's rows (a narrower square leaves bands of no width before its last row).
+const BANDS: usize = MAX_CELLS + 2;
+/// Columns along the side: the quiet zone before the first, the square's cells, the quiet
+/// zone after (a narrower square leaves columns of no width before the quiet zone).
+const COLUMNS: usize = MAX_CELLS + 2;
 
 /// What a cell prints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -115,9 +119,11 @@ fn project(h: &[f64; 9], x: f64, y: f64) -> [f64; 2] {
 }
 
 /// Tag coordinates ([−1, 1]², y down) of the point `u` cells along side `side` (0 top, 1 right,
-/// 2 bottom, 3 left, running clockwise in the upright tag) and `v` cells inward from it.
-fn side_point(side: usize, u: f64, v: f64) -> (f64, f64) {
-    let (a, b) = (u / 4.0, v / 4.0);
+/// 2 bottom, 3 left, running clockwise in the upright tag) and `v` cells inward from it, in a
+/// square `n` cells across.
+fn side_point(n: usize, side: usize, u: f64, v: f64) -> (f64, f64) {
+    let half = n as f64 / 2.0;
+    let (a, b) = (u / half, v / half);
     match side {
         0 => (-1.0 + a, -1.0 + b),
         1 => (1.0 - b, -1.0 + a),
@@ -129,16 +135,25 @@ fn side_point(side: usize, u: f64, v: f64) -> (f64, f64) {
 /// What the cell `c` cells along side `side` and `j` cells inward prints (both may be −1, the
 /// quiet zone; a band further out is beyond it).
 fn print(bitmap: &TagBitmap, side: usize, c: i32, j: i32) -> Print {
+    let n = bitmap.width();
     if j < -1 {
         return Print::Beyond;
     }
-    if !(0..8).contains(&j) || !(0..8).contains(&c) {
+    if !(0..n as i32).contains(&j) || !(0..n as i32).contains(&c) {
         return Print::Paper;
     }
-    let (tx, ty) = side_point(side, f64::from(c) + 0.5, f64::from(j) + 0.5);
-    let x = (((tx + 1.0) * 4.0).floor() as usize).min(7);
-    let y = (((ty + 1.0) * 4.0).floor() as usize).min(7);
+    let (tx, ty) = side_point(n, side, f64::from(c) + 0.5, f64::from(j) + 0.5);
+    let half = n as f64 / 2.0;
+    let x = (((tx + 1.0) * half).floor() as usize).min(n - 1);
+    let y = (((ty + 1.0) * half).floor() as usize).min(n - 1);
     if bitmap.is_white(x, y) { Print::Paper } else { Print::Ink }
+}
+
+/// The places along a side of an `n`-cell square that `places` name on an 8-cell one, mapped
+/// so that one cell in from either end stays one cell in.
+fn along(n: usize, places: &[f64]) -> Vec<f64> {
+    let scale = (n as f64 - 2.0) / (MAX_CELLS as f64 - 2.0);
+    places.iter().map(|&u| 1.0 + (u - 1.0) * scale).collect()
 }
 
 fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -147,16 +162,23 @@ fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// The profiles of side `side` of the tag `h` maps, across it at each of `along` (cells).
 fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f64]) -> Option<Vec<Profile>> {
+    let n = bitmap.width();
+    if !(4..=MAX_CELLS).contains(&n) {
+        return None;
+    }
     let at = |u: f64, v: f64| {
-        let (x, y) = side_point(side, u, v);
+        let (x, y) = side_point(n, side, u, v);
         project(h, x, y)
     };
     let mut print_of = [[Print::Paper; COLUMNS]; BANDS];
     for (b, row) in print_of.iter_mut().enumerate() {
         for (c, cell) in row.iter_mut().enumerate() {
-            *cell = print(bitmap, side, c as i32 - 1, b as i32 - 2);
+            // The last band is everything inward of the last boundary: the square's last row.
+            let j = (b as i32 - 2).min(n as i32 - 1);
+            *cell = print(bitmap, side, c as i32 - 1, j);
         }
     }
+    let half = n as f64 / 2.0;
     let mut out = Vec::with_capacity(along.len());
     for &u in along {
         let origin = at(u, 0.0);
@@ -174,9 +196,10 @@ fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f64]) -> Opt
         }
         let mut across = [0.0; BANDS - 1];
         for (k, t) in across.iter_mut().enumerate() {
-            // Where the normal meets the image of the line v = k − 1.
-            let v = k as f64 - 1.0;
-            let (p, q) = (at(0.0, v), at(8.0, v));
+            // Where the normal meets the image of the line v = k − 1 (the last row's inner
+            // boundary repeated past a narrower square's).
+            let v = k.min(n) as f64 - 1.0;
+            let (p, q) = (at(0.0, v), at(n as f64, v));
             let dir = [q[0] - p[0], q[1] - p[1]];
             let denom = cross(normal, dir);
             if denom.abs() < 1e-12 {
@@ -187,14 +210,15 @@ fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f64]) -> Opt
         // Column boundaries along the side, half a cell in (where the profile's data cells are).
         let mut columns = [0.0; COLUMNS - 1];
         for (k, t) in columns.iter_mut().enumerate() {
-            let p = at(k as f64, 0.5);
+            let p = at(k.min(n) as f64, 0.5);
             let here = at(u, 0.5);
             *t = (p[0] - here[0]) * tangent[0] + (p[1] - here[1]) * tangent[1];
         }
-        if !across.windows(2).all(|w| w[1] > w[0]) || !columns.windows(2).all(|w| w[1] > w[0]) {
+        let rising = |t: &[f64]| t[..=n].windows(2).all(|w| w[1] > w[0]);
+        if !rising(&across) || !rising(&columns) {
             return None;
         }
-        out.push(Profile { origin, normal, along: (u - 4.0) / 2.75, across, columns, print: print_of });
+        out.push(Profile { origin, normal, along: (u - half) / (half - 1.25), across, columns, print: print_of });
     }
     Some(out)
 }
@@ -478,7 +502,7 @@ pub(super) fn intersect(a: &[[f64; 2]; 2], b: &[[f64; 2]; 2]) -> Option<[f64; 2]
 /// when the two sides measured first are both under it, the other two are not fitted.
 const SHARP_BLUR_PER_CELL: f64 = 0.12;
 
-/// The border of tag `id`, decoded with homography `h` (tag coordinates to pixels in C's
+/// The border of the tag `bitmap` prints, decoded with homography `h` (tag coordinates to pixels in C's
 /// convention, upright) in `im` read through `lut`: its blur, and each side's line where the
 /// blur calls for the model (`None` for a side the gradient fit keeps). The top and right sides
 /// are measured first, at six places each; only when either is blurred by
@@ -489,20 +513,20 @@ const SHARP_BLUR_PER_CELL: f64 = 0.12;
 pub(super) fn fit_border(
     im: &ImageView<'_>,
     lut: &[f64; 256],
-    id: u32,
+    bitmap: &TagBitmap,
     h: &[f64; 9],
     want_lines: bool,
 ) -> Option<BorderFit> {
-    let bitmap = Tag36h11::bitmap(id)?;
-    let side = |k: usize, along: &[f64]| fit_side(im, lut, &profiles(h, &bitmap, k, along)?);
+    let (places, places_blur) = (along(bitmap.width(), &ALONG), along(bitmap.width(), &ALONG_BLUR));
+    let side = |k: usize, along: &[f64]| fit_side(im, lut, &profiles(h, bitmap, k, along)?);
     let sharp = |s: &SideFit| s.sigma_px < SHARP_BLUR_PER_CELL * s.cell_px;
-    let (top, right) = (side(0, &ALONG_BLUR)?, side(1, &ALONG_BLUR)?);
+    let (top, right) = (side(0, &places_blur)?, side(1, &places_blur)?);
     let lens = |sigma: f64| (sigma * sigma - PIXEL_SIGMA_PX * PIXEL_SIGMA_PX).max(0.0).sqrt();
     if !want_lines || (sharp(&top) && sharp(&right)) {
         // Motion smears at most one of two perpendicular sides: the sharper is the lens's.
         return Some(BorderFit { sides: None, blur_px: lens(top.sigma_px.min(right.sigma_px)) });
     }
-    let sides = [side(0, &ALONG)?, side(1, &ALONG)?, side(2, &ALONG)?, side(3, &ALONG)?];
+    let sides = [side(0, &places)?, side(1, &places)?, side(2, &places)?, side(3, &places)?];
     let mut sigmas = sides.map(|s| s.sigma_px);
     sigmas.sort_by(f64::total_cmp);
     Some(BorderFit { sides: Some(sides), blur_px: lens(sigmas[1]) })
@@ -510,7 +534,7 @@ pub(super) fn fit_border(
 
 #[cfg(test)]
 mod tests {
-    use crate::{Detection, Detector, DetectorConfig, ImageView, Tag36h11};
+    use crate::{Detection, Detector, DetectorConfig, ImageView, TagFamily};
 
     fn srgb(v: f64) -> u8 {
         let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
@@ -521,7 +545,7 @@ mod tests {
     /// wide on a background of reflectance `beyond`, blurred by a Gaussian of σ `blur` px (in
     /// linear light, exact pixel coverage), encoded as sRGB; and its true corners.
     fn drawn(id: u32, cell: f64, deg: f64, margin: f64, beyond: f64, blur: f64) -> (Vec<u8>, usize, [[f64; 2]; 4]) {
-        let bm = Tag36h11::bitmap(id).expect("id");
+        let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
         let n = (cell * (8.0 + 2.0 * margin) * 1.5 + 12.0 * blur + 40.0) as usize;
         let centre = [n as f64 / 2.0 + 0.31, n as f64 / 2.0 - 0.17];
         let (s, c) = deg.to_radians().sin_cos();

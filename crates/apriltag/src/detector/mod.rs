@@ -9,7 +9,7 @@ use crate::clusters::gradient_clusters_with;
 use crate::components::{UnionFind, connected_components_into};
 use crate::config::{DetectorConfig, Roi};
 use crate::decode::CodeTable;
-use crate::family::Tag36h11;
+use crate::family::TagFamily;
 use crate::gray::Gray;
 use crate::image::ImageView;
 use crate::preprocess::{blur_or_sharpen, decimate_into};
@@ -28,7 +28,7 @@ pub use border::PIXEL_SIGMA_PX;
 /// (0, 0); the C library reports 0.5 more).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Detection {
-    /// tag36h11 id.
+    /// Id in the detector's family.
     pub id: u32,
     /// Bits corrected.
     pub hamming: u32,
@@ -48,7 +48,7 @@ pub struct Detection {
     pub blur_px: Option<f64>,
 }
 
-/// A tag36h11 detector.
+/// An AprilTag detector for one family ([`DetectorConfig::family`]).
 #[derive(Debug)]
 pub struct Detector {
     config: DetectorConfig,
@@ -84,7 +84,7 @@ impl Detector {
     /// Checks the settings and builds the decoding table.
     pub fn new(config: DetectorConfig) -> Result<Self, DetectError> {
         config.validate()?;
-        let table = CodeTable::new(config.max_hamming)?;
+        let table = CodeTable::new(&config.family, config.max_hamming)?;
         Ok(Detector {
             config,
             table,
@@ -215,7 +215,7 @@ impl Detector {
             }
         }
         let lut = if c.linear_edges { &*SRGB_TO_LINEAR } else { &IDENTITY };
-        let decode = |q: &Quad| decode_quad(im, &homography(q)?, &self.table, c.decode_sharpening);
+        let decode = |q: &Quad| decode_quad(im, &homography(q)?, &c.family, &self.table, c.decode_sharpening);
         let dets = self.workers.filter_map(&quads, |q0| {
             let mut q = *q0;
             if c.refine_edges {
@@ -232,7 +232,11 @@ impl Detector {
                 refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false, false);
                 decode(&q)
             })?;
-            Some(if c.linear_edges && c.blur_aware_edges { with_border_fit(im, lut, d, !smeared) } else { d })
+            Some(if c.linear_edges && c.blur_aware_edges {
+                with_border_fit(im, lut, &c.family, d, !smeared)
+            } else {
+                d
+            })
         });
         let mut dets = reconcile(dets);
         // C sorts by id; ties keep a deterministic order here (by position).
@@ -283,8 +287,9 @@ const MODEL_SIDE_MAX_MISFIT: f64 = 0.05;
 /// smeared frame keeps the ramp fit's sides: motion smears an edge into a ramp, not the
 /// Gaussian the model assumes (a tag smeared 8 px over 12 px cells: 0.065 px off with the
 /// model's sides, within 0.02 px with the ramp's).
-fn with_border_fit(im: &ImageView<'_>, lut: &[f64; 256], d: Detection, sides: bool) -> Detection {
-    let Some(fit) = border::fit_border(im, lut, d.id, &d.homography, sides) else { return d };
+fn with_border_fit(im: &ImageView<'_>, lut: &[f64; 256], family: &TagFamily, d: Detection, sides: bool) -> Detection {
+    let Some(bitmap) = family.bitmap(d.id) else { return d };
+    let Some(fit) = border::fit_border(im, lut, &bitmap, &d.homography, sides) else { return d };
     let measured = Detection { blur_px: Some(fit.blur_px), ..d };
     let Some(fitted) = fit.sides.filter(|_| sides) else { return measured };
     let c = d.corners;
@@ -464,9 +469,15 @@ fn value_for_pixel(im: &ImageView<'_>, px: f64, py: f64) -> Option<f64> {
     Some(p(x1, y1) * (1.0 - x) * (1.0 - y) + p(x2, y1) * x * (1.0 - y) + p(x1, y2) * (1.0 - x) * y + p(x2, y2) * x * y)
 }
 
-fn decode_quad(im: &ImageView<'_>, h: &[f64; 9], table: &CodeTable, sharpening: f64) -> Option<Detection> {
-    let wab = Tag36h11::WIDTH_AT_BORDER as f64;
-    let total = Tag36h11::TOTAL_WIDTH;
+fn decode_quad(
+    im: &ImageView<'_>,
+    h: &[f64; 9],
+    family: &TagFamily,
+    table: &CodeTable,
+    sharpening: f64,
+) -> Option<Detection> {
+    let wab = family.width_at_border as f64;
+    let total = family.total_width;
     // Sample lines just outside (white) and just inside (black) each side of the border.
     let patterns: [[f32; 5]; 8] = [
         [-0.5, 0.5, 0.0, 1.0, 1.0],
@@ -480,7 +491,7 @@ fn decode_quad(im: &ImageView<'_>, h: &[f64; 9], table: &CodeTable, sharpening: 
     ];
     let (mut white, mut black) = (GrayModel::default(), GrayModel::default());
     for p in &patterns {
-        for i in 0..Tag36h11::WIDTH_AT_BORDER {
+        for i in 0..family.width_at_border {
             let tx01 = (f64::from(p[0]) + i as f64 * f64::from(p[2])) / wab;
             let ty01 = (f64::from(p[1]) + i as f64 * f64::from(p[3])) / wab;
             let (tx, ty) = (2.0 * (tx01 - 0.5), 2.0 * (ty01 - 0.5));
@@ -495,14 +506,14 @@ fn decode_quad(im: &ImageView<'_>, h: &[f64; 9], table: &CodeTable, sharpening: 
     }
     white.solve();
     black.solve();
-    // tag36h11's border is dark inside light: anything else is not this family.
+    // The border is dark inside light: anything else is not this family.
     if white.at(0.0, 0.0) - black.at(0.0, 0.0) < 0.0 {
         return None;
     }
-    let min_coord = (Tag36h11::WIDTH_AT_BORDER as i64 - total as i64) / 2;
+    let min_coord = (family.width_at_border as i64 - total as i64) / 2;
     let mut values = vec![0.0f64; total * total];
     let cell = |bx: u8, by: u8| ((i64::from(by) - min_coord) as usize) * total + (i64::from(bx) - min_coord) as usize;
-    for &(bx, by) in Tag36h11::bit_cells() {
+    for &(bx, by) in family.bit_cells {
         let tx = 2.0 * ((f64::from(bx) + 0.5) / wab - 0.5);
         let ty = 2.0 * ((f64::from(by) + 0.5) / wab - 0.5);
         let (px, py) = project(h, tx, ty);
@@ -514,7 +525,7 @@ fn decode_quad(im: &ImageView<'_>, h: &[f64; 9], table: &CodeTable, sharpening: 
     let (mut white_score, mut black_score) = (0.0f32, 0.0f32);
     let (mut white_count, mut black_count) = (1.0f32, 1.0f32);
     let mut rcode = 0u64;
-    for &(bx, by) in Tag36h11::bit_cells() {
+    for &(bx, by) in family.bit_cells {
         rcode <<= 1;
         let v = values[cell(bx, by)];
         if v > 0.0 {

@@ -7,7 +7,7 @@ use crate::config::Roi;
 
 /// A tag drawn axis-aligned: `cell` px per cell, one white cell of quiet zone, on grey.
 fn drawn_tag(id: u32, cell: usize, pad: usize) -> (Vec<u8>, usize) {
-    let bm = Tag36h11::bitmap(id).expect("id");
+    let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
     let side = 10 * cell + 2 * pad;
     let mut img = vec![128u8; side * side];
     for y in 0..10 * cell {
@@ -166,7 +166,7 @@ fn srgb(v: f64) -> u8 {
 /// the exposure (steps of 1/16 px along the motion, 4 points per pixel across it), sRGB-encoded.
 /// Returns the image and the black square's corners at mid-exposure.
 fn smeared_tag(id: u32, size: usize, cell: f64, deg: f64, smear: [f64; 2]) -> (Vec<u8>, [[f64; 2]; 4]) {
-    let bm = Tag36h11::bitmap(id).expect("id");
+    let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
     let centre = (size as f64 - 1.0) / 2.0;
     let (s, c) = deg.to_radians().sin_cos();
     let reflectance = |x: f64, y: f64| -> f64 {

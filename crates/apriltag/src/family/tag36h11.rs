@@ -1,8 +1,8 @@
-//! The tag36h11 codebook, as dumped from the AprilTag C library 3.3 (`tag36h11.c`, BSD-2).
+//! The tag36h11 codebook and bit layout, as dumped from the AprilTag C library 3.3 (`tag36h11.c`, BSD-2).
 //! Generated from `codes.txt`; a test checks it against `../shared/data/tag36h11/codes.txt` when present.
 
 /// The 587 codewords, index = tag id. Bit `35 - i` of a code is the cell at `BIT_XY[i]`; 1 = white.
-pub(crate) const CODES: [u64; 587] = [
+pub(super) const CODES: [u64; 587] = [
     0xd7e00984b,
     0xdda664ca7,
     0xdc4a1c821,
@@ -594,7 +594,7 @@ pub(crate) const CODES: [u64; 587] = [
 
 /// Cell (x, y) of each bit, most significant first, counted inside the 8-cell black border
 /// (x right, y down; cells 0 and 7 are the border).
-pub(crate) const BIT_XY: [(u8, u8); 36] = [
+pub(super) const BIT_XY: [(u8, u8); 36] = [
     (1, 1),
     (2, 1),
     (3, 1),
