@@ -2,7 +2,7 @@
 //! and benchmarks compare like with like; each says what it trades.
 
 use crate::DetectError;
-use crate::family::TagFamily;
+use jawtrack_tag_family::TagFamily;
 
 /// A rectangle of the full frame to search (px); detections keep full-frame coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 //! those balls disjoint.
 
 use crate::DetectError;
-use crate::family::{TagFamily, permute};
+use jawtrack_tag_family::{TagFamily, permute};
 use std::collections::HashMap;
 
 /// A decoded pattern.

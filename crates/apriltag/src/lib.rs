@@ -31,7 +31,6 @@ pub mod components;
 pub mod config;
 pub mod decode;
 pub mod detector;
-pub mod family;
 pub mod gray;
 pub mod image;
 pub mod preprocess;
@@ -43,9 +42,9 @@ pub use backend::TagDetector;
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};
 pub use detector::{Detection, Detector};
-pub use family::{TagBitmap, TagFamily};
 pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra, luma_from_bgra_into};
+pub use jawtrack_tag_family::{self as family, TagBitmap, TagFamily};
 
 /// Why detection could not run.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

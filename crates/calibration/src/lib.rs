@@ -496,10 +496,13 @@ fn calibrate_body(
         }
     }
     // The adjusted placements, written the way the marker model displaces a tag.
-    let displaced =
-        Marker { edge: 0.0, bodies: vec![jawtrack_marker::Body { kind, tags: fixed.clone(), provenance: None }] }
-            .with_print_errors(&placements)
-            .ok()?;
+    let displaced = Marker {
+        edge: 0.0,
+        bodies: vec![jawtrack_marker::Body { kind, tags: fixed.clone(), provenance: None }],
+        ..Marker::default()
+    }
+    .with_print_errors(&placements)
+    .ok()?;
     fixed = displaced.bodies.into_iter().next()?.tags;
     let report = BodyCalibration {
         body: kind,

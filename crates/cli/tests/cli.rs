@@ -49,7 +49,7 @@ fn check_marker_prints_the_calibration_provenance() {
     let out = ok(&jawtrack(&["check-marker", p]));
     assert!(out.contains("calibration: none recorded") && !out.contains("uncalibrated_tag"), "{out}");
     // A version 1 file still reads, its provenance unknown.
-    let v1 = std::fs::read_to_string(&path).expect("written").replacen("\"version\": 2", "\"version\": 1", 1);
+    let v1 = std::fs::read_to_string(&path).expect("written").replacen("\"version\": 3", "\"version\": 1", 1);
     std::fs::write(&path, v1).expect("rewritten");
     let out = ok(&jawtrack(&["check-marker", p]));
     assert!(out.contains("calibration: none recorded"), "{out}");

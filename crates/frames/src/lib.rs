@@ -116,8 +116,12 @@ pub fn detect_marker_tags(
     // tracker predicts here, and the model (a Gaussian blur) makes smeared sightings plausible
     // enough to escape the calibration's outlier rule and bias its placements (the fixtures'
     // jaw 0.081 mm off after calibrating with them, 0.025 mm without; crates/cli/tests/calibrate.rs).
-    let detector =
-        Detector::new(DetectorConfig { linear_edges, blur_aware_edges: false, ..DetectorConfig::default() })?;
+    let detector = Detector::new(DetectorConfig {
+        linear_edges,
+        blur_aware_edges: false,
+        family: marker.family,
+        ..DetectorConfig::default()
+    })?;
     let mut frames = Vec::new();
     while let Some(frame) = source.next_frame()? {
         progress(Progress::Frame);

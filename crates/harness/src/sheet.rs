@@ -177,7 +177,7 @@ fn render(marker: &Marker, body: BodyKind, notches: &[(usize, Vec<Vector3<f64>>)
             GRID_TOP + row as f64 * cell_h + LABEL_ROOM - ymin,
         );
         let notch = notches.iter().find(|(f, _)| *f == tag.face).map(|(_, p)| p.as_slice());
-        draw_tag(&mut svg, &solid, tag, origin, notch)?;
+        draw_tag(&mut svg, &solid, &marker.family, tag, origin, notch)?;
     }
 
     scale_bar(&mut svg);
@@ -242,11 +242,12 @@ fn heading(svg: &mut String, marker: &Marker, body: BodyKind, tags: &[&Tag]) {
 fn draw_tag(
     svg: &mut String,
     solid: &Dodecahedron,
+    family: &TagFamily,
     tag: &Tag,
     origin: Vector2<f64>,
     notch: Option<&[Vector3<f64>]>,
 ) -> Result<(), HarnessError> {
-    let bitmap = TagFamily::TAG36H11.bitmap(tag.id).ok_or(HarnessError::UnknownTag(tag.id))?;
+    let bitmap = family.bitmap(tag.id).ok_or(HarnessError::UnknownTag(tag.id))?;
     let face = &solid.faces()[tag.face];
     // Face points in page coordinates: the face's 2D frame (x right, y toward the apex, both as
     // on the page) shifted to this tag's place.

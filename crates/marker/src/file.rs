@@ -1,7 +1,7 @@
 //! The marker file: versioned JSON describing both bodies' tags in millimetres.
 //!
 //! ```json
-//! {"version": 2, "units": "mm", "edge": 12.7,
+//! {"version": 3, "units": "mm", "family": "tag36h11", "solid": "dodecahedron", "edge": 12.7,
 //!  "bodies": [{"name": "maxilla",
 //!              "calibration": {"views": 18, "rms_before_px": 1.9, "rms_after_px": 0.21,
 //!                              "recordings": ["calibration_frames"]},
@@ -24,18 +24,27 @@
 //! (`"status": "nominal"`, with the views it had, 0 if never seen). A body has `calibration`
 //! exactly when its tags have. A nominal marker has none; nor does a version 1 file, read with
 //! its provenance unknown.
+//!
+//! **Family and solid** (version 3): the AprilTag family the tags are printed in (`tag36h11`,
+//! `tag25h9` or `tag16h5`; every tag id must be in it) and the solid that carries them (the
+//! `dodecahedron`, the one this build knows). Files of versions 1 and 2 are tag36h11 on a
+//! dodecahedron.
 
 use crate::MarkerError;
 use crate::model::{
     Body, BodyKind, BodyProvenance, Marker, Tag, TagProvenance, fitted_normal, newell_normal, plane_deviation,
 };
+use jawtrack_tag_family::TagFamily;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// The marker file version this build writes; it reads this one and version 1 (which has no
-/// provenance).
-pub const MARKER_FILE_VERSION: u32 = 2;
+/// The marker file version this build writes; it reads this one, version 2 (which names no
+/// family or solid) and version 1 (which has no provenance either).
+pub const MARKER_FILE_VERSION: u32 = 3;
+
+/// The one solid this build knows.
+const SOLID: &str = "dodecahedron";
 
 /// How far (mm) a face's vertices, or a tag's corners, may stray from their common plane.
 /// Printed tags lie flat on a flat face; calibration noise is far below this.
@@ -51,6 +60,10 @@ const SIDE_TOLERANCE: f64 = 0.1;
 struct File {
     version: u32,
     units: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    family: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    solid: Option<String>,
     edge: f64,
     bodies: Vec<FileBody>,
 }
@@ -104,6 +117,8 @@ impl Marker {
         let file = File {
             version: MARKER_FILE_VERSION,
             units: "mm".into(),
+            family: Some(self.family.name.into()),
+            solid: Some(SOLID.into()),
             edge: self.edge,
             bodies: self
                 .bodies
@@ -144,12 +159,12 @@ impl Marker {
     pub fn from_json(text: &str) -> Result<Marker, MarkerError> {
         let value: serde_json::Value = serde_json::from_str(text).map_err(|e| MarkerError::Json(e.to_string()))?;
         let version = value.get("version").ok_or_else(|| field("marker file", "version", "is missing"))?;
-        let with_provenance = match version.as_u64() {
-            Some(1) => false,
-            Some(v) if v == u64::from(MARKER_FILE_VERSION) => true,
+        let version = match version.as_u64() {
+            Some(v @ 1..=3) => v,
             Some(v) => return Err(MarkerError::Version { found: v.to_string() }),
             None => return Err(MarkerError::Version { found: version.to_string() }),
         };
+        let with_provenance = version >= 2;
         let mut file: File = serde_path_to_error::deserialize(&value).map_err(|e| {
             let path = e.path().to_string();
             MarkerError::Field {
@@ -158,6 +173,18 @@ impl Marker {
                 reason: e.into_inner().to_string(),
             }
         })?;
+        if version < 3 {
+            // Family and solid came with version 3: before it every marker was tag36h11 on a
+            // dodecahedron, whatever such keys a writer added.
+            file.family = None;
+            file.solid = None;
+        } else {
+            for key in ["family", "solid"] {
+                if value.get(key).is_none() {
+                    return Err(field("marker file", key, "is missing (a version 3 file names it)"));
+                }
+            }
+        }
         if !with_provenance {
             // Version 1 had no provenance: whatever such keys a writer added mean nothing.
             for b in &mut file.bodies {
@@ -217,6 +244,10 @@ impl Marker {
             }
             for (ti, tag) in body.tags.iter().enumerate() {
                 let loc = format!("body '{}', tag id {} (bodies[{bi}].tags[{ti}])", body.kind, tag.id);
+                if self.family.code(tag.id).is_none() {
+                    let f = &self.family;
+                    return Err(field(&loc, "id", &format!("is not in {} (ids 0–{})", f.name, f.count() - 1)));
+                }
                 if let Some(prev) = ids.insert(tag.id, body.kind) {
                     return Err(field(&loc, "id", &format!("duplicate id {} (already on the {prev})", tag.id)));
                 }
@@ -349,6 +380,24 @@ fn from_file(file: File) -> Result<Marker, MarkerError> {
     if file.units != "mm" {
         return Err(field("marker file", "units", &format!("must be \"mm\", got \"{}\"", file.units)));
     }
+    let family = match &file.family {
+        None => TagFamily::TAG36H11,
+        Some(name) => TagFamily::named(name).ok_or_else(|| {
+            let known: Vec<&str> = TagFamily::ALL.iter().map(|f| f.name).collect();
+            field(
+                "marker file",
+                "family",
+                &format!("names \"{name}\", not a family this build reads ({})", known.join(", ")),
+            )
+        })?,
+    };
+    if let Some(solid) = file.solid.as_deref().filter(|&s| s != SOLID) {
+        return Err(field(
+            "marker file",
+            "solid",
+            &format!("names \"{solid}\"; this build knows the \"{SOLID}\" only"),
+        ));
+    }
     let bodies = file
         .bodies
         .into_iter()
@@ -388,7 +437,7 @@ fn from_file(file: File) -> Result<Marker, MarkerError> {
             Ok(Body { kind, tags, provenance })
         })
         .collect::<Result<Vec<_>, MarkerError>>()?;
-    Ok(Marker { edge: file.edge, bodies })
+    Ok(Marker { family, edge: file.edge, bodies })
 }
 
 fn field(location: &str, field: &str, reason: &str) -> MarkerError {
@@ -433,8 +482,9 @@ mod tests {
         let back = Marker::from_json(&m.to_json()).expect("own output parses");
         assert_eq!(m, back);
         let v = nominal_json();
-        assert_eq!(v["version"], 2);
+        assert_eq!(v["version"], 3);
         assert_eq!(v["units"], "mm");
+        assert_eq!((&v["family"], &v["solid"]), (&json!("tag36h11"), &json!("dodecahedron")));
         assert!(v["bodies"][0].get("calibration").is_none(), "a nominal marker records no calibration");
         assert!(v["bodies"][0]["tags"][0].get("calibration").is_none());
         assert_eq!(v["bodies"][1]["name"], "mandible");
@@ -453,8 +503,8 @@ mod tests {
     #[test]
     fn wrong_version_is_named() {
         let mut v = nominal_json();
-        v["version"] = json!(3);
-        assert!(err_of(&v).contains("version 3"), "{}", err_of(&v));
+        v["version"] = json!(4);
+        assert!(err_of(&v).contains("version 4"), "{}", err_of(&v));
         v.as_object_mut().expect("object").remove("version");
         assert!(err_of(&v).contains("version"));
     }
@@ -483,7 +533,7 @@ mod tests {
         let back = Marker::from_json(&m.to_json()).expect("own output parses");
         assert_eq!(back, m);
         let v: Value = serde_json::from_str(&m.to_json()).expect("json");
-        assert_eq!(v["version"], 2);
+        assert_eq!(v["version"], 3);
         let body = &v["bodies"][1]["calibration"];
         assert_eq!(body["views"], 18);
         assert_eq!(body["rms_before_px"], 1.25);
@@ -500,6 +550,59 @@ mod tests {
         let loose: Vec<u32> = back.uncalibrated_tags().iter().map(|&(_, id)| id).collect();
         assert_eq!(loose, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 17]);
         assert!(Marker::default().uncalibrated_tags().is_empty(), "a nominal marker has nothing to flag");
+    }
+
+    #[test]
+    fn the_family_is_named_and_read_back() {
+        let m = Marker::nominal_of(TagFamily::TAG25H9, 12.7, None).expect("tag25h9 marker");
+        let v: Value = serde_json::from_str(&m.to_json()).expect("json");
+        assert_eq!(v["family"], "tag25h9");
+        let back = Marker::from_json(&m.to_json()).expect("own output parses");
+        assert_eq!(back, m);
+        assert_eq!(back.family, TagFamily::TAG25H9);
+        // Seven cells across, one of margin: a smaller tag than tag36h11's on the same face.
+        let size = m.bodies[0].tags[0].size;
+        assert!(size < Marker::default().bodies[0].tags[0].size, "{size}");
+        // tag16h5 has 30 ids: the pair fits; a family too small for 24 ids is refused.
+        assert!(Marker::nominal_of(TagFamily::TAG16H5, 12.7, None).is_ok());
+        let tiny = TagFamily { codes: &TagFamily::TAG16H5.codes[..20], ..TagFamily::TAG16H5 };
+        assert!(Marker::nominal_of(tiny, 12.7, None).expect_err("20 ids").to_string().contains("0–23"));
+    }
+
+    #[test]
+    fn family_and_solid_are_checked() {
+        let mut v = nominal_json();
+        v["family"] = json!("tag99h1");
+        let e = err_of(&v);
+        assert!(e.contains("`family`") && e.contains("tag99h1") && e.contains("tag25h9"), "{e}");
+        let mut v = nominal_json();
+        v["solid"] = json!("cube");
+        let e = err_of(&v);
+        assert!(e.contains("`solid`") && e.contains("cube") && e.contains("dodecahedron"), "{e}");
+        for key in ["family", "solid"] {
+            let mut v = nominal_json();
+            v.as_object_mut().expect("object").remove(key);
+            assert!(err_of(&v).contains(&format!("`{key}` is missing")), "{}", err_of(&v));
+        }
+        // An id the family does not have.
+        let mut v: Value =
+            serde_json::from_str(&Marker::nominal_of(TagFamily::TAG25H9, 12.7, None).expect("marker").to_json())
+                .expect("json");
+        v["bodies"][1]["tags"][11]["id"] = json!(35);
+        let e = err_of(&v);
+        assert!(e.contains("tag id 35") && e.contains("not in tag25h9 (ids 0–34)"), "{e}");
+    }
+
+    #[test]
+    fn version_2_file_is_tag36h11_on_a_dodecahedron() {
+        let mut v = nominal_json();
+        v["version"] = json!(2);
+        // Keys a version 2 writer could not mean are ignored, as provenance is in version 1.
+        v["family"] = json!("tag16h5");
+        v.as_object_mut().expect("object").remove("solid");
+        let old = Marker::from_json(&v.to_string()).expect("a version 2 file still reads");
+        assert_eq!(old, Marker::default());
+        assert_eq!(old.family, TagFamily::TAG36H11);
     }
 
     #[test]

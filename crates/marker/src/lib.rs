@@ -21,7 +21,7 @@ pub enum MarkerError {
     #[error("marker file is not valid JSON: {0}")]
     Json(String),
     /// The file's `version` is not one this build reads.
-    #[error("unsupported marker file version {found} (this build reads versions 1 and 2)")]
+    #[error("unsupported marker file version {found} (this build reads versions 1 to 3)")]
     Version {
         /// The version found.
         found: String,

@@ -8,6 +8,7 @@
 
 use crate::MarkerError;
 use crate::dodecahedron::{Dodecahedron, Face};
+use jawtrack_tag_family::TagFamily;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
 /// Corners in tag coordinates, in detection order (bottom-left, bottom-right, top-right, top-left).
@@ -185,6 +186,8 @@ pub struct Body {
 /// Both bodies of a printed marker pair.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {
+    /// The AprilTag family its tags are printed in (tag36h11 unless the file names another).
+    pub family: TagFamily,
     /// Nominal edge length of the dodecahedron (mm).
     pub edge: f64,
     /// The bodies, at most one of each kind.
@@ -207,28 +210,48 @@ fn margin(face: &Face, size: f64) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// The largest tag (mm) that leaves a white margin of one tag cell (size/8) inside a face of
-/// a dodecahedron with this edge: size = min over edges of r / (½(|e·x| + |e·y|) + ⅛), with r
-/// the pentagon's inradius and e each edge's in-plane normal.
+/// The largest tag36h11 tag (mm) that leaves a white margin of one tag cell (size/8) inside a
+/// face of a dodecahedron with this edge: size = min over edges of r / (½(|e·x| + |e·y|) + ⅛),
+/// with r the pentagon's inradius and e each edge's in-plane normal.
 pub fn default_tag_size(edge: f64) -> f64 {
+    default_tag_size_of(&TagFamily::TAG36H11, edge)
+}
+
+/// [`default_tag_size`] for a tag of `family`, whose cell is size / (cells across its border).
+pub fn default_tag_size_of(family: &TagFamily, edge: f64) -> f64 {
+    let cell = 1.0 / family.width_at_border as f64;
     let d = Dodecahedron::new(edge);
     let face = &d.faces()[0];
     let r = face.inradius();
     face.edge_normals()
         .iter()
-        .map(|e| r / (0.5 * (e.dot(&face.x_axis).abs() + e.dot(&face.y_axis).abs()) + 0.125))
+        .map(|e| r / (0.5 * (e.dot(&face.x_axis).abs() + e.dot(&face.y_axis).abs()) + cell))
         .fold(f64::INFINITY, f64::min)
 }
 
 impl Marker {
-    /// The ideal marker pair: `edge` (mm) and tag side `tag_size` (mm, default
+    /// The ideal marker pair in tag36h11: `edge` (mm) and tag side `tag_size` (mm, default
     /// [`default_tag_size`]), maxilla ids 0–11 and mandible ids 12–23 on faces 0–11.
     pub fn nominal(edge: f64, tag_size: Option<f64>) -> Result<Marker, MarkerError> {
+        Marker::nominal_of(TagFamily::TAG36H11, edge, tag_size)
+    }
+
+    /// [`Marker::nominal`] printed in `family` (its default tag size: [`default_tag_size_of`]).
+    pub fn nominal_of(family: TagFamily, edge: f64, tag_size: Option<f64>) -> Result<Marker, MarkerError> {
+        if family.count() < (2 * TAGS_PER_BODY) as usize {
+            return Err(MarkerError::Params(format!(
+                "{} has {} tags; a marker pair needs ids 0–{}",
+                family.name,
+                family.count(),
+                2 * TAGS_PER_BODY - 1
+            )));
+        }
         if !edge.is_finite() || edge <= 0.0 {
             return Err(MarkerError::Params(format!("the edge length must be a positive number of mm, got {edge}")));
         }
         let solid = Dodecahedron::new(edge);
-        let largest = default_tag_size(edge);
+        let largest = default_tag_size_of(&family, edge);
+        let cells = family.width_at_border as f64;
         let size = tag_size.unwrap_or(largest);
         if !size.is_finite() || size <= 0.0 {
             return Err(MarkerError::Params(format!("the tag size must be a positive number of mm, got {size}")));
@@ -241,11 +264,11 @@ impl Marker {
                  (the largest tag that keeps a one-cell white margin is {largest:.3} mm)"
             )));
         }
-        if margin(face0, size) < size / 8.0 - 1e-9 {
+        if margin(face0, size) < size / cells - 1e-9 {
             return Err(MarkerError::Params(format!(
                 "a {size} mm tag leaves less than one cell ({:.3} mm) of white margin inside its face, which the \
                  detector needs; the largest tag with that margin on a {edge} mm face is {largest:.3} mm",
-                size / 8.0
+                size / cells
             )));
         }
         let bodies = BodyKind::ALL
@@ -256,7 +279,7 @@ impl Marker {
                 provenance: None,
             })
             .collect();
-        Ok(Marker { edge, bodies })
+        Ok(Marker { family, edge, bodies })
     }
 
     /// Refuses a marker without both bodies: a file describing one body reads, but can never

@@ -37,6 +37,8 @@ pub struct PlacedBody<'a> {
     pub body: &'a Body,
     /// Edge of the solid they are glued on (mm).
     pub edge: f64,
+    /// The family the tags are printed in (the marker's).
+    pub family: TagFamily,
     /// Where the body is.
     pub camera_from_body: Pose,
 }
@@ -172,7 +174,7 @@ impl Prepared {
                                 x: pose.transform_vector(&x),
                                 y: pose.transform_vector(&y),
                                 inv_half: 2.0 / size,
-                                bitmap: TagFamily::TAG36H11.bitmap(t.id)?,
+                                bitmap: pb.family.bitmap(t.id)?,
                             })
                         });
                         FaceC { normal, offset: normal.dot(&center), shade: shade(&normal, &light, scene.ambient), tag }
@@ -539,7 +541,7 @@ mod tests {
         let pose = Pose::from_parts(UnitQuaternion::from_euler_angles(2.8, 0.3, 0.4), Vector3::new(28.0, 14.0, 110.0));
         let scene = RenderScene {
             camera: cam,
-            bodies: vec![PlacedBody { body, edge: marker.edge, camera_from_body: pose }],
+            bodies: vec![PlacedBody { body, edge: marker.edge, family: marker.family, camera_from_body: pose }],
             planes: vec![],
             light_dir: Vector3::new(0.0, 0.0, -1.0),
             ambient: 0.35,
@@ -588,6 +590,7 @@ mod tests {
             bodies: vec![PlacedBody {
                 body,
                 edge: marker.edge,
+                family: marker.family,
                 camera_from_body: Pose::from_axis_angle(Vector3::new(2.9, 0.2, 0.1), Vector3::new(0.0, 0.0, 120.0)),
             }],
             planes: vec![],

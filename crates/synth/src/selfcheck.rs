@@ -46,7 +46,7 @@ pub fn edge_self_check(side_px: f64, roll_deg: f64) -> EdgeCheck {
     let cam = Camera { intrinsics: k, width: w, height: h };
     let scene = RenderScene {
         camera: cam,
-        bodies: vec![PlacedBody { body, edge: marker.edge, camera_from_body: pose }],
+        bodies: vec![PlacedBody { body, edge: marker.edge, family: marker.family, camera_from_body: pose }],
         planes: vec![],
         light_dir: Vector3::new(0.0, 0.0, -1.0),
         ambient: 0.35,

@@ -200,6 +200,7 @@ mod tests {
                 bodies: vec![PlacedBody {
                     body: self.marker.body(BodyKind::Maxilla).expect("maxilla"),
                     edge: self.marker.edge,
+                    family: self.marker.family,
                     camera_from_body: self.pose(t),
                 }],
                 planes: vec![],

@@ -250,7 +250,12 @@ impl Synthesizer {
             .iter()
             .zip([cam_max, cam_man])
             .filter_map(|(k, pose)| {
-                self.true_marker.body(*k).map(|body| PlacedBody { body, edge, camera_from_body: pose })
+                self.true_marker.body(*k).map(|body| PlacedBody {
+                    body,
+                    edge,
+                    family: self.true_marker.family,
+                    camera_from_body: pose,
+                })
             })
             .collect();
         let head_from_plane =

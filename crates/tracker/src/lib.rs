@@ -280,8 +280,10 @@ fn slot(kind: BodyKind) -> usize {
 }
 
 impl Tracker {
-    /// A tracker for `marker` (nominal or calibrated).
-    pub fn new(marker: Marker, config: TrackerConfig) -> Result<Self, TrackError> {
+    /// A tracker for `marker` (nominal or calibrated). Its detector finds the marker's tag
+    /// family, whatever `config.detector.family` says.
+    pub fn new(marker: Marker, mut config: TrackerConfig) -> Result<Self, TrackError> {
+        config.detector.family = marker.family;
         validate(&config)?;
         let corners = BodyKind::ALL.map(|kind| {
             marker
@@ -313,6 +315,11 @@ impl Tracker {
         &self.marker
     }
 
+    /// Cells across a tag's black border in the marker's family.
+    fn cells(&self) -> f64 {
+        self.marker.family.width_at_border as f64
+    }
+
     /// The ids of the tags a calibrated marker left at their nominal place, ascending: a pose
     /// that uses one is flagged [`Flag::UncalibratedTag`]. Empty for a nominal marker (every
     /// tag nominal alike) and for one calibrated whole.
@@ -329,7 +336,8 @@ impl Tracker {
     /// region, the starts of their PnP, what settles a lone tag), the last relative pose and
     /// the tag statistics. The smoother restarts only when its settings change, since its state
     /// was built under the old ones. Settings refused leave the tracker as it was.
-    pub fn set_config(&mut self, config: TrackerConfig) -> Result<(), TrackError> {
+    pub fn set_config(&mut self, mut config: TrackerConfig) -> Result<(), TrackError> {
+        config.detector.family = self.marker.family;
         validate(&config)?;
         if config.detector != self.config.detector {
             self.detector = Detector::new(config.detector)?;
@@ -532,7 +540,8 @@ impl Tracker {
             };
             bodies[slot(kind)] = self.accept(kind, pose, rejected, other.or(own).as_ref(), &mut flags);
         }
-        let defocused = sharpness::judge(&mut bodies, &detections, smears, self.config.max_blur_per_cell, &mut flags);
+        let defocused =
+            sharpness::judge(&mut bodies, &detections, smears, self.config.max_blur_per_cell, self.cells(), &mut flags);
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
                 Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
@@ -597,11 +606,11 @@ impl Tracker {
     pub fn observations(&self, kind: BodyKind, detections: &[Detection]) -> Vec<Observation> {
         let mine: Vec<&Detection> =
             detections.iter().filter(|d| self.marker.find_tag(d.id).is_some_and(|(b, _)| b == kind)).collect();
-        let skip_thin = mine.iter().filter(|d| !sharpness::thin(d)).count() >= 2;
+        let skip_thin = mine.iter().filter(|d| !sharpness::thin(d, self.cells())).count() >= 2;
         let mut out = Vec::new();
         for d in mine {
             let Some((_, tag)) = self.marker.find_tag(d.id) else { continue };
-            if skip_thin && sharpness::thin(d) {
+            if skip_thin && sharpness::thin(d, self.cells()) {
                 continue;
             }
             for (corner, pixel) in tag.corners.iter().zip(&d.corners) {

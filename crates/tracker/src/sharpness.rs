@@ -34,10 +34,10 @@ pub const THIN_RATIO: f64 = 0.22;
 
 /// Whether a detected tag is seen too edge-on to use while its body has others
 /// ([`THIN_CELL_PX`], [`THIN_RATIO`]).
-pub(crate) fn thin(d: &Detection) -> bool {
+pub(crate) fn thin(d: &Detection, cells: f64) -> bool {
     let sides = sides_px(d);
     let (short, long) = sides.iter().fold((f64::INFINITY, 0.0f64), |(s, l), &v| (s.min(v), l.max(v)));
-    short / 8.0 < THIN_CELL_PX || short < THIN_RATIO * long
+    short / cells < THIN_CELL_PX || short < THIN_RATIO * long
 }
 
 /// The lengths (px) of a detected tag's four sides.
@@ -46,9 +46,9 @@ fn sides_px(d: &Detection) -> [f64; 4] {
     std::array::from_fn(|i| (c[i][0] - c[(i + 1) % 4][0]).hypot(c[i][1] - c[(i + 1) % 4][1]))
 }
 
-/// The width (px) of a detected tag's cells along its longest side.
-fn longest_cell_px(d: &Detection) -> f64 {
-    sides_px(d).into_iter().fold(0.0, f64::max) / 8.0
+/// The width (px) of a detected tag's cells along its longest side, `cells` across its border.
+fn longest_cell_px(d: &Detection, cells: f64) -> f64 {
+    sides_px(d).into_iter().fold(0.0, f64::max) / cells
 }
 
 /// The lens's blur (σ, px) in a tag's measured blur `sigma_px` when the motion predicted over
@@ -68,6 +68,7 @@ pub(crate) fn judge(
     detections: &[Detection],
     smears_px: [f64; 2],
     max_blur_per_cell: f64,
+    cells: f64,
     flags: &mut Vec<Flag>,
 ) -> bool {
     let mut defocused = false;
@@ -75,7 +76,7 @@ pub(crate) fn judge(
         let Some(b) = body else { continue };
         let used: Vec<&Detection> = detections.iter().filter(|d| b.tags.contains(&d.id)).collect();
         b.blur_px = median(used.iter().filter_map(|d| d.blur_px)).map(|blur| lens_blur(blur, smear));
-        b.cell_px = median(used.iter().map(|d| longest_cell_px(d))).unwrap_or(0.0);
+        b.cell_px = median(used.iter().map(|d| longest_cell_px(d, cells))).unwrap_or(0.0);
         if b.defocused(max_blur_per_cell) {
             flags.push(Flag::Defocused(*kind));
             defocused = true;
@@ -137,7 +138,7 @@ mod tests {
             };
             let mut bodies = [Some(body), None];
             let mut flags = Vec::new();
-            let defocused = judge(&mut bodies, &[d], [0.0; 2], DEFOCUSED_BLUR_PER_CELL, &mut flags);
+            let defocused = judge(&mut bodies, &[d], [0.0; 2], DEFOCUSED_BLUR_PER_CELL, 8.0, &mut flags);
             let b = bodies[0].clone().expect("kept");
             (defocused, flags, b.blur_px, b.cell_px)
         };

@@ -1,9 +1,10 @@
 //! The tracker through time: searching where the markers are expected on a rendered hinge
 //! sequence, dropping a tag that flickers in, settling a lone tag's mirror ambiguity (and
 //! reporting the covariance of the solution taken), new settings that keep the motion, and the
-//! registration to the tooth scans.
+//! registration to the tooth scans; a marker printed in another tag family, tracked from its
+//! file.
 
-use jawtrack_apriltag::{Detection, ImageView};
+use jawtrack_apriltag::{Detection, ImageView, TagFamily};
 use jawtrack_marker::{BodyKind, BodyProvenance, Marker, TagProvenance};
 use jawtrack_pose::pnp::{pose_jacobian, projection_jacobian};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
@@ -15,6 +16,41 @@ use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector2, Vector3};
 
 /// Rows of the frames the hand-made detections stand for (a global shutter ignores them).
 const ROWS: usize = 1080;
+
+#[test]
+fn a_marker_in_another_family_is_tracked_from_its_file() {
+    // The marker file names tag25h9: the renderer prints it, the tracker's detector reads it.
+    let nominal = Marker::nominal_of(TagFamily::TAG25H9, 12.7, None).expect("tag25h9 marker");
+    let marker = Marker::from_json(&nominal.to_json()).expect("its file reads");
+    assert_eq!(marker.family, TagFamily::TAG25H9);
+    let config = SynthConfig {
+        realism: Realism::clean(),
+        marker: marker.clone(),
+        max_frames: Some(6),
+        ..SynthConfig::new(SceneKind::Static)
+    };
+    let synth = Synthesizer::new(config).expect("scene");
+    let camera = synth.header().intrinsics;
+    let mut tracker = Tracker::new(marker, TrackerConfig::default()).expect("tracker");
+    let mut as_36h11 = Tracker::new(Marker::default(), TrackerConfig::default()).expect("tracker");
+    let (mut posed, mut tags) = (0, 0);
+    for i in 0..synth.len() {
+        let f = synth.render(i).expect("frame");
+        let (w, h) = (f.width as usize, f.height as usize);
+        let view = ImageView::new(&f.luma, w, h, w).expect("view");
+        let r = tracker.track(&view, &camera, f.truth.t).expect("tracks");
+        let m = r.maxilla_from_mandible.unwrap_or_else(|| panic!("frame {i}: no jaw pose"));
+        let (angle, dist) = m.distance_to(&f.truth.maxilla_from_mandible);
+        assert!(dist < 0.05 && angle.to_degrees() < 0.1, "frame {i}: {dist:.3} mm {:.3}°", angle.to_degrees());
+        assert!(r.detections.iter().all(|d| d.id < 24), "frame {i}: an id off the marker");
+        tags += r.detections.len();
+        posed += 1;
+        // Printed in tag25h9, the markers show a tag36h11 tracker nothing.
+        assert!(as_36h11.track(&view, &camera, f.truth.t).expect("tracks").detections.is_empty(), "frame {i}");
+    }
+    assert_eq!(posed, 6, "frames posed");
+    assert!(tags >= 6 * 6, "{tags} tags in 6 frames");
+}
 
 #[test]
 fn steady_tracking_searches_only_the_expected_region() {
@@ -179,7 +215,7 @@ fn a_nominal_marker_never_flags_uncalibrated_tags() {
     for marker in [Marker::default(), {
         // A version 1 calibrated file: provenance unknown, nothing to flag.
         let mut m = calibrated_but_3_and_15();
-        m = Marker::from_json(&m.to_json().replacen("\"version\": 2", "\"version\": 1", 1)).expect("version 1 reads");
+        m = Marker::from_json(&m.to_json().replacen("\"version\": 3", "\"version\": 1", 1)).expect("version 1 reads");
         m
     }] {
         let mut tracker = Tracker::new(marker.clone(), TrackerConfig::default()).expect("tracker");

@@ -21,8 +21,8 @@
 //! side along the motion is not smeared, so a tag's blur is the second-sharpest of its sides:
 //! what the lens did, which is what [`crate::Detection::blur_px`] reports.
 
-use crate::family::TagBitmap;
 use crate::image::ImageView;
+use jawtrack_tag_family::TagBitmap;
 use nalgebra::{SMatrix, SVector};
 
 /// The spread (σ, px) an ideal, perfectly sharp edge shows in this fit: the pixel's area

@@ -9,7 +9,6 @@ use crate::clusters::gradient_clusters_with;
 use crate::components::{UnionFind, connected_components_into};
 use crate::config::{DetectorConfig, Roi};
 use crate::decode::CodeTable;
-use crate::family::TagFamily;
 use crate::gray::Gray;
 use crate::image::ImageView;
 use crate::preprocess::{blur_or_sharpen, decimate_into};
@@ -17,6 +16,7 @@ use crate::quads::{Quad, fit_quads};
 use crate::threshold::threshold_into;
 use crate::workers::Workers;
 use edges::refine_edges;
+use jawtrack_tag_family::TagFamily;
 use std::sync::{Arc, Mutex, TryLockError};
 
 mod border;

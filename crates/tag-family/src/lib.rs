@@ -1,7 +1,7 @@
 //! Tag families as data: each family is its codewords, where each bit sits, and how many cells
 //! the printed square spans ([`TagFamily`]). The detector, the renderer and the harness sheet
 //! read a family only through this type, so a family is added here alone: its codebook in a
-//! file under `family/` and one constant (see [`TagFamily::ALL`]).
+//! file of its own (`tag25h9.rs`) and one constant (see [`TagFamily::ALL`]).
 //!
 //! Supported layouts are the classic ones: the data cells inside a one-cell black border, itself
 //! inside a white quiet zone. Built in: tag36h11 (JawTrack's), tag25h9 and tag16h5.
@@ -20,7 +20,7 @@ mod tag36h11;
 /// # Examples
 ///
 /// ```
-/// use jawtrack_apriltag::TagFamily;
+/// use jawtrack_tag_family::TagFamily;
 ///
 /// let family = TagFamily::named("tag25h9").expect("built in");
 /// assert_eq!((family.count(), family.nbits()), (35, 25));
@@ -28,7 +28,7 @@ mod tag36h11;
 /// assert_eq!(bitmap.width(), 7);
 /// assert_eq!(bitmap.code(), family.code(3).expect("tag 3 exists"));
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy, PartialEq, Eq)]
 pub struct TagFamily {
     /// The family's name as the C library spells it, e.g. `tag36h11`.
     pub name: &'static str,
@@ -154,8 +154,15 @@ impl TagFamily {
     }
 }
 
+/// A family shows as its name: its codebook is data, not a message.
+impl std::fmt::Debug for TagFamily {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "TagFamily({})", self.name)
+    }
+}
+
 /// `code` with bit `i` (most significant first) taken from bit `from[i]`.
-pub(crate) fn permute(code: u64, from: &[u8]) -> u64 {
+pub fn permute(code: u64, from: &[u8]) -> u64 {
     let n = from.len();
     from.iter().fold(0u64, |acc, &j| (acc << 1) | ((code >> (n - 1 - usize::from(j))) & 1))
 }
