@@ -14,6 +14,7 @@
 
 pub mod link;
 pub mod receiver;
+pub mod replay;
 
 use chacha20poly1305::aead::{Aead, KeyInit, Payload};
 use chacha20poly1305::{XChaCha20Poly1305, XNonce};
@@ -187,6 +188,16 @@ pub enum Security {
     Sealed(Key),
     /// In clear, for development only: both ends must opt in.
     Plaintext,
+}
+
+impl Security {
+    /// The pairing key's id, to name it in a recording's header; none in plaintext.
+    pub fn key_id(&self) -> Option<String> {
+        match self {
+            Security::Sealed(k) => Some(k.id()),
+            Security::Plaintext => None,
+        }
+    }
 }
 
 /// What a datagram carries.

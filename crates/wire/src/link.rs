@@ -67,6 +67,19 @@ impl Counters {
         self.rejected.values().sum()
     }
 
+    /// The counts in words, as the receiver prints them while it runs and when it stops.
+    pub fn describe(&self) -> String {
+        format!(
+            "received {}, accepted {}, lost {}, reordered {}, duplicated {}, rejected {}",
+            self.received,
+            self.accepted,
+            self.lost,
+            self.reordered,
+            self.duplicated,
+            self.rejected_total()
+        )
+    }
+
     /// The counts as JSON: the receiver's exit summary and the viewer's status share them.
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({

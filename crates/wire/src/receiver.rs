@@ -2,9 +2,9 @@
 //! into a recording line when accepted, and answered with an acknowledgement at most ten times
 //! a second per phone (enough for the app's link light).
 
-use crate::link::{Link, LinkConfig, Verdict};
+use crate::link::{Counters, Link, LinkConfig, Verdict};
 use crate::{Ack, Message, Security, decode, encode_ack};
-use jawtrack_recording::FrameRecord;
+use jawtrack_recording::{FrameRecord, RecordingHeader};
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
@@ -29,6 +29,38 @@ pub struct Receiver {
     session: u64,
     acks_sent: u64,
     last_ack: Option<(SocketAddr, Instant)>,
+}
+
+/// A receiver's recording header: it records whatever sessions arrive (each frame carries its
+/// phone's), under the key it opened them with, and names where it listened and the clock skew
+/// it allowed (s).
+pub fn recording_header(listen: SocketAddr, max_clock_skew_s: f64, security: &Security) -> RecordingHeader {
+    let mut header = RecordingHeader::new("jawtrack receive");
+    header.session = None;
+    header.key_id = security.key_id();
+    header.settings = serde_json::json!({ "listen": listen.to_string(), "max_clock_skew_s": max_clock_skew_s });
+    header
+}
+
+/// What a receiver run did, as one JSON object: the counts `c`, the acknowledgements sent, the
+/// run's length (s) and the CPU time it took (s, when known) and its share of one core.
+pub fn run_summary(c: &Counters, acks: u64, elapsed_s: f64, cpu_s: Option<f64>) -> serde_json::Value {
+    let mut v = c.to_json();
+    v["acks_sent"] = acks.into();
+    v["duration_s"] = elapsed_s.into();
+    v["cpu_s"] = cpu_s.into();
+    v["cpu_share_of_one_core"] = cpu_s.map(|c| c / elapsed_s.max(1e-9)).into();
+    v
+}
+
+/// CPU time of this process so far (s), from /proc (Linux only).
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which may hold spaces) start at the last ')'.
+    let fields: Vec<&str> = stat.get(stat.rfind(')')? + 2..)?.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    // USER_HZ is 100 on every Linux architecture we run on.
+    Some(ticks / 100.0)
 }
 
 impl Receiver {
@@ -84,5 +116,27 @@ impl Receiver {
     /// The accounting so far.
     pub fn link(&self) -> &Link {
         &self.link
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_summary_adds_the_run_to_the_counts() {
+        let c = Counters { received: 3, accepted: 2, ..Counters::default() };
+        let v = run_summary(&c, 1, 2.0, Some(0.5));
+        assert_eq!((v["received"].as_u64(), v["acks_sent"].as_u64()), (Some(3), Some(1)));
+        assert_eq!((v["cpu_s"].as_f64(), v["cpu_share_of_one_core"].as_f64()), (Some(0.5), Some(0.25)));
+        assert!(run_summary(&c, 0, 1.0, None)["cpu_share_of_one_core"].is_null());
+        assert_eq!(c.describe(), "received 3, accepted 2, lost 0, reordered 0, duplicated 0, rejected 0");
+    }
+
+    #[test]
+    fn a_plaintext_receivers_header_names_no_key() {
+        let h = recording_header("127.0.0.1:5005".parse().expect("address"), 60.0, &Security::Plaintext);
+        assert_eq!((h.session, h.key_id), (None, None));
+        assert_eq!(h.settings["listen"], "127.0.0.1:5005");
     }
 }

@@ -35,13 +35,6 @@ impl KeyArgs {
     }
 }
 
-pub(super) fn key_id(security: &Security) -> Option<String> {
-    match security {
-        Security::Sealed(k) => Some(k.id()),
-        Security::Plaintext => None,
-    }
-}
-
 /// Prints a new pairing key and its id.
 pub(crate) fn keygen() {
     let key = Key::generate();

@@ -3,14 +3,14 @@
 //! rejected, acknowledges so the phone can show the link is alive, and optionally serves the
 //! live viewer.
 
-use super::{KeyArgs, key_id};
+use super::KeyArgs;
 use crate::flags::ViewerArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_recording::{RecordingHeader, RecordingWriter};
+use jawtrack_recording::RecordingWriter;
 use jawtrack_viewer::{LiveServer, LiveState};
-use jawtrack_wire::link::{Counters, LinkConfig};
-use jawtrack_wire::receiver::Receiver;
+use jawtrack_wire::link::LinkConfig;
+use jawtrack_wire::receiver::{Receiver, process_cpu_seconds, recording_header, run_summary};
 use jawtrack_wire::{Key, Security, unix_ms};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
@@ -80,49 +80,6 @@ fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
     Ok(())
 }
 
-/// What a receiver run did, printed as one JSON line at exit.
-fn summary_json(c: &Counters, acks: u64, elapsed: f64) -> serde_json::Value {
-    let cpu = process_cpu_seconds();
-    let mut v = c.to_json();
-    v["acks_sent"] = acks.into();
-    v["duration_s"] = elapsed.into();
-    v["cpu_s"] = cpu.into();
-    v["cpu_share_of_one_core"] = cpu.map(|c| c / elapsed.max(1e-9)).into();
-    v
-}
-
-fn describe(c: &Counters) -> String {
-    format!(
-        "received {}, accepted {}, lost {}, reordered {}, duplicated {}, rejected {}",
-        c.received,
-        c.accepted,
-        c.lost,
-        c.reordered,
-        c.duplicated,
-        c.rejected_total()
-    )
-}
-
-/// CPU time of this process so far (s), from /proc (Linux only).
-pub(crate) fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name (which may hold spaces) start at the last ')'.
-    let fields: Vec<&str> = stat.get(stat.rfind(')')? + 2..)?.split_whitespace().collect();
-    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-    // USER_HZ is 100 on every Linux architecture we run on.
-    Some(ticks / 100.0)
-}
-
-/// The recording's header: a receiver records whatever sessions arrive (each frame carries its
-/// phone's), under the key it opened them with.
-fn header(a: &ReceiveArgs, security: &Security) -> RecordingHeader {
-    let mut header = RecordingHeader::new("jawtrack receive");
-    header.session = None;
-    header.key_id = key_id(security);
-    header.settings = serde_json::json!({ "listen": a.listen.to_string(), "max_clock_skew_s": a.max_clock_skew });
-    header
-}
-
 /// Refuses times that cannot be, naming the flag.
 fn check_times(a: &ReceiveArgs) -> Result<()> {
     if !(a.max_clock_skew.is_finite() && a.max_clock_skew >= 0.0) {
@@ -163,7 +120,8 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
         None => None,
     };
     let mut out =
-        RecordingWriter::create(&a.out, header(a, &security), a.force.overwrite()).map_err(|e| a.force.explain(e))?;
+        RecordingWriter::create(&a.out, recording_header(a.listen, a.max_clock_skew, &security), a.force.overwrite())
+            .map_err(|e| a.force.explain(e))?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -172,10 +130,7 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     eprintln!(
         "listening on {} ({}); recording to {}{}",
         socket.local_addr()?,
-        match &security {
-            Security::Sealed(k) => format!("key id {}", k.id()),
-            Security::Plaintext => "PLAINTEXT".into(),
-        },
+        security.key_id().map_or_else(|| "PLAINTEXT".into(), |id| format!("key id {id}")),
         a.out.display(),
         a.serve.map(|s| format!("; viewer at http://{s}/")).unwrap_or_default()
     );
@@ -213,9 +168,9 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             last_status = Instant::now();
             let c = receiver.link().counters();
             if tty {
-                eprint!("\r\x1b[K{}", describe(&c));
+                eprint!("\r\x1b[K{}", c.describe());
             } else {
-                eprintln!("{}", describe(&c));
+                eprintln!("{}", c.describe());
             }
         }
         let (n, from) = match socket.recv_from(&mut buf) {
@@ -247,12 +202,13 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     eprintln!(
         "stopped after {:.1} s: {}; recording in {}",
         started.elapsed().as_secs_f64(),
-        describe(&c),
+        c.describe(),
         a.out.display()
     );
     for (reason, n) in &c.rejected {
         eprintln!("  rejected as {reason}: {n}");
     }
-    say!("{}", summary_json(&c, receiver.acks_sent(), started.elapsed().as_secs_f64()));
+    let elapsed = started.elapsed().as_secs_f64();
+    say!("{}", run_summary(&c, receiver.acks_sent(), elapsed, process_cpu_seconds()));
     Ok(())
 }

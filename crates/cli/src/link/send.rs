@@ -5,8 +5,9 @@ use super::KeyArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_recording::FrameRecord;
-use jawtrack_wire::{Ack, PosePacket, Session};
-use rand::{Rng, SeedableRng};
+use jawtrack_wire::replay::{AckTally, Impairment, replay_summary};
+use jawtrack_wire::{PosePacket, Session};
+use rand::SeedableRng;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -43,26 +44,6 @@ pub(crate) struct SendArgs {
     seed: u64,
 }
 
-/// The receiver's acknowledgements: read, refused (not opened by the key), and the last one.
-#[derive(Default)]
-struct Acks {
-    read: u64,
-    refused: u64,
-    last: Option<Ack>,
-}
-
-impl Acks {
-    fn read(&mut self, session: &Session, datagram: &[u8]) {
-        match session.read_ack(datagram) {
-            Ok(ack) => {
-                self.read += 1;
-                self.last = Some(ack);
-            }
-            Err(_) => self.refused += 1,
-        }
-    }
-}
-
 pub(crate) fn run(a: &SendArgs) -> Result<()> {
     let security = a.key.security()?;
     for (name, p) in [("--loss", a.loss), ("--reorder", a.reorder), ("--duplicate", a.duplicate)] {
@@ -88,25 +69,19 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     let mut session = Session::new(security);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
     let bar = crate::progress::bar("sending", Some(total), "datagrams");
-    let (mut sent, mut dropped, mut reordered, mut duplicated) = (0u64, 0u64, 0u64, 0u64);
-    let mut acks = Acks::default();
-    let mut held: Option<Vec<u8>> = None;
+    let mut impairment = Impairment::new(a.loss, a.reorder, a.duplicate);
+    let mut acks = AckTally::default();
     let period = Duration::from_secs_f64(1.0 / a.rate);
     let start = Instant::now();
     let mut buf = [0u8; 2048];
-    let transmit = |d: &[u8], rng: &mut rand_chacha::ChaCha8Rng, sent: &mut u64, duplicated: &mut u64| {
-        let copies = if rng.random_bool(a.duplicate) { 2 } else { 1 };
-        for _ in 0..copies {
-            // Loopback drops nothing; a full socket buffer is retried rather than lost.
-            while let Err(e) = socket.send_to(d, a.to) {
-                if e.kind() != std::io::ErrorKind::WouldBlock {
-                    return Err(e);
-                }
-                std::thread::sleep(Duration::from_micros(200));
+    let transmit = |d: &[u8]| {
+        // Loopback drops nothing; a full socket buffer is retried rather than lost.
+        while let Err(e) = socket.send_to(d, a.to) {
+            if e.kind() != std::io::ErrorKind::WouldBlock {
+                return Err(e);
             }
-            *sent += 1;
+            std::thread::sleep(Duration::from_micros(200));
         }
-        *duplicated += copies - 1;
         Ok(())
     };
     for i in 0..total {
@@ -119,17 +94,8 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
         record.frame = i;
         record.t = i as f64 / a.rate;
         let datagram = session.pose_datagram(&PosePacket::from_record(&record));
-        let last = i + 1 == total;
-        if !last && rng.random_bool(a.loss) {
-            dropped += 1;
-        } else if !last && held.is_none() && rng.random_bool(a.reorder) {
-            held = Some(datagram);
-        } else {
-            transmit(&datagram, &mut rng, &mut sent, &mut duplicated).context("sending")?;
-            if let Some(h) = held.take() {
-                transmit(&h, &mut rng, &mut sent, &mut duplicated).context("sending")?;
-                reordered += 1;
-            }
+        for d in impairment.pass(datagram, i + 1 == total, &mut rng) {
+            transmit(&d).context("sending")?;
         }
         while let Ok((n, _)) = socket.recv_from(&mut buf) {
             acks.read(&session, &buf[..n]);
@@ -146,30 +112,16 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     let elapsed = start.elapsed().as_secs_f64();
+    let i = &impairment;
     eprintln!(
-        "sent {total} frames as {sent} datagrams in {elapsed:.1} s (session {:#018x}): dropped {dropped}, reordered {reordered}, duplicated {duplicated}; {}",
+        "sent {total} frames as {} datagrams in {elapsed:.1} s (session {:#018x}): dropped {}, reordered {}, duplicated {}; {}",
+        i.sent,
         session.id(),
-        match acks.last {
-            Some(ack) => {
-                format!("{} acknowledgements, the last: {} accepted, {} lost", acks.read, ack.accepted, ack.lost)
-            }
-            None => "no acknowledgement (is the receiver running, with the same key?)".into(),
-        }
+        i.dropped,
+        i.reordered,
+        i.duplicated,
+        acks.describe()
     );
-    say!(
-        "{}",
-        serde_json::json!({
-            "session": format!("{:#018x}", session.id()),
-            "frames": total,
-            "datagrams_sent": sent,
-            "dropped": dropped,
-            "reordered": reordered,
-            "duplicated": duplicated,
-            "acks": acks.read,
-            "acks_refused": acks.refused,
-            "last_ack": acks.last.map(|a| serde_json::json!({"accepted": a.accepted, "lost": a.lost, "highest_seq": a.highest_seq})),
-            "duration_s": elapsed,
-        })
-    );
+    say!("{}", replay_summary(session.id(), total, i, &acks, elapsed));
     Ok(())
 }
