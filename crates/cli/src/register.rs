@@ -10,7 +10,9 @@ use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_occlusion::Mesh;
 use jawtrack_pose::Pose;
 use jawtrack_registration::Registration;
-use jawtrack_registration::icp::{Acceptance, IcpOptions, IcpResult, centred_init, marker_surface_samples, register};
+use jawtrack_registration::icp::{
+    Acceptance, IcpOptions, IcpResult, centred_init, marker_surface_samples, register, set_entry,
+};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 
@@ -116,16 +118,7 @@ pub(crate) fn run(a: &RegisterArgs) -> Result<()> {
     };
     result.check(&limits).with_context(|| format!("not written to {}", a.out.display()))?;
 
-    let (field, kept) = match a.body {
-        BodyKind::Maxilla => {
-            registration.maxilla_scan_from_maxilla_marker = result.scan_from_marker;
-            ("maxilla_scan_from_maxilla_marker", "mandible_scan_from_mandible_marker")
-        }
-        BodyKind::Mandible => {
-            registration.mandible_scan_from_mandible_marker = result.scan_from_marker;
-            ("mandible_scan_from_mandible_marker", "maxilla_scan_from_maxilla_marker")
-        }
-    };
+    let (field, kept) = set_entry(&mut registration, a.body, result.scan_from_marker);
     std::fs::write(&a.out, registration.to_json() + "\n").with_context(|| format!("writing {}", a.out.display()))?;
     say!("wrote {}: {field} set, {kept} and the intercuspation pose kept", a.out.display());
     Ok(())

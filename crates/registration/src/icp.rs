@@ -588,6 +588,26 @@ fn solve(pairs: &[Pair], within: f64) -> Option<(Pose, f64, f64)> {
     Some((step, t.norm(), omega.norm()))
 }
 
+/// Sets `body`'s entry of `registration` to `scan_from_marker` (what [`register`] found),
+/// keeping the other body's entry and the intercuspation pose; the field set and the field kept,
+/// by name.
+pub fn set_entry(
+    registration: &mut crate::Registration,
+    body: BodyKind,
+    scan_from_marker: Pose,
+) -> (&'static str, &'static str) {
+    match body {
+        BodyKind::Maxilla => {
+            registration.maxilla_scan_from_maxilla_marker = scan_from_marker;
+            ("maxilla_scan_from_maxilla_marker", "mandible_scan_from_mandible_marker")
+        }
+        BodyKind::Mandible => {
+            registration.mandible_scan_from_mandible_marker = scan_from_marker;
+            ("mandible_scan_from_mandible_marker", "maxilla_scan_from_maxilla_marker")
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -640,5 +660,15 @@ mod tests {
             let err = options.validate().expect_err("invalid").to_string();
             assert!(err.contains(word), "{err}");
         }
+    }
+
+    #[test]
+    fn setting_one_bodys_entry_keeps_the_other() {
+        let mut r = crate::Registration::identity();
+        let moved = Pose::from_axis_angle(nalgebra::Vector3::zeros(), nalgebra::Vector3::new(1.0, 2.0, 3.0));
+        let (set, kept) = set_entry(&mut r, BodyKind::Mandible, moved);
+        assert_eq!((set, kept), ("mandible_scan_from_mandible_marker", "maxilla_scan_from_maxilla_marker"));
+        assert_eq!(r.mandible_scan_from_mandible_marker, moved);
+        assert_eq!(r.maxilla_scan_from_maxilla_marker, Pose::identity());
     }
 }
