@@ -4,14 +4,14 @@
 //! object.
 
 use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, registration, warn_if_nominal};
-use crate::numbers::{clean_json, fixed};
+use crate::numbers::fixed;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::Anatomy;
 use jawtrack_kinematics::articulator::name;
-use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Displacement, Movements, Side, Window, co_mi};
+use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Movements, Side, co_mi};
+use jawtrack_session::measures::{ArticulatorWindows, articulator_json};
 use jawtrack_session::rest_of;
-use serde_json::{Value, json};
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack articulator`.
@@ -69,11 +69,9 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     let v = ArticulatorValues::measure(&anatomy.mounting, &rest.pose(), &movements, &options)
         .with_context(|| format!("{name_of}"))?;
     let slide = moved.co.map(|co| co_mi(&anatomy.mounting, &co, &moved.mi.unwrap_or_else(|| rest.pose())));
-    let mut report = to_json(&v, a, &options, &anatomy, rest.to_json());
-    if let (Some(s), Value::Object(o)) = (slide, &mut report) {
-        o.insert("co_mi".into(), co_mi_json(&s));
-    }
-    clean_json(&mut report);
+    let m = a.moves;
+    let windows = ArticulatorWindows { protrusion: m.protrusion, left: m.left, right: m.right, co: m.co, mi: m.mi };
+    let report = articulator_json(&v, &options, &anatomy, windows, rest, &a.recording, slide.as_ref());
     if a.json {
         say!("{report}");
     } else {
@@ -88,18 +86,6 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     Ok(())
 }
 
-/// The CO–MI slide as JSON: each point's components and length (mm).
-pub(crate) fn co_mi_json(s: &CoMi) -> Value {
-    let d = |d: &Displacement| json!({"forward_mm": d.protrusive, "down_mm": d.opening, "toward_left_mm": d.lateral, "length_mm": d.norm()});
-    json!({
-        "from": "centric occlusion",
-        "to": "maximal intercuspation",
-        "lower_incisal_point": d(&s.incisor),
-        "left_condyle": d(&s.condyles[0]),
-        "right_condyle": d(&s.condyles[1]),
-    })
-}
-
 fn print_co_mi(s: &CoMi, mi: &str) {
     let mm = |x: f64| fixed(x, 2);
     say!("CO–MI slide, from centric occlusion into maximal intercuspation ({mi}), mm:");
@@ -109,40 +95,6 @@ fn print_co_mi(s: &CoMi, mi: &str) {
     {
         say!("{name:<22} {:>10} {:>8} {:>13} {:>8}", mm(d.protrusive), mm(d.opening), mm(d.lateral), mm(d.norm()));
     }
-}
-
-fn to_json(
-    v: &ArticulatorValues,
-    a: &ArticulatorArgs,
-    o: &ArticulatorOptions,
-    anatomy: &Anatomy,
-    rest: Value,
-) -> Value {
-    let side = |k: usize| {
-        json!({
-            "condylar_inclination_deg": v.condylar_inclination_deg[k],
-            "bennett_deg": v.bennett_deg[k],
-            "immediate_side_shift_mm": v.side_shift_mm[k],
-        })
-    };
-    let window = |w: Option<Window>| w.map(|w| [w.from, w.to]);
-    json!({
-        "version": 1,
-        "units": {"angles": "deg", "lengths": "mm"},
-        "reference_plane": anatomy.reference_plane,
-        "landmarks": anatomy.landmarks,
-        "read_over_mm": o.over_mm,
-        "left_condyle": side(0),
-        "right_condyle": side(1),
-        "protrusive_incisal_guidance_deg": v.protrusive_guidance_deg,
-        "lateral_incisal_guidance_deg": {"toward_left": v.lateral_guidance_deg[0], "toward_right": v.lateral_guidance_deg[1]},
-        "windows_s": {
-            "protrusion": window(a.moves.protrusion), "left": window(a.moves.left), "right": window(a.moves.right),
-            "co": window(a.moves.co), "mi": window(a.moves.mi),
-        },
-        "rest": rest,
-        "recording": a.recording.to_string_lossy(),
-    })
 }
 
 fn print_summary(v: &ArticulatorValues, o: &ArticulatorOptions, anatomy: &Anatomy, rest: &str) {

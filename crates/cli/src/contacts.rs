@@ -1,7 +1,8 @@
 //! `jawtrack contacts`: where the arches touch over a recording. Each frame's lower scan is
 //! placed in the upper scan's frame by `maxilla_scan_from_mandible_scan` and checked by a
 //! [`ContactSession`] (regions in contact, their areas and depths, the contact map over the
-//! recording); this file reads the inputs, feeds the session and writes what it finds.
+//! recording); the run itself is `jawtrack_session::contact_run`, and this file gives it the
+//! flags and prints what it finds.
 //!
 //! Where the pose comes from: with `--registration`, from each frame's `maxilla_from_mandible`
 //! through the registration; without, from the frames' recorded `maxilla_scan_from_mandible_scan`
@@ -18,24 +19,16 @@
 //! and `summary.json` with per-tooth totals.
 
 use crate::flags::{SessionArg, load, registration};
-use crate::numbers::{clean_json, fixed};
-use anyhow::{Context, Result, bail};
+use crate::numbers::fixed;
+use anyhow::{Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
-use jawtrack_occlusion::contacts::{Arch, ContactSettings, THRESHOLD_RANGE_MM};
-use jawtrack_occlusion::dynamics::{self, DynamicsOptions, StepSummary};
-use jawtrack_occlusion::session::{ContactSession, SessionSummary};
-use jawtrack_occlusion::teeth::{Tooth, ToothTotal, ToothTotals};
-use jawtrack_pose::Pose;
+use jawtrack_occlusion::contacts::{ContactSettings, THRESHOLD_RANGE_MM};
+use jawtrack_occlusion::dynamics::{DynamicsOptions, PathSummary};
+use jawtrack_occlusion::teeth::Tooth;
 use jawtrack_session::PoseSource;
-use jawtrack_session::anatomy::upper_scan_left;
-use jawtrack_session::arches::{ArchInput, load_arch, tooth_places};
-use jawtrack_session::contacts::write_outputs;
-use jawtrack_session::scan_pose::PosedFrame;
+use jawtrack_session::contact_run::{self, ContactEvents, ContactJob, ContactReport};
 use nalgebra::Vector3;
-use serde_json::{Value, json};
-use std::io::Write;
 use std::path::PathBuf;
-use std::time::Instant;
 
 /// How the mandible is placed in each frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -46,15 +39,6 @@ pub(crate) enum Mode {
     /// spring-damper, pushed out by contact forces, after the smallest correction that removes
     /// the interpenetration of the first frame.
     Dynamic,
-}
-
-impl Mode {
-    fn name(self) -> &'static str {
-        match self {
-            Mode::Kinematic => "kinematic",
-            Mode::Dynamic => "dynamic",
-        }
-    }
 }
 
 /// Arguments of `jawtrack contacts`.
@@ -114,44 +98,6 @@ pub(crate) struct ContactsArgs {
     dt: f64,
 }
 
-/// Reads one arch's meshes, printing a line per mesh unless `quiet`.
-fn read_arch(side: &'static str, files: &[PathBuf], quiet: bool) -> Result<ArchInput> {
-    let arch = load_arch(side, files)?;
-    if !quiet {
-        arch.lines.iter().for_each(|l| say!("{l}"));
-    }
-    Ok(arch)
-}
-
-/// The dynamic mode: the recorded path resolved by the rigid-body simulation; per frame the
-/// resolved pose and what its line adds, and the summary.
-fn dynamic_frames(
-    a: &ContactsArgs,
-    upper: &Arch,
-    lower: &Arch,
-    posed: &[PosedFrame],
-) -> Result<(Vec<PosedFrame>, Vec<Value>, Value)> {
-    let options = dynamics_options(a);
-    let target: Vec<(f64, Pose)> = posed.iter().map(|&(_, t, p)| (t, p)).collect();
-    let bar = if a.quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar("simulating", posed.len()) };
-    let path = dynamics::resolve_path(upper, lower, &target, &options, &mut |done, _| bar.set_position(done as u64))
-        .context("dynamic mode")?;
-    bar.finish_and_clear();
-    let s = path.summary();
-    let c = &s.intercuspation_correction;
-    say!(
-        "dynamic: intercuspation corrected by {:.3} mm and {:.3}°; peak contact force {:.3} N; largest offset from the recorded path {:.3} mm; residual penetration {:.4} mm",
-        Vector3::from(c.shift_mm).norm(),
-        c.rotation_deg,
-        s.peak_force_n,
-        s.max_target_offset_mm,
-        s.max_residual_penetration_mm
-    );
-    let frames = posed.iter().zip(&path.steps).map(|(&(frame, t, _), s)| (frame, t, s.maxilla_scan_from_mandible_scan));
-    let extras = path.steps.iter().map(|s| json!(StepSummary::from(s))).collect();
-    Ok((frames.collect(), extras, json!(s)))
-}
-
 /// The dynamic mode's options from the flags.
 fn dynamics_options(a: &ContactsArgs) -> DynamicsOptions {
     DynamicsOptions { mass_kg: a.mass, natural_frequency_hz: a.spring_hz, dt_s: a.dt, ..Default::default() }
@@ -164,7 +110,7 @@ fn check_options(a: &ContactsArgs) -> Result<()> {
     if a.out.exists() && !a.out.is_dir() {
         bail!("--out {}: exists and is not a folder (contacts writes a folder of results)", a.out.display());
     }
-    a.force.check_folder(&a.out, &["contacts.jsonl", "summary.json"])?;
+    a.force.check_folder(&a.out, &contact_run::RESULT_FILES)?;
     if a.mode == Mode::Dynamic {
         let options = dynamics_options(a);
         if let Err(e) = options.validate() {
@@ -185,6 +131,53 @@ fn check_options(a: &ContactsArgs) -> Result<()> {
     Ok(())
 }
 
+/// Prints what a run does as it goes, and draws its progress unless `--quiet`.
+struct Printed {
+    quiet: bool,
+    bar: Option<indicatif::ProgressBar>,
+}
+
+impl ContactEvents for Printed {
+    fn mesh(&mut self, line: &str) {
+        if !self.quiet {
+            say!("{line}");
+        }
+    }
+    fn indexing(&mut self) {
+        if !self.quiet {
+            say!("indexing both arches for distance queries (a few seconds per 100k triangles)…");
+        }
+    }
+    fn indexed(&mut self, seconds: f64) {
+        if !self.quiet {
+            say!("indexed in {seconds:.1} s");
+        }
+    }
+    fn begin(&mut self, what: &'static str, total: usize) {
+        self.bar = Some(if self.quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar(what, total) });
+    }
+    fn progress(&mut self, done: usize) {
+        self.bar.iter().for_each(|b| b.set_position(done as u64));
+    }
+    fn end(&mut self) {
+        self.bar.take().iter().for_each(indicatif::ProgressBar::finish_and_clear);
+    }
+    fn simulated(&mut self, s: &PathSummary) {
+        let c = &s.intercuspation_correction;
+        say!(
+            "dynamic: intercuspation corrected by {:.3} mm and {:.3}°; peak contact force {:.3} N; largest offset from the recorded path {:.3} mm; residual penetration {:.4} mm",
+            Vector3::from(c.shift_mm).norm(),
+            c.rotation_deg,
+            s.peak_force_n,
+            s.max_target_offset_mm,
+            s.max_residual_penetration_mm
+        );
+    }
+    fn warning(&mut self, w: &str) {
+        eprintln!("warning: {w}");
+    }
+}
+
 pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     check_options(a)?;
     let settings = ContactSettings { threshold_mm: a.threshold, max_depth_mm: a.max_depth };
@@ -196,147 +189,30 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     let registration = registration(a.registration.as_deref())?;
     let rec = load(&a.poses, a.session)?;
     let source = PoseSource::for_poses_file(&rec, registration, &a.poses)?;
-    let with_pose = source.posed(&rec);
-    let posed: Vec<PosedFrame> = with_pose.iter().copied().step_by(a.every as usize).collect();
-    let (skipped_no_pose, outside_stride) = (rec.frames.len() - with_pose.len(), with_pose.len() - posed.len());
-    let Some(&(_, _, first_pose)) = posed.first() else {
-        bail!(
-            "{}: none of its {} frames has a pose ({}); nothing to check",
-            a.poses.display(),
-            rec.frames.len(),
-            source.describe()
-        );
+    let job = ContactJob {
+        maxilla: &a.maxilla,
+        mandible: &a.mandible,
+        poses: &a.poses,
+        registration: a.registration.as_deref(),
+        points: a.points.as_deref(),
+        settings,
+        dynamics: (a.mode == Mode::Dynamic).then(|| dynamics_options(a)),
+        every: a.every,
+        out: &a.out,
     };
-
-    let setup = Instant::now();
-    let ArchInput { parts: upper_parts, reports: upper_reports, .. } = read_arch("maxilla", &a.maxilla, a.quiet)?;
-    let ArchInput { parts: lower_parts, reports: lower_reports, .. } = read_arch("mandible", &a.mandible, a.quiet)?;
-    let teeth = [tooth_places(&upper_parts), tooth_places(&lower_parts)];
-    let upper_left = upper_scan_left(a.points.as_deref())?;
-    let (upper, lower) = index_arches(upper_parts, lower_parts, &settings, a.quiet)?;
-    let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
-
-    let (frames, extras, dynamics_summary) = match a.mode {
-        Mode::Kinematic => (posed, Vec::new(), Value::Null),
-        Mode::Dynamic => dynamic_frames(a, &upper, &lower, &posed)?,
-    };
-
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let path = a.out.join("contacts.jsonl");
-    let mut out =
-        std::io::BufWriter::new(std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?);
-    // The header holds the settings that summary.json repeats, and the inputs.
-    let run_settings = json!({
-        "mode": a.mode.name(),
-        "threshold_mm": settings.threshold_mm,
-        "max_depth_mm": settings.max_depth_mm,
-        "every": a.every,
-        "registration": a.registration.as_ref().map(|p| p.display().to_string()),
-        "poses": a.poses.display().to_string(),
-        "pose_source": source.describe(),
-    });
-    let mut header = run_settings.clone();
-    let files = |v: &[PathBuf]| json!(v.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
-    (header["version"], header["units"]) = (json!(1), json!("mm"));
-    (header["maxilla"], header["mandible"]) = (files(&a.maxilla), files(&a.mandible));
-    let mut write_line = |line: &Value| {
-        writeln!(out, "{line}").and_then(|()| out.flush()).with_context(|| format!("writing {}", path.display()))
-    };
-    write_line(&json!({ "contacts": header }))?;
-
-    let bar = if a.quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar("contacts", frames.len()) };
-    let started = Instant::now();
-    let mut session = ContactSession::new(&upper, &lower, settings);
-    let mut per_tooth = ToothTotals::default();
-    for (k, (frame, t, pose)) in frames.iter().enumerate() {
-        let found = session.check(*frame, *t, pose);
-        per_tooth.add(&found.regions);
-        let mut line = json!(found);
-        if let Some(extra) = extras.get(k) {
-            line["dynamics"] = extra.clone();
-        }
-        write_line(&line)?;
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let total_s = started.elapsed().as_secs_f64();
-
-    let s = session.summary();
-    let more = write_outputs(&a.out, &session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left)?;
-    more.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
-    let mut written = vec![path.clone()];
-    written.extend(more.files);
-    let teeth_totals = per_tooth.totals();
-    let mut summary = json!({
-        "frames": {
-            "read": rec.frames.len(),
-            "checked": s.frames,
-            "skipped_no_pose": skipped_no_pose,
-            "outside_stride": outside_stride,
-            "unreadable_lines": rec.skipped.len(),
-            "with_contact": s.with_contact,
-            "penetrating": s.penetrating,
-        },
-        "settings": run_settings,
-        "meshes": { "maxilla": upper_reports, "mandible": lower_reports },
-        "contact_area": s.contact_area,
-        "teeth": teeth_totals,
-        "dynamics": dynamics_summary,
-        "deepest": s.deepest,
-        "depth_colour_full_scale_mm": s.depth_colour_full_scale_mm,
-        "timing": {
-            "setup_ms": setup_ms,
-            "ms_per_frame_median": s.query_ms_median,
-            "ms_per_frame_max": s.query_ms_max,
-            "total_s": total_s,
-        },
-    });
-    clean_json(&mut summary);
-    let p = a.out.join("summary.json");
-    let text = serde_json::to_string_pretty(&summary).context("summary")?;
-    std::fs::write(&p, text + "\n").with_context(|| format!("writing {}", p.display()))?;
-    written.push(p);
-
-    print_findings(&s, &teeth_totals, rec.frames.len(), skipped_no_pose, settings.threshold_mm, source.describe());
-    say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), setup_ms);
-    for p in &written {
+    let found = contact_run::run(&job, &rec, &source, &mut Printed { quiet: a.quiet, bar: None })?;
+    print_findings(&found, settings.threshold_mm, source.describe());
+    let s = &found.summary;
+    say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), found.setup_ms);
+    for p in &found.written {
         say!("wrote {}", p.display());
     }
     Ok(())
 }
 
-/// Builds both arches' distance indexes, side by side (they are independent).
-fn index_arches(
-    upper: Vec<(String, jawtrack_occlusion::Mesh)>,
-    lower: Vec<(String, jawtrack_occlusion::Mesh)>,
-    settings: &ContactSettings,
-    quiet: bool,
-) -> Result<(Arch, Arch)> {
-    if !quiet {
-        say!("indexing both arches for distance queries (a few seconds per 100k triangles)…");
-    }
-    let started = Instant::now();
-    let (upper, lower) = std::thread::scope(|scope| {
-        let upper = scope.spawn(|| Arch::new(upper, settings));
-        let lower = Arch::new(lower, settings);
-        (upper.join(), lower)
-    });
-    let upper = upper.map_err(|_| anyhow::anyhow!("indexing the upper arch failed"))?;
-    if !quiet {
-        say!("indexed in {:.1} s", started.elapsed().as_secs_f64());
-    }
-    Ok((upper, lower))
-}
-
 /// Prints what the run found: frames checked, the deepest contact, per-tooth totals.
-fn print_findings(
-    s: &SessionSummary,
-    teeth: &[ToothTotal],
-    read: usize,
-    skipped_no_pose: usize,
-    threshold_mm: f64,
-    source: &str,
-) {
+fn print_findings(found: &ContactReport, threshold_mm: f64, source: &str) {
+    let (s, teeth, read, skipped_no_pose) = (&found.summary, &found.teeth, found.read, found.skipped_no_pose);
     let skipped =
         if skipped_no_pose > 0 { format!(", {skipped_no_pose} without a pose skipped") } else { String::new() };
     let (checked, near, deep) = (s.frames, s.with_contact, s.penetrating);

@@ -11,8 +11,8 @@ use crate::flags::{SessionArg, load, registration};
 use crate::numbers::fixed;
 use anyhow::{Context, Result};
 use clap::{ArgGroup, Args};
-use jawtrack_kinematics::{Displacement, PlaneView};
-use jawtrack_plot::{self as plot, Series, Style};
+use jawtrack_kinematics::Displacement;
+use jawtrack_plot as plot;
 use jawtrack_session::export::{Format, Inputs, displacements};
 use jawtrack_session::{rest::require_rest, rest_of};
 use std::io::Write;
@@ -127,9 +127,6 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// A frame's time and the incisor's displacement.
-type Timed = (f64, Displacement);
-
 /// The plots `plot` writes, each as SVG and PNG.
 const PLOTS: [&str; 4] = ["incisor_sagittal", "incisor_frontal", "incisor_transverse", "incisor_opening"];
 
@@ -140,32 +137,7 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
     let rest = require_rest(&rec, a.rest_frame, &a.recording, "plot")?.pose();
     let path = displacements(&rec.frames, &rest);
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let series = |f: &dyn Fn(&Timed) -> (f64, f64)| {
-        vec![Series {
-            name: "lower incisor",
-            color: "#d62728",
-            style: Style::Line,
-            points: path.iter().map(f).collect(),
-        }]
-    };
-    let mut charts: Vec<(String, _)> = PlaneView::ALL
-        .iter()
-        .map(|&v| {
-            let (x, y) = v.axes();
-            let title = format!("Lower incisor, {}", v.title());
-            (format!("incisor_{}", v.name()), plot::chart(&title, x, y, &series(&|(_, d)| v.project(d)), true))
-        })
-        .collect();
-    charts.push((
-        "incisor_opening".into(),
-        plot::chart(
-            "Lower incisor opening over time",
-            "time (s)",
-            "opening (mm)",
-            &series(&|(t, d)| (*t, d.opening)),
-            false,
-        ),
-    ));
+    let charts = jawtrack_report::incisor_charts(&path);
     for (stem, doc) in &charts {
         let [svg, png] = plot::save_svg_and_png(doc, &a.out.join(stem))?;
         say!("{}\n{}", svg.display(), png.display());

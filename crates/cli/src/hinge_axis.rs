@@ -3,15 +3,15 @@
 //! the upper scan's; printed, or as one JSON object other tools read.
 
 use crate::flags::{PointsArg, SessionArg, anatomy, load, registration};
-use crate::numbers::{clean_json, fixed, parse_numbers};
+use crate::numbers::{fixed, parse_numbers};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::{HingeAxis, HingeOptions, hinge};
 use jawtrack_pose::Pose;
 use jawtrack_registration::Registration;
-use jawtrack_session::{Rest, rest_of};
+use jawtrack_session::Rest;
+use jawtrack_session::measures::{HingeReport, hinge_condyles, hinge_window};
 use nalgebra::{Point3, Unit, Vector3};
-use serde_json::{Value, json};
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack hinge-axis`.
@@ -63,15 +63,7 @@ fn condyles(a: &HingeAxisArgs, reg: Option<&Registration>, rest: &Pose) -> Resul
     if let Some(c) = a.condyles {
         return Ok((c, "given"));
     }
-    let anatomy = anatomy(a.points.points.as_deref(), reg, rest)?;
-    let m = anatomy.mounting;
-    let at = |side| m.head_from_maxilla.inverse().transform_point(&Point3::from(m.condyle(side)));
-    let whose = match (a.points.points.is_some(), anatomy.condyles_given) {
-        (false, _) => "the standard mounting's",
-        (true, true) => "the points file's",
-        (true, false) => "the points file's Bonwill triangle's",
-    };
-    Ok(([at(jawtrack_kinematics::Side::Left), at(jawtrack_kinematics::Side::Right)], whose))
+    Ok(hinge_condyles(&anatomy(a.points.points.as_deref(), reg, rest)?, a.points.points.is_some()))
 }
 
 /// Runs `jawtrack hinge-axis`.
@@ -85,23 +77,22 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
     let registration = registration(a.registration.as_deref())?;
     let rec = load(&a.recording, a.session)?;
     crate::flags::warn_if_nominal(&rec, "the axis of a rendered 40 mm opening moved 1.7–2.4 mm and 2–3°");
-    let inside = |t: f64| a.from.is_none_or(|f| t >= f) && a.to.is_none_or(|e| t <= e);
-    let window: Vec<(u64, Pose)> =
-        rec.frames.iter().filter(|f| inside(f.t)).filter_map(|f| Some((f.frame, f.maxilla_from_mandible?))).collect();
-    if window.is_empty() {
-        bail!("{name}: no frame {}has a jaw pose (both markers tracked)", window_words(a));
-    }
-    let rest = match (a.rest_frame, rec.rest(None)) {
-        (None, None) => Rest::Frame(window[0].0, window[0].1),
-        (n, _) => rest_of(&rec, n)?.context("no rest pose")?,
-    };
+    let (window, rest) = hinge_window(&rec, &name.to_string(), (a.from, a.to), a.rest_frame)?;
     let options = HingeOptions { max_rotation_deg: a.max_rotation_deg, ..HingeOptions::default() };
     let poses: Vec<Pose> = window.iter().map(|(_, p)| *p).collect();
     let axis = hinge::fit(&poses, &rest.pose(), None, &options).with_context(|| format!("{name}"))?;
     let scan = registration.as_ref().map(|r| axis.transformed(&r.maxilla_scan_from_maxilla_marker));
     let (condyles, whose) = condyles(a, registration.as_ref(), &rest.pose())?;
-    let mut report = to_json(a, &axis, scan, rest, window.len(), (condyles, whose));
-    clean_json(&mut report);
+    let report = HingeReport {
+        axis: &axis,
+        scan,
+        rest,
+        frames: window.len(),
+        window: [a.from, a.to],
+        recording: &a.recording,
+        condyles: (condyles, whose),
+    }
+    .to_json();
     if a.json {
         say!("{report}");
     } else {
@@ -119,61 +110,6 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// "between 1 s and 3 s " and the like, for messages.
-fn window_words(a: &HingeAxisArgs) -> String {
-    match (a.from, a.to) {
-        (None, None) => String::new(),
-        (Some(f), None) => format!("from {f} s "),
-        (None, Some(t)) => format!("up to {t} s "),
-        (Some(f), Some(t)) => format!("between {f} s and {t} s "),
-    }
-}
-
-fn xyz(v: &Vector3<f64>) -> Value {
-    json!([v.x, v.y, v.z])
-}
-
-fn to_json(
-    a: &HingeAxisArgs,
-    axis: &HingeAxis,
-    scan: Option<(Point3<f64>, Unit<Vector3<f64>>)>,
-    rest: Rest,
-    frames: usize,
-    (condyles, whose): ([Point3<f64>; 2], &str),
-) -> Value {
-    let mut o = json!({
-        "version": 1,
-        "units": "mm",
-        "frame": "maxilla marker",
-        "point": xyz(&axis.point.coords),
-        "direction": xyz(&axis.direction),
-        "uncertainty": {
-            "point_mm": axis.point_sigma_mm,
-            "direction_deg": axis.direction_sigma_deg,
-            "rms_mm": axis.rms_mm,
-        },
-        "poses_used": axis.poses,
-        "frames_in_window": frames,
-        "max_rotation_deg": axis.max_rotation_deg,
-        "window_s": [a.from, a.to],
-        "rest": rest.to_json(),
-        "recording": a.recording.to_string_lossy(),
-    });
-    if let (Some((p, d)), Value::Object(m)) = (scan, &mut o) {
-        m.insert("point_scan".into(), xyz(&p.coords));
-        m.insert("direction_scan".into(), xyz(&d));
-    }
-    if let Value::Object(m) = &mut o {
-        let moved = |c: &Point3<f64>| json!({"point": xyz(&axis.project(c).coords), "moved_mm": axis.distance_to(c)});
-        let [l, r] = condyles;
-        m.insert(
-            "condyles_on_axis".into(),
-            json!({"left": moved(&l), "right": moved(&r), "given": whose == "given" || whose == "the points file's", "source": whose}),
-        );
-    }
-    o
 }
 
 fn print_summary(axis: &HingeAxis, scan: Option<(Point3<f64>, Unit<Vector3<f64>>)>, rest: Rest, frames: usize) {

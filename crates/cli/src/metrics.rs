@@ -8,15 +8,16 @@
 //! rest position); frames without a jaw pose are skipped and counted.
 
 use crate::flags::{SessionArg, load};
-use crate::numbers::{clean_json, fixed};
+use crate::numbers::fixed;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_kinematics::metrics::RETRUSION_OPENING_MM;
 use jawtrack_kinematics::{Border, Incisor, Metrics, PlaneView, Sample};
-use jawtrack_plot::{self as plot, Series, Style};
+use jawtrack_plot as plot;
+use jawtrack_session::measures::metrics_json;
 use jawtrack_session::{Rest, rest_of};
 use nalgebra::Point3;
-use serde_json::{Value, json};
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `jawtrack metrics`.
@@ -74,21 +75,7 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
         .collect();
     let skipped = rec.frames.len() - path.len();
     let metrics = Metrics::compute(&path).context("no frame has a jaw pose")?;
-    let p = incisor.point_in_mandible_marker();
-    let mut report = metrics.to_json();
-    if let Value::Object(o) = &mut report {
-        o.insert("recording".into(), json!(a.recording.to_string_lossy()));
-        o.insert("frames_total".into(), json!(rec.frames.len()));
-        o.insert("frames_skipped_no_pose".into(), json!(skipped));
-        o.insert("rest_frame".into(), json!(if let Rest::Frame(n, _) = rest_at { Some(n) } else { None }));
-        o.insert("rest".into(), rest_at.to_json());
-        o.insert("incisor_in_mandible_marker_mm".into(), json!([p.x, p.y, p.z]));
-        o.insert("incisor_standard".into(), json!(a.incisor.is_none()));
-        for view in PlaneView::ALL {
-            o.insert(format!("border_{}", view.name()), Border::of(view, &path, &metrics).to_json());
-        }
-    }
-    clean_json(&mut report);
+    let report = metrics_json(&metrics, &path, &rec, &a.recording, rest_at, &incisor, a.incisor.is_none());
     if skipped > 0 {
         eprintln!("{name}: {skipped} of {} frames have no jaw pose, skipped", rec.frames.len());
     }
@@ -153,23 +140,8 @@ fn print_summary(m: &Metrics, skipped: usize, rest: Rest, incisor: &Incisor, sta
 /// Writes the two envelope plots (path and hull outline) and metrics.json into `out`.
 fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    // The hulls are of (x, opening) pairs; drawn as `plot` draws the path, up upward.
-    let up = |(x, y): (f64, f64)| (x, -y);
     for (view, envelope) in [(PlaneView::Sagittal, &m.sagittal), (PlaneView::Frontal, &m.frontal)] {
-        // The hull closed back to its first corner.
-        let outline = envelope.hull.iter().chain(envelope.hull.first()).map(|&q| up(q)).collect();
-        // The hull first, so the path stays visible where it runs along the outline.
-        let series = [
-            Series { name: "envelope (convex hull)", color: "#1f77b4", style: Style::Line, points: outline },
-            Series {
-                name: "lower incisor",
-                color: "#d62728",
-                style: Style::Line,
-                points: path.iter().map(|(_, _, d)| view.project(d)).collect(),
-            },
-        ];
-        let (x_label, y_label) = view.axes();
-        let doc = plot::chart(&format!("Convex hull of the path, {}", view.title()), x_label, y_label, &series, true);
+        let doc = jawtrack_report::envelope_chart(view, envelope, path);
         for p in plot::save_svg_and_png(&doc, &out.join(format!("envelope_{}", view.name())))? {
             eprintln!("wrote {}", p.display());
         }

@@ -1,21 +1,10 @@
 //! Numbers as the CLI shows them. A value that reads as zero never carries a minus sign
-//! ("-0.00 mm", "-0" in a CSV, -0.0 in JSON): users read the sign as a direction.
-
-use serde_json::Value;
+//! ("-0.00 mm", "-0" in a CSV; JSON: `jawtrack_session::json::clean_json`): users read the
+//! sign as a direction.
 
 pub(crate) use jawtrack_plot::fixed;
 #[cfg(test)]
 use jawtrack_session::export::full;
-
-/// `v` with every -0.0 in it made 0.0.
-pub(crate) fn clean_json(v: &mut Value) {
-    match v {
-        Value::Number(n) if n.as_f64().is_some_and(|x| x == 0.0 && x.is_sign_negative()) => *v = Value::from(0.0),
-        Value::Array(a) => a.iter_mut().for_each(clean_json),
-        Value::Object(o) => o.values_mut().for_each(clean_json),
-        _ => {}
-    }
-}
 
 /// Parses `count` comma-separated finite numbers (mm), for flags giving points; `what` names
 /// them in the error ("LX,LY,LZ,RX,RY,RZ").
@@ -42,9 +31,6 @@ mod tests {
             ["0.00", "0.00", "-0.005", "1.5"]
         );
         assert_eq!([full(-0.0), full(-0.001), full(2.5)], ["0", "-0.001", "2.5"]);
-        let mut v = serde_json::json!({"a": -0.0, "b": [-0.0, -1.0, 3], "c": "-0.0"});
-        clean_json(&mut v);
-        assert_eq!(v.to_string(), r#"{"a":0.0,"b":[0.0,-1.0,3],"c":"-0.0"}"#);
     }
 
     #[test]

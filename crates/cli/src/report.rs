@@ -3,7 +3,7 @@
 
 use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, parse_window, registration};
 use crate::output::ForceArgs;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{ArgAction, Args};
 use jawtrack_kinematics::Window;
 use jawtrack_recording::Recording;
@@ -11,10 +11,10 @@ use jawtrack_registration::Registration;
 use jawtrack_report::{Centric, ContactsResult, Inputs, Windows};
 use jawtrack_session::anatomy::upper_scan_left;
 use jawtrack_session::arches::load_arch;
+use jawtrack_session::contacts::read_folder;
 use jawtrack_session::survey::survey;
 use jawtrack_session::{PoseSource, rest_of};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// Arguments of `jawtrack report`.
 #[derive(Args)]
@@ -67,34 +67,9 @@ pub(crate) struct ReportArgs {
     force: ForceArgs,
 }
 
-/// What `jawtrack contacts` wrote into `dir`.
+/// What `jawtrack contacts` wrote into `dir` (`jawtrack_session::contacts::read_folder`).
 fn read_contacts(dir: &Path) -> Result<ContactsResult> {
-    let path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&path).with_context(|| {
-        format!("--contacts {}: reading {} (is it a `jawtrack contacts` folder?)", dir.display(), path.display())
-    })?;
-    let summary = serde_json::from_str(&text).with_context(|| format!("{}", path.display()))?;
-    let mut maps = Vec::new();
-    for (file, what) in [
-        ("maxilla_depth_map.svg", "Upper arch, deepest contact over the session"),
-        ("mandible_depth_map.svg", "Lower arch, deepest contact over the session"),
-        ("maxilla_frequency_map.svg", "Upper arch, share of frames in contact"),
-        ("mandible_frequency_map.svg", "Lower arch, share of frames in contact"),
-    ] {
-        let p = dir.join(file);
-        if p.is_file() {
-            maps.push((
-                what.to_string(),
-                std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?,
-            ));
-        }
-    }
-    if maps.is_empty() {
-        bail!(
-            "--contacts {}: no contact maps in it; run `jawtrack contacts` again with this version to write them",
-            dir.display()
-        );
-    }
+    let (summary, maps) = read_folder(dir)?;
     Ok(ContactsResult { folder: dir.display().to_string(), summary, maps })
 }
 
@@ -148,7 +123,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
     }
     say!("wrote {} ({} sections, {} kB)", a.out.display(), report.sections.len(), report.html.len() / 1024);
     if let Some(pdf) = &a.pdf {
-        print_pdf(&a.out, pdf)?;
+        jawtrack_report::print_pdf(&a.out, pdf)?;
         say!("wrote {}", pdf.display());
     }
     Ok(())
@@ -172,48 +147,4 @@ fn survey_contacts(a: &ReportArgs, rec: &Recording, reg: Option<Registration>) -
         eprintln!("warning: {w}");
     }
     Ok(ContactsResult { folder: found.checked, summary: found.summary, maps: found.maps })
-}
-
-/// The Chromium to print with: `CHROMIUM`, else the first of the usual names on the PATH.
-fn chromium() -> Option<PathBuf> {
-    if let Some(c) = std::env::var_os("CHROMIUM") {
-        return Some(PathBuf::from(c));
-    }
-    let path = std::env::var_os("PATH")?;
-    ["chromium", "chromium-browser", "google-chrome", "google-chrome-stable"]
-        .iter()
-        .flat_map(|n| std::env::split_paths(&path).map(move |d| d.join(n)))
-        .find(|p| p.is_file())
-}
-
-/// Prints `html` to `pdf` with headless Chromium.
-fn print_pdf(html: &Path, pdf: &Path) -> Result<()> {
-    let Some(browser) = chromium() else {
-        bail!(
-            "no Chromium to print the PDF with (set CHROMIUM, or install chromium); the HTML report {} was written \
-             and prints from any browser",
-            html.display()
-        );
-    };
-    // What --force allowed to be replaced goes first, so an old file cannot pass for a print.
-    let _ = std::fs::remove_file(pdf);
-    let url = format!("file://{}", std::fs::canonicalize(html)?.display());
-    // The page is ours, has no script and loads nothing, so the sandbox (which cannot start as
-    // root) adds nothing here.
-    let out = Command::new(&browser)
-        .args(["--headless", "--disable-gpu", "--no-sandbox", "--no-pdf-header-footer"])
-        .arg(format!("--print-to-pdf={}", pdf.display()))
-        .arg(&url)
-        .output()
-        .with_context(|| format!("starting {}", browser.display()))?;
-    let printed = std::fs::metadata(pdf).is_ok_and(|m| m.len() > 0);
-    if !out.status.success() || !printed {
-        bail!(
-            "{} could not print {}: {}",
-            browser.display(),
-            html.display(),
-            String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("no message")
-        );
-    }
-    Ok(())
 }

@@ -2,8 +2,9 @@
 //! Ctrl-C or `--duration`.
 
 use crate::flags::{ViewerArgs, warn_if_exposed};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
+use jawtrack_session::measures::read_hinge_axis;
 use jawtrack_viewer::{LiveServer, LiveState};
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -34,30 +35,6 @@ pub(crate) struct ViewArgs {
     /// Stop serving after this many seconds (default: until Ctrl-C).
     #[arg(long)]
     duration: Option<f64>,
-}
-
-/// The `point` and unit `direction` of `jawtrack hinge-axis --json`'s output.
-fn read_hinge_axis(path: &std::path::Path) -> Result<([f64; 3], [f64; 3])> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading --hinge-axis {}", path.display()))?;
-    let v: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("--hinge-axis {}: not the JSON of `jawtrack hinge-axis --json`", path.display()))?;
-    let xyz = |key: &str| -> Result<[f64; 3]> {
-        let a: Vec<f64> =
-            v[key].as_array().map(|a| a.iter().filter_map(serde_json::Value::as_f64).collect()).unwrap_or_default();
-        match a[..] {
-            [x, y, z] if a.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
-            _ => anyhow::bail!(
-                "--hinge-axis {}: no \"{key}\" of three numbers (the output of `jawtrack hinge-axis --json`)",
-                path.display()
-            ),
-        }
-    };
-    let (point, d) = (xyz("point")?, xyz("direction")?);
-    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if !(n > 0.5 && n < 1.5) {
-        anyhow::bail!("--hinge-axis {}: its direction is not a unit vector (length {n})", path.display());
-    }
-    Ok((point, d.map(|c| c / n)))
 }
 
 pub(crate) fn view(a: &ViewArgs) -> Result<()> {

@@ -7,13 +7,17 @@
 //! CO–MI slide. Plots are inline SVG, the page has no script and loads nothing, so it prints
 //! and archives as it is.
 
+mod charts;
 mod html;
+mod pdf;
 mod sections;
 
+pub use charts::{envelope_chart, incisor_charts};
 use jawtrack_kinematics::Anatomy;
 pub use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
+pub use pdf::{ReportError, chromium, print_pdf};
 
 /// The movements the caller located in the recording; what is not given is not measured, and
 /// the report says which flag would measure it.

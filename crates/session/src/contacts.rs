@@ -1,6 +1,7 @@
 //! What `jawtrack contacts` leaves in its folder besides the per-frame lines: each arch as PLY
 //! coloured by contact frequency and by depth, occlusal PNG views coloured by frequency, and the
-//! SVG contact maps a clinician reads (the patient's side, tooth numbers, scale bar, colour scale).
+//! SVG contact maps a clinician reads (the patient's side, tooth numbers, scale bar, colour scale);
+//! and what the report reads back from such a folder ([`read_folder`]).
 
 use crate::SessionError;
 use crate::arches::UNSIDED;
@@ -64,4 +65,63 @@ pub fn write_outputs(
         out.warnings.push(UNSIDED.to_string());
     }
     Ok(out)
+}
+
+/// The contact maps a folder of `jawtrack contacts` holds, each file's name and caption.
+pub const MAPS: [(&str, &str); 4] = [
+    ("maxilla_depth_map.svg", "Upper arch, deepest contact over the session"),
+    ("mandible_depth_map.svg", "Lower arch, deepest contact over the session"),
+    ("maxilla_frequency_map.svg", "Upper arch, share of frames in contact"),
+    ("mandible_frequency_map.svg", "Lower arch, share of frames in contact"),
+];
+
+/// What `jawtrack contacts` wrote into `dir` (given as `--contacts`): its `summary.json`, and
+/// each contact map's caption and SVG; a folder without maps is refused.
+pub fn read_folder(dir: &Path) -> Result<(serde_json::Value, Vec<(String, String)>), SessionError> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|source| SessionError::Io {
+        context: format!(
+            "--contacts {}: reading {} (is it a `jawtrack contacts` folder?)",
+            dir.display(),
+            path.display()
+        ),
+        source,
+    })?;
+    let summary = serde_json::from_str(&text)
+        .map_err(|source| SessionError::Json { context: format!("{}", path.display()), source })?;
+    let mut maps = Vec::new();
+    for (file, what) in MAPS {
+        let p = dir.join(file);
+        if p.is_file() {
+            let svg = std::fs::read_to_string(&p)
+                .map_err(|source| SessionError::Io { context: format!("reading {}", p.display()), source })?;
+            maps.push((what.to_string(), svg));
+        }
+    }
+    if maps.is_empty() {
+        return Err(SessionError::Setting(format!(
+            "--contacts {}: no contact maps in it; run `jawtrack contacts` again with this version to write them",
+            dir.display()
+        )));
+    }
+    Ok((summary, maps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_is_read_with_its_maps_and_one_without_is_refused() {
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let err = read_folder(dir.path()).expect_err("no summary");
+        assert!(err.to_string().contains("is it a `jawtrack contacts` folder?"), "{err}");
+        std::fs::write(dir.path().join("summary.json"), r#"{"frames":{"checked":3}}"#).expect("written");
+        let err = read_folder(dir.path()).expect_err("no maps");
+        assert!(err.to_string().contains("no contact maps in it"), "{err}");
+        std::fs::write(dir.path().join("mandible_depth_map.svg"), "<svg/>").expect("written");
+        let (summary, maps) = read_folder(dir.path()).expect("read");
+        assert_eq!(summary["frames"]["checked"], 3);
+        assert_eq!(maps, [(MAPS[1].1.to_string(), "<svg/>".to_string())]);
+    }
 }

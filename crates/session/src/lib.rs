@@ -9,7 +9,9 @@
 //! - [`scan_pose`]: the lower scan in the upper scan's frame — through a registration, else as
 //!   recorded;
 //! - [`arches`] and [`survey`]: the tooth scans read and their contacts checked over frames;
-//! - [`export`]: the export formats (CSV, JSON Lines, scan transforms, OpenSim).
+//!   [`contact_run`]: a whole `jawtrack contacts` run and the files it writes;
+//! - [`export`]: the export formats (CSV, JSON Lines, scan transforms, OpenSim);
+//! - [`measures`]: the measuring commands' JSON, and the frames a hinge-axis fit takes.
 //!
 //! # Examples
 //!
@@ -24,8 +26,11 @@
 
 pub mod anatomy;
 pub mod arches;
+pub mod contact_run;
 pub mod contacts;
 pub mod export;
+pub mod json;
+pub mod measures;
 pub mod movements;
 pub mod open;
 pub mod rest;
@@ -115,6 +120,9 @@ pub enum SessionError {
          (`jawtrack register`) places that scan on the maxilla marker"
     )]
     PointsNeedRegistration,
+    /// The window chosen holds no frame with a jaw pose.
+    #[error("{0}")]
+    EmptyWindow(String),
     /// No frame carries the scans' pose.
     #[error("{0}")]
     NoScanPose(String),
@@ -129,6 +137,27 @@ pub enum SessionError {
     /// A setting out of range, naming its flag.
     #[error("{0}")]
     Setting(String),
+    /// The dynamic mode could not resolve the recorded path.
+    #[error("dynamic mode")]
+    Dynamics(#[source] jawtrack_occlusion::dynamics::ResolveError),
+    /// Creating or writing an output failed (`context` says which).
+    #[error("{context}")]
+    Io {
+        /// What was being done, naming the file.
+        context: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A JSON file could not be read (`context` names it).
+    #[error("{context}")]
+    Json {
+        /// What was being read, naming the file.
+        context: String,
+        /// Why.
+        #[source]
+        source: serde_json::Error,
+    },
     /// Writing an output failed.
     #[error("writing {path}: {reason}")]
     Write {
