@@ -438,7 +438,9 @@ impl Tracker {
         // prediction was off, and the edge fit there lacks its pixels): search everywhere.
         let missing = BodyKind::ALL.iter().any(|&k| !detections.iter().any(|d| self.body_of(d.id) == Some(k)));
         let at_edge = expected.is_some_and(|r| {
-            detections.iter().any(|d| near_inner_edge(&d.corners, &r, frame, self.config.search.min_margin_px / 2.0))
+            detections
+                .iter()
+                .any(|d| roi::near_inner_edge(&d.corners, &r, frame, self.config.search.min_margin_px / 2.0))
         });
         if expected.is_some() && (missing || at_edge) {
             detections = self.detect(frame, None, smeared)?;
@@ -750,18 +752,6 @@ fn validate(c: &TrackerConfig) -> Result<(), TrackError> {
         return Err(TrackError::BadConfig("full_frame_every must be at least 1".into()));
     }
     Ok(())
-}
-
-/// Whether a corner lies within `distance` (px) of an edge of `roi` that is not the frame's.
-fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageView<'_>, distance: f64) -> bool {
-    let (x0, y0) = (roi.x as f64, roi.y as f64);
-    let (x1, y1) = ((roi.x + roi.width) as f64 - 1.0, (roi.y + roi.height) as f64 - 1.0);
-    corners.iter().any(|c| {
-        (roi.x > 0 && c[0] - x0 < distance)
-            || (roi.y > 0 && c[1] - y0 < distance)
-            || (roi.x + roi.width < frame.width() && x1 - c[0] < distance)
-            || (roi.y + roi.height < frame.height() && y1 - c[1] < distance)
-    })
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Where to look next: what the tracker remembers of each marker, its pose extrapolated to
 //! the coming frame at constant velocity, and the image region its tags will cover.
 
-use jawtrack_apriltag::Roi;
+use jawtrack_apriltag::{ImageView, Roi};
 use jawtrack_pose::{CameraIntrinsics, Pose, Velocity};
 use nalgebra::{Point3, UnitQuaternion};
 
@@ -117,6 +117,18 @@ pub fn region(
         return None;
     }
     Some(Roi { x: x0 as usize, y: y0 as usize, width: (x1 - x0) as usize + 1, height: (y1 - y0) as usize + 1 })
+}
+
+/// Whether a corner lies within `distance` (px) of an edge of `roi` that is not the frame's.
+pub(crate) fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageView<'_>, distance: f64) -> bool {
+    let (x0, y0) = (roi.x as f64, roi.y as f64);
+    let (x1, y1) = ((roi.x + roi.width) as f64 - 1.0, (roi.y + roi.height) as f64 - 1.0);
+    corners.iter().any(|c| {
+        (roi.x > 0 && c[0] - x0 < distance)
+            || (roi.y > 0 && c[1] - y0 < distance)
+            || (roi.x + roi.width < frame.width() && x1 - c[0] < distance)
+            || (roi.y + roi.height < frame.height() && y1 - c[1] < distance)
+    })
 }
 
 #[cfg(test)]
