@@ -10,7 +10,7 @@ use clap::Args;
 use jawtrack_kinematics::Anatomy;
 use jawtrack_kinematics::articulator::name;
 use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Movements, Side, co_mi};
-use jawtrack_session::measures::{ArticulatorWindows, articulator_json};
+use jawtrack_session::measures::articulator_json;
 use jawtrack_session::rest_of;
 use std::path::PathBuf;
 
@@ -69,9 +69,7 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
     let v = ArticulatorValues::measure(&anatomy.mounting, &rest.pose(), &movements, &options)
         .with_context(|| format!("{name_of}"))?;
     let slide = moved.co.map(|co| co_mi(&anatomy.mounting, &co, &moved.mi.unwrap_or_else(|| rest.pose())));
-    let m = a.moves;
-    let windows = ArticulatorWindows { protrusion: m.protrusion, left: m.left, right: m.right, co: m.co, mi: m.mi };
-    let report = articulator_json(&v, &options, &anatomy, windows, rest, &a.recording, slide.as_ref());
+    let report = articulator_json(&v, &options, &anatomy, a.moves.windows(), rest, &a.recording, slide.as_ref());
     if a.json {
         say!("{report}");
     } else {

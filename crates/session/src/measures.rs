@@ -4,6 +4,7 @@
 
 use crate::SessionError;
 use crate::json::clean_json;
+use crate::movements::MovementWindows;
 use crate::rest::{Rest, rest_of};
 use jawtrack_kinematics::{
     Anatomy, ArticulatorOptions, ArticulatorValues, Border, CoMi, Displacement, HingeAxis, Incisor, Metrics, PlaneView,
@@ -163,28 +164,13 @@ pub fn co_mi_json(s: &CoMi) -> Value {
     })
 }
 
-/// The movement windows an articulator measurement was read from (s).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ArticulatorWindows {
-    /// The protrusion.
-    pub protrusion: Option<Window>,
-    /// The laterotrusion toward the patient's left.
-    pub left: Option<Window>,
-    /// The laterotrusion toward the patient's right.
-    pub right: Option<Window>,
-    /// Centric occlusion held.
-    pub co: Option<Window>,
-    /// Maximal intercuspation held.
-    pub mi: Option<Window>,
-}
-
 /// `jawtrack articulator --json`'s object: the values `v` read with `o` on `anatomy`, the
 /// windows, the rest position and the recording, and the CO–MI `slide` when measured.
 pub fn articulator_json(
     v: &ArticulatorValues,
     o: &ArticulatorOptions,
     anatomy: &Anatomy,
-    windows: ArticulatorWindows,
+    windows: MovementWindows,
     rest: Rest,
     recording: &Path,
     slide: Option<&CoMi>,
