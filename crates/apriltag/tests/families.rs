@@ -5,6 +5,7 @@
 
 use jawtrack_apriltag::{Detection, Detector, DetectorConfig, ImageView, TagFamily};
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
+use jawtrack_synth::post::srgb_encode;
 use nalgebra::{Matrix3, Vector3};
 
 /// Linear reflectances of ink, paper and the background.
@@ -15,8 +16,7 @@ const WIDTH: usize = 960;
 const HEIGHT: usize = 640;
 
 fn srgb(v: f64) -> u8 {
-    let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-    (255.0 * e).round().clamp(0.0, 255.0) as u8
+    (255.0 * srgb_encode(v)).round().clamp(0.0, 255.0) as u8
 }
 
 /// One tag to draw: its id, cell size (px), centre, turn (degrees clockwise), perspective
