@@ -42,7 +42,7 @@ function label(text, height, colour = '#ffffff') {
   return sprite;
 }
 
-// A marker: its dodecahedron (see-through when a scan is shown), each tag's square and id.
+// A marker: its solid (see-through when a scan is shown), each tag's square and id.
 export function markerGroup(solid, tags, colour, { seeThrough }) {
   const group = new THREE.Group();
   group.name = 'marker';

@@ -634,7 +634,7 @@ fn assembly_check(
             face: template.face,
             corners: order.map(|i| template.corners[i]),
             center: template.center,
-            face_polygon: template.face_polygon,
+            face_polygon: template.face_polygon.clone(),
             ..tags[t].clone()
         };
         let quarter_turns = turns as u8;

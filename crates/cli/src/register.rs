@@ -101,7 +101,7 @@ pub(crate) fn run(a: &RegisterArgs) -> Result<()> {
     let init = match a.init {
         Some(p) => p,
         None => {
-            let p = centred_init(&scan, marker.edge).context("--scan: the scan has no surface area")?;
+            let p = centred_init(&scan, &marker).context("--scan: the scan has no surface area")?;
             say!("no --init: starting with the marker's axes at the centre of the scan's surface");
             p
         }

@@ -381,7 +381,7 @@ fn starting_marker(marker: Marker) -> Result<Marker, JawTrackError> {
         return Ok(marker);
     }
     let size = marker.tags().next().map(|(_, t)| t.size);
-    let mut nominal = Marker::nominal(marker.edge, size)?;
+    let mut nominal = Marker::nominal_on(marker.solid, marker.family, marker.edge, size)?;
     nominal.bodies.retain(|b| marker.body(b.kind).is_some());
     let tags = |m: &Marker| {
         let mut v: Vec<(u32, u64)> = m.tags().map(|(_, t)| (t.id, (t.size * 1e6).round() as u64)).collect();

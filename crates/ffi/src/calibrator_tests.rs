@@ -288,6 +288,23 @@ fn a_calibrated_marker_starts_afresh_from_its_nominal_solid() {
 }
 
 #[test]
+fn a_calibrated_marker_of_another_solid_and_family_starts_from_its_own_nominal() {
+    use jawtrack_marker::{BodyProvenance, SolidKind, TagFamily};
+    let nominal = Marker::nominal_on(SolidKind::Cube, TagFamily::TAG25H9, 15.0, None).expect("cube marker");
+    let mut calibrated = nominal.clone();
+    for body in &mut calibrated.bodies {
+        body.provenance =
+            Some(BodyProvenance { views: 9, rms_before_px: 1.0, rms_after_px: 0.2, recordings: vec!["r".into()] });
+        for t in &mut body.tags {
+            t.provenance = Some(TagProvenance::Calibrated { views: 9, rms_before_px: 1.0, rms_after_px: 0.2 });
+        }
+    }
+    assert!(calibrated.is_calibrated());
+    let again = Calibrator::new(Some(calibrated.to_json()), 3).expect("from the calibrated cube file");
+    assert_eq!(again.marker, nominal, "the nominal cube in tag25h9, not a tag36h11 dodecahedron");
+}
+
+#[test]
 fn a_wrong_focal_length_is_named() {
     let focal = FocalCheck { views: 12, given_px: 3.1, best_scale: 1.52, best_px: 0.4 };
     let text = focal_warning(&focal, [0.2, 0.9]);

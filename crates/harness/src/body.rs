@@ -1,5 +1,6 @@
-//! The printable marker body: the regular dodecahedron fused with a cylindrical mounting post
-//! that leaves its −Z vertex (the one opposite the camera-facing +Z vertex) along −Z.
+//! The printable marker body: the marker's solid (the regular dodecahedron, or a cube standing
+//! on a vertex) fused with a cylindrical mounting post that leaves its −Z vertex (the one
+//! opposite the camera-facing +Z vertex) along −Z.
 //!
 //! The post is a right prism whose cross-section is a regular N-gon (N a multiple of 3) of
 //! circumradius `post_diameter / 2` centred on the Z axis. Near the −Z vertex the solid's lower
@@ -7,13 +8,13 @@
 //! the three edges leaving the vertex, 120° apart in azimuth. The N-gon is turned so that
 //! three of its corners lie on those creases; then each side of the N-gon lies over a single
 //! face, every wall quad of the prism is planar with its top edge on that face, and the three
-//! bottom faces become pentagons with a notch cut round the vertex. The union's surface is:
-//! the nine untouched faces, the three notched faces, the prism walls from the notch down to
-//! the end cap, and the N-gon end cap. Nothing of the prism inside the solid is kept, so the
+//! bottom faces keep their polygon with a notch cut round the vertex. The union's surface is:
+//! the untouched faces (nine of a dodecahedron, three of a cube), the three notched faces, the
+//! prism walls from the notch down to the end cap, and the N-gon end cap. Nothing of the prism inside the solid is kept, so the
 //! mesh has no internal faces.
 
 use crate::{HarnessError, HarnessParams, Mesh};
-use jawtrack_marker::{BodyKind, Dodecahedron, Face, Marker};
+use jawtrack_marker::{BodyKind, Face, Marker, Solid, SolidKind, TagFamily};
 use nalgebra::{Point3, Vector2, Vector3};
 use std::f64::consts::TAU;
 
@@ -32,7 +33,7 @@ struct BottomFace {
 /// Where the post meets the solid, independent of the post's diameter.
 #[derive(Debug, Clone)]
 pub(crate) struct PostLayout {
-    /// Index of the −Z vertex in `Dodecahedron::vertices()`.
+    /// Index of the −Z vertex in `Solid::vertices()`.
     apex_index: usize,
     /// The −Z vertex (mm).
     apex: Vector3<f64>,
@@ -46,7 +47,7 @@ pub(crate) struct PostLayout {
 
 impl PostLayout {
     /// Finds the −Z vertex, its three faces and edges, and lays the N-gon's corners on them.
-    fn new(solid: &Dodecahedron, segments: usize) -> Result<PostLayout, HarnessError> {
+    fn new(solid: &Solid, segments: usize) -> Result<PostLayout, HarnessError> {
         let geometry = |msg: String| HarnessError::Geometry(msg);
         let edge = solid.edge();
         let tol = 1e-9 * edge;
@@ -82,8 +83,9 @@ impl PostLayout {
         let mut bottom = Vec::new();
         for face in solid.faces() {
             let Some(at) = face.vertices.iter().position(|v| (v - apex).norm() < tol) else { continue };
-            let before = ring_index(&face.vertices[(at + 4) % 5])?;
-            let after = ring_index(&face.vertices[(at + 1) % 5])?;
+            let sides = face.vertices.len();
+            let before = ring_index(&face.vertices[(at + sides - 1) % sides])?;
+            let after = ring_index(&face.vertices[(at + 1) % sides])?;
             // Go the short way round (a third of the ring) from one edge to the other.
             let forward = (after + segments - before) % segments;
             let dir = if forward == third {
@@ -108,7 +110,7 @@ impl PostLayout {
     }
 
     /// Ring corner `k` of a post of circumradius `r`, on the solid's lower surface.
-    fn ring_point(&self, solid: &Dodecahedron, k: usize, r: f64) -> Vector3<f64> {
+    fn ring_point(&self, solid: &Solid, k: usize, r: f64) -> Vector3<f64> {
         let phi = self.azimuth(k);
         let (x, y) = (r * phi.cos(), r * phi.sin());
         let z = self
@@ -125,7 +127,7 @@ impl PostLayout {
 
     /// The post's footprint on each bottom face: (face number, the −Z vertex followed by the
     /// ring corners over that face), all on the face's plane.
-    pub(crate) fn footprints(&self, solid: &Dodecahedron, r: f64) -> Vec<(usize, Vec<Vector3<f64>>)> {
+    pub(crate) fn footprints(&self, solid: &Solid, r: f64) -> Vec<(usize, Vec<Vector3<f64>>)> {
         self.bottom
             .iter()
             .map(|b| {
@@ -174,18 +176,14 @@ fn penetration(a: &[Vector2<f64>], b: &[Vector2<f64>]) -> f64 {
 
 /// Whether a post of circumradius `r` fits: its footprint inside every bottom face and clear
 /// of the black square of the tag there.
-fn check_fit(
-    solid: &Dodecahedron,
-    layout: &PostLayout,
-    squares: &[[Vector3<f64>; 4]; 12],
-    r: f64,
-) -> Result<(), Misfit> {
+fn check_fit(solid: &Solid, layout: &PostLayout, squares: &[[Vector3<f64>; 4]], r: f64) -> Result<(), Misfit> {
     for (b, (face_no, poly)) in layout.bottom.iter().zip(layout.footprints(solid, r)) {
         let face = &solid.faces()[face_no];
-        let normals = face.edge_normals();
+        let normals = &face.edge_normals();
         // The footprint is convex and lies in the angle of the two edges at the vertex, so it is
-        // inside the face when its corners are inside the three far edges.
-        let far = (0..5).filter(|&i| i != b.at && (i + 1) % 5 != b.at);
+        // inside the face when its corners are inside the far edges.
+        let sides = face.vertices.len();
+        let far = (0..sides).filter(|&i| i != b.at && (i + 1) % sides != b.at);
         let clearance = far
             .flat_map(|i| poly.iter().map(move |p| (face.vertices[i] - p).dot(&normals[i])))
             .fold(f64::INFINITY, f64::min);
@@ -203,9 +201,9 @@ fn check_fit(
 }
 
 /// The nominal tag square (corners, body frame) on each face for this edge and tag size.
-fn tag_squares(marker: &Marker) -> Result<[[Vector3<f64>; 4]; 12], HarnessError> {
+fn tag_squares(marker: &Marker) -> Result<Vec<[Vector3<f64>; 4]>, HarnessError> {
     let body = marker.body(BodyKind::Maxilla).ok_or(HarnessError::MissingBody(BodyKind::Maxilla))?;
-    let mut squares = [[Vector3::zeros(); 4]; 12];
+    let mut squares = vec![[Vector3::zeros(); 4]; marker.solid.face_count()];
     for t in &body.tags {
         if let Some(s) = squares.get_mut(t.face) {
             *s = t.corners;
@@ -215,7 +213,7 @@ fn tag_squares(marker: &Marker) -> Result<[[Vector3<f64>; 4]; 12], HarnessError>
 }
 
 /// The largest circumradius (mm) that fits, by bisection (the footprint grows with r).
-fn largest_radius(solid: &Dodecahedron, layout: &PostLayout, squares: &[[Vector3<f64>; 4]; 12]) -> f64 {
+fn largest_radius(solid: &Solid, layout: &PostLayout, squares: &[[Vector3<f64>; 4]]) -> f64 {
     let (mut lo, mut hi) = (0.0, solid.circumradius());
     if check_fit(solid, layout, squares, hi).is_ok() {
         return hi;
@@ -229,23 +227,31 @@ fn largest_radius(solid: &Dodecahedron, layout: &PostLayout, squares: &[[Vector3
 
 /// Everything needed to build the post, after every check has passed.
 pub(crate) struct CheckedPost {
-    /// The solid (nominal, of the marker's edge).
-    pub(crate) solid: Dodecahedron,
+    /// The solid (nominal, of the marker's kind and edge).
+    pub(crate) solid: Solid,
     /// Where the post meets it.
     pub(crate) layout: PostLayout,
     /// The post's circumradius (mm).
     pub(crate) radius: f64,
 }
 
-/// Checks the parameters, the marker's edge and tag size, and the fit of the post.
+/// The nominal marker of this solid, edge and tag size: where the post must not reach. The tag
+/// family only sets the white margin checked here, and tag36h11's (a cell of size/8) is the
+/// narrowest of the families, so no marker of another family is refused by it.
+fn squares_of(solid: SolidKind, marker_edge: f64, tag_size: f64) -> Result<Marker, HarnessError> {
+    Ok(Marker::nominal_on(solid, TagFamily::TAG36H11, marker_edge, Some(tag_size))?)
+}
+
+/// Checks the parameters, the marker's solid, edge and tag size, and the fit of the post.
 pub(crate) fn checked_post(
+    kind: SolidKind,
     marker_edge: f64,
     tag_size: f64,
     params: &HarnessParams,
 ) -> Result<CheckedPost, HarnessError> {
     params.validate()?;
-    let marker = Marker::nominal(marker_edge, Some(tag_size))?;
-    let solid = Dodecahedron::new(marker_edge);
+    let marker = squares_of(kind, marker_edge, tag_size)?;
+    let solid = marker.geometry();
     let layout = PostLayout::new(&solid, params.post_segments)?;
     let squares = tag_squares(&marker)?;
     let radius = params.post_diameter / 2.0;
@@ -271,12 +277,17 @@ pub(crate) fn checked_post(
 }
 
 /// The largest post diameter (mm) whose footprint stays inside the bottom faces and clear of
-/// their tags' black squares, for a marker of this edge and tag size and a post of
+/// their tags' black squares, for a marker of this solid, edge and tag size and a post of
 /// `post_segments` sides.
-pub fn max_post_diameter(marker_edge: f64, tag_size: f64, post_segments: usize) -> Result<f64, HarnessError> {
+pub fn max_post_diameter(
+    kind: SolidKind,
+    marker_edge: f64,
+    tag_size: f64,
+    post_segments: usize,
+) -> Result<f64, HarnessError> {
     HarnessParams { post_segments, ..HarnessParams::default() }.validate()?;
-    let marker = Marker::nominal(marker_edge, Some(tag_size))?;
-    let solid = Dodecahedron::new(marker_edge);
+    let marker = squares_of(kind, marker_edge, tag_size)?;
+    let solid = marker.geometry();
     let layout = PostLayout::new(&solid, post_segments)?;
     Ok(2.0 * largest_radius(&solid, &layout, &tag_squares(&marker)?))
 }
@@ -299,23 +310,29 @@ impl Builder {
     }
 }
 
-/// The marker body (regular dodecahedron of edge `marker_edge`) fused with its mounting post,
-/// as a closed, outward-oriented triangle mesh in the body frame (mm).
+/// The marker body (the solid `kind` of edge `marker_edge`) fused with its mounting post, as
+/// a closed, outward-oriented triangle mesh in the body frame (mm).
 ///
 /// `tag_size` is only used to check that the post's footprint on the three bottom faces stays
 /// clear of their tags' black squares. Errors name the parameter that is out of range, or
 /// the face and tag a too-thick post would cover.
-pub fn body_mesh(marker_edge: f64, tag_size: f64, params: &HarnessParams) -> Result<Mesh, HarnessError> {
-    let CheckedPost { solid, layout, radius } = checked_post(marker_edge, tag_size, params)?;
+pub fn body_mesh(
+    kind: SolidKind,
+    marker_edge: f64,
+    tag_size: f64,
+    params: &HarnessParams,
+) -> Result<Mesh, HarnessError> {
+    let CheckedPost { solid, layout, radius } = checked_post(kind, marker_edge, tag_size, params)?;
     let n = layout.segments;
     let to_u32 = |i: usize| u32::try_from(i).map_err(|_| HarnessError::Geometry("mesh too large".into()));
 
     // Vertex table: the solid's vertices but the −Z one, the ring on the surface, the ring at
     // the end, the end cap's centre.
     let solid_index = |j: usize| if j < layout.apex_index { j } else { j - 1 };
-    let top = |k: usize| 19 + k;
-    let low = |k: usize| 19 + n + k;
-    let centre = 19 + 2 * n;
+    let kept = solid.vertices().len() - 1;
+    let top = |k: usize| kept + k;
+    let low = |k: usize| kept + n + k;
+    let centre = kept + 2 * n;
     let z_end = layout.apex.z - params.post_length;
 
     let mut vertices: Vec<Point3<f64>> = solid
@@ -329,7 +346,7 @@ pub fn body_mesh(marker_edge: f64, tag_size: f64, params: &HarnessParams) -> Res
     vertices.extend(ring.iter().map(|p| Point3::from(*p)));
     vertices.extend(ring.iter().map(|p| Point3::new(p.x, p.y, z_end)));
     vertices.push(Point3::new(0.0, 0.0, z_end));
-    let mut b = Builder { mesh: Mesh { vertices, triangles: Vec::with_capacity(36 + 4 * n) } };
+    let mut b = Builder { mesh: Mesh { vertices, triangles: Vec::with_capacity(3 * solid.faces().len() + 4 * n) } };
 
     // Mesh index of each of the solid's vertices (the −Z one has none).
     let vertex_ids: Vec<Option<usize>> =
@@ -345,11 +362,12 @@ pub fn body_mesh(marker_edge: f64, tag_size: f64, params: &HarnessParams) -> Res
 
     for face in solid.faces() {
         if let Some(bf) = layout.bottom.iter().find(|bf| bf.face == face.index) {
-            // The notched face: the four other pentagon corners, then the ring corners from the
+            // The notched face: the polygon's other corners, then the ring corners from the
             // edge before the −Z vertex to the edge after it. Not convex, so ear-clipped in the
             // face's own plane.
+            let sides = face.vertices.len();
             let mut poly: Vec<usize> =
-                (1..5).map(|s| id_of(&face.vertices[(bf.at + s) % 5])).collect::<Result<_, _>>()?;
+                (1..sides).map(|s| id_of(&face.vertices[(bf.at + s) % sides])).collect::<Result<_, _>>()?;
             poly.extend(bf.chain.iter().map(|&k| top(k)));
             let flat: Vec<f64> = poly
                 .iter()
@@ -372,9 +390,9 @@ pub fn body_mesh(marker_edge: f64, tag_size: f64, params: &HarnessParams) -> Res
                 b.push(to_u32(poly[t[0]])?, to_u32(poly[t[1]])?, to_u32(poly[t[2]])?, &face.normal);
             }
         } else {
-            // An untouched face: a convex pentagon, fanned from its first corner.
+            // An untouched face: a convex polygon, fanned from its first corner.
             let ids: Vec<u32> = face.vertices.iter().map(|v| id_of(v).and_then(to_u32)).collect::<Result<_, _>>()?;
-            for s in 1..4 {
+            for s in 1..ids.len() - 1 {
                 b.push(ids[0], ids[s], ids[s + 1], &face.normal);
             }
         }
@@ -399,7 +417,13 @@ mod tests {
     use std::collections::HashMap;
 
     fn default_mesh() -> Mesh {
-        body_mesh(DEFAULT_EDGE_MM, default_tag_size(DEFAULT_EDGE_MM), &HarnessParams::default()).expect("defaults fit")
+        body_mesh(
+            SolidKind::Dodecahedron,
+            DEFAULT_EDGE_MM,
+            default_tag_size(DEFAULT_EDGE_MM),
+            &HarnessParams::default(),
+        )
+        .expect("defaults fit")
     }
 
     fn v3(p: Point3<f64>) -> Vector3<f64> {
@@ -486,8 +510,8 @@ mod tests {
     }
 
     impl Union {
-        fn new(edge: f64, params: &HarnessParams) -> Union {
-            let d = Dodecahedron::new(edge);
+        fn new(kind: SolidKind, edge: f64, params: &HarnessParams) -> Union {
+            let d = Solid::new(kind, edge);
             let planes: Vec<(Vector3<f64>, f64)> =
                 d.faces().iter().map(|f| (f.normal, f.normal.dot(&f.center))).collect();
             let mut bottom = planes.clone();
@@ -535,7 +559,8 @@ mod tests {
             HarnessParams { post_segments: 6, post_diameter: 7.0, post_length: 3.0 },
             HarnessParams { post_segments: 99, post_diameter: 0.5, post_length: 60.0 },
         ] {
-            let m = body_mesh(DEFAULT_EDGE_MM, default_tag_size(DEFAULT_EDGE_MM), &params).expect("fits");
+            let m = body_mesh(SolidKind::Dodecahedron, DEFAULT_EDGE_MM, default_tag_size(DEFAULT_EDGE_MM), &params)
+                .expect("fits");
             assert_closed_manifold(&m);
             assert_no_degenerate_triangles(&m);
             assert_eq!(m.triangles.len(), 36 + 4 * params.post_segments);
@@ -549,7 +574,7 @@ mod tests {
         // along its normal is outside the union, just behind it is inside.
         let params = HarnessParams::default();
         let m = default_mesh();
-        let u = Union::new(DEFAULT_EDGE_MM, &params);
+        let u = Union::new(SolidKind::Dodecahedron, DEFAULT_EDGE_MM, &params);
         for i in 0..m.triangles.len() {
             let [a, b, c] = m.corners(i).map(v3);
             let centroid = (a + b + c) / 3.0;
@@ -565,8 +590,8 @@ mod tests {
             [HarnessParams::default(), HarnessParams { post_segments: 12, post_diameter: 6.0, post_length: 10.0 }]
         {
             let edge = DEFAULT_EDGE_MM;
-            let m = body_mesh(edge, default_tag_size(edge), &params).expect("fits");
-            let u = Union::new(edge, &params);
+            let m = body_mesh(SolidKind::Dodecahedron, edge, default_tag_size(edge), &params).expect("fits");
+            let u = Union::new(SolidKind::Dodecahedron, edge, &params);
             let apex_z = u.z_end + params.post_length;
             // Prism from the vertex down: N-gon area × length, in closed form.
             let n = params.post_segments as f64;
@@ -586,7 +611,7 @@ mod tests {
                     }
                 }
             }
-            let solid = Dodecahedron::new(edge).volume();
+            let solid = Solid::new(SolidKind::Dodecahedron, edge).volume();
             let expected = solid + prism + cone;
             let got = m.volume();
             let post_got = got - solid;
@@ -611,7 +636,7 @@ mod tests {
 
     #[test]
     fn the_post_leaves_the_minus_z_vertex_of_faces_9_10_11() {
-        let solid = Dodecahedron::new(DEFAULT_EDGE_MM);
+        let solid = Solid::new(SolidKind::Dodecahedron, DEFAULT_EDGE_MM);
         let layout = PostLayout::new(&solid, 48).expect("layout");
         let mut faces: Vec<usize> = layout.bottom.iter().map(|b| b.face).collect();
         faces.sort_unstable();
@@ -622,6 +647,39 @@ mod tests {
         let m = default_mesh();
         let lowest = m.vertices.iter().map(|v| v.z).fold(f64::INFINITY, f64::min);
         assert!((lowest - (layout.apex.z - 25.0)).abs() < 1e-9, "the end cap is 25 mm below the vertex");
+    }
+
+    #[test]
+    fn a_cube_body_is_a_closed_manifold_on_the_union_of_cube_and_post() {
+        let edge = DEFAULT_EDGE_MM;
+        let size = jawtrack_marker::default_tag_size_of(SolidKind::Cube, &TagFamily::TAG36H11, edge);
+        let max = max_post_diameter(SolidKind::Cube, edge, size, 48).expect("valid");
+        eprintln!("cube of {edge} mm, {size:.3} mm tags: the post may be up to {max:.3} mm across");
+        assert!(max > 1.0 && max < edge, "{max}");
+        let params = HarnessParams { post_diameter: 0.9 * max, ..HarnessParams::default() };
+        let m = body_mesh(SolidKind::Cube, edge, size, &params).expect("fits");
+        assert_closed_manifold(&m);
+        assert_no_degenerate_triangles(&m);
+        // Six squares fanned into two triangles each, the notches adding one per ring corner,
+        // and the post's walls and cap: F·(sides − 2) + 4N.
+        assert_eq!(m.triangles.len(), 6 * 2 + 4 * params.post_segments);
+        let u = Union::new(SolidKind::Cube, edge, &params);
+        for i in 0..m.triangles.len() {
+            let [a, b, c] = m.corners(i).map(v3);
+            let centroid = (a + b + c) / 3.0;
+            let n = m.area_normal(i).normalize();
+            assert!(!u.contains(&(centroid + n * 1e-6)), "triangle {i}: outside side is inside the union");
+            assert!(u.contains(&(centroid - n * 1e-6)), "triangle {i}: inside side is outside the union");
+        }
+        let post = m.volume() - edge.powi(3);
+        assert!(post > 0.0 && post < params.post_diameter.powi(2) * (params.post_length + edge), "{post}");
+        let layout = PostLayout::new(&Solid::new(SolidKind::Cube, edge), 48).expect("layout");
+        let mut faces: Vec<usize> = layout.bottom.iter().map(|b| b.face).collect();
+        faces.sort_unstable();
+        assert_eq!(faces, [3, 4, 5], "the post leaves the −Z vertex of the lower ring");
+        let err = body_mesh(SolidKind::Cube, edge, size, &HarnessParams { post_diameter: 1.05 * max, ..params })
+            .expect_err("too thick");
+        assert!(err.to_string().contains("post_diameter"), "{err}");
     }
 
     #[test]
@@ -655,7 +713,7 @@ mod tests {
             (-3.0, size, base, "edge"),
             (DEFAULT_EDGE_MM, -1.0, base, "tag size"),
         ] {
-            let err = body_mesh(edge, size, &params).expect_err("invalid").to_string();
+            let err = body_mesh(SolidKind::Dodecahedron, edge, size, &params).expect_err("invalid").to_string();
             assert!(err.contains(word), "{err}");
         }
     }
@@ -663,14 +721,24 @@ mod tests {
     #[test]
     fn a_post_too_thick_names_the_tag_it_would_cover() {
         let size = default_tag_size(DEFAULT_EDGE_MM);
-        let max = max_post_diameter(DEFAULT_EDGE_MM, size, 48).expect("valid");
+        let max = max_post_diameter(SolidKind::Dodecahedron, DEFAULT_EDGE_MM, size, 48).expect("valid");
         assert!(max > 4.0 && max < 12.0, "{max}");
         assert!(
-            body_mesh(DEFAULT_EDGE_MM, size, &HarnessParams { post_diameter: max * 0.999, ..Default::default() })
-                .is_ok()
+            body_mesh(
+                SolidKind::Dodecahedron,
+                DEFAULT_EDGE_MM,
+                size,
+                &HarnessParams { post_diameter: max * 0.999, ..Default::default() }
+            )
+            .is_ok()
         );
-        let err = body_mesh(DEFAULT_EDGE_MM, size, &HarnessParams { post_diameter: max * 1.05, ..Default::default() })
-            .expect_err("too thick");
+        let err = body_mesh(
+            SolidKind::Dodecahedron,
+            DEFAULT_EDGE_MM,
+            size,
+            &HarnessParams { post_diameter: max * 1.05, ..Default::default() },
+        )
+        .expect_err("too thick");
         match &err {
             HarnessError::PostCoversTag { face, maxilla_id, mandible_id, depth, max_diameter, .. } => {
                 assert!((9..12).contains(face));
@@ -687,13 +755,24 @@ mod tests {
     #[test]
     fn a_post_wider_than_the_face_is_refused_even_with_small_tags() {
         // With a small tag the face itself is the limit.
-        let err = body_mesh(DEFAULT_EDGE_MM, 2.0, &HarnessParams { post_diameter: 40.0, ..Default::default() })
-            .expect_err("too wide");
+        let err = body_mesh(
+            SolidKind::Dodecahedron,
+            DEFAULT_EDGE_MM,
+            2.0,
+            &HarnessParams { post_diameter: 40.0, ..Default::default() },
+        )
+        .expect_err("too wide");
         assert!(matches!(err, HarnessError::PostTooWide { .. }), "{err}");
         assert!(err.to_string().contains("post_diameter"), "{err}");
-        let max = max_post_diameter(DEFAULT_EDGE_MM, 2.0, 48).expect("valid");
+        let max = max_post_diameter(SolidKind::Dodecahedron, DEFAULT_EDGE_MM, 2.0, 48).expect("valid");
         assert!(
-            body_mesh(DEFAULT_EDGE_MM, 2.0, &HarnessParams { post_diameter: 0.99 * max, ..Default::default() }).is_ok()
+            body_mesh(
+                SolidKind::Dodecahedron,
+                DEFAULT_EDGE_MM,
+                2.0,
+                &HarnessParams { post_diameter: 0.99 * max, ..Default::default() }
+            )
+            .is_ok()
         );
     }
 

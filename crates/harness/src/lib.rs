@@ -13,15 +13,21 @@
 pub mod body;
 pub mod sheet;
 
-use jawtrack_marker::{BodyKind, Marker, MarkerError};
+use jawtrack_marker::{BodyKind, Marker, MarkerError, SolidKind};
 use std::path::{Path, PathBuf};
 
 pub use body::{body_mesh, max_post_diameter};
 pub use jawtrack_mesh::Mesh;
 pub use sheet::{tag_sheet_svg, tag_sheet_svg_with_post};
 
-/// File name of the body mesh written by [`write_harness`].
+/// File name of the default marker's body mesh written by [`write_harness`].
 pub const BODY_STL_NAME: &str = "dodecahedron-with-post.stl";
+
+/// File name of the body mesh [`write_harness`] writes for a marker on `solid`:
+/// `dodecahedron-with-post.stl` ([`BODY_STL_NAME`]) or `cube-with-post.stl`.
+pub fn body_stl_name(solid: SolidKind) -> String {
+    format!("{}-with-post.stl", solid.name())
+}
 
 /// File name of the marker file written by [`write_harness`].
 pub const MARKER_JSON_NAME: &str = "marker.json";
@@ -126,7 +132,7 @@ pub enum HarnessError {
     #[error(
         "`post_diameter` {diameter} mm is too thick: the post's footprint on face {face} cuts {depth:.3} mm into the \
          black square of the tag there (id {maxilla_id} on the maxilla, id {mandible_id} on the mandible); at most \
-         {max_diameter:.3} mm fits"
+         {max_diameter:.3} mm fits (smaller tags, `jawtrack marker --tag-size`, leave room for a thicker post)"
     )]
     PostCoversTag {
         /// The requested diameter (mm).
@@ -215,15 +221,17 @@ pub fn common_tag_size(marker: &Marker) -> Result<f64, HarnessError> {
 
 /// Writes the harness files for `marker` into `dir` (created if missing): one tag sheet per
 /// body the marker has (`tags-maxilla.svg`, `tags-mandible.svg`, with the post's notch
-/// marked on the bottom faces), the body with its post (`dodecahedron-with-post.stl`) and
-/// the marker file (`marker.json`). Returns the written paths in that order.
+/// marked on the bottom faces), the body with its post ([`body_stl_name`]:
+/// `dodecahedron-with-post.stl` or `cube-with-post.stl`) and the marker file (`marker.json`).
+/// Returns the written paths in that order.
 ///
-/// The edge and tag size are the marker's (`marker.edge`, the tags' common size); the
+/// The solid, edge and tag size are the marker's (`marker.solid`, `marker.edge`, the tags'
+/// common size); the
 /// sheets print every tag centred on its face, as the nominal marker has it.
 pub fn write_harness(dir: &Path, marker: &Marker, params: &HarnessParams) -> Result<Vec<PathBuf>, HarnessError> {
     let tag_size = common_tag_size(marker)?;
     // Build everything before writing anything, so bad parameters leave no half-written folder.
-    let mesh = body_mesh(marker.edge, tag_size, params)?;
+    let mesh = body_mesh(marker.solid, marker.edge, tag_size, params)?;
     let mut sheets = Vec::new();
     for body in &marker.bodies {
         sheets.push((sheet_file_name(body.kind), tag_sheet_svg_with_post(marker, body.kind, params)?));
@@ -238,7 +246,7 @@ pub fn write_harness(dir: &Path, marker: &Marker, params: &HarnessParams) -> Res
         std::fs::write(&path, svg).map_err(|e| io_err(&path, e))?;
         written.push(path);
     }
-    let stl_path = dir.join(BODY_STL_NAME);
+    let stl_path = dir.join(body_stl_name(marker.solid));
     let file = std::fs::File::create(&stl_path).map_err(|e| io_err(&stl_path, e))?;
     mesh.write_stl(file).map_err(|e| io_err(&stl_path, e))?;
     written.push(stl_path);
@@ -266,7 +274,7 @@ mod tests {
         let checked_in = include_bytes!("../../../harness-cad/dodecahedron-with-post.stl");
         let marker = Marker::default();
         let size = common_tag_size(&marker).expect("one tag size");
-        let mesh = body_mesh(marker.edge, size, &HarnessParams::default()).expect("defaults fit");
+        let mesh = body_mesh(marker.solid, marker.edge, size, &HarnessParams::default()).expect("defaults fit");
         let mut bytes = Vec::new();
         mesh.write_stl(&mut bytes).expect("write to memory");
         assert!(bytes == checked_in, "harness-cad/{BODY_STL_NAME} differs from what the defaults write");

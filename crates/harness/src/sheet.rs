@@ -1,7 +1,8 @@
 //! Printable tag sheets: one A4 SVG per jaw body, in true millimetres (1 user unit = 1 mm),
-//! with every tag printed on a pentagon the size of its face, ready to cut out and glue on.
+//! with every tag printed on a polygon the size of its face (a dodecahedron's pentagon, a
+//! cube's square), ready to cut out and glue on.
 //!
-//! Each pentagon is the face seen from outside with the tag upright (x right, y down, as in
+//! Each polygon is the face seen from outside with the tag upright (x right, y down, as in
 //! the upright tag image), so the face's apex — the vertex the tag's +y axis points at — is
 //! at the bottom of the printed pentagon, and cell row 0 of the tag is at the top. Labels,
 //! the scale bar and the instructions are all outside the cut lines.
@@ -9,7 +10,7 @@
 use crate::body::{checked_post, face_2d};
 use crate::{HarnessError, HarnessParams, common_tag_size};
 use jawtrack_apriltag::TagFamily;
-use jawtrack_marker::{BodyKind, Dodecahedron, Marker, MarkerError, Tag};
+use jawtrack_marker::{BodyKind, Marker, MarkerError, Solid, Tag};
 use nalgebra::{Vector2, Vector3};
 use std::fmt::Write as _;
 
@@ -86,15 +87,16 @@ pub fn tag_sheet_svg(marker: &Marker, body: BodyKind) -> Result<String, HarnessE
     render(marker, body, &[])
 }
 
-/// Like [`tag_sheet_svg`], and on the three faces the post leaves (faces 9–11) a dashed line
-/// marks the notch to cut out of the pentagon's apex so the paper fits round the post.
+/// Like [`tag_sheet_svg`], and on the three faces the post leaves (faces 9–11 of a
+/// dodecahedron, 3–5 of a cube) a dashed line marks the notch to cut out of the face's corner
+/// at the −Z vertex so the paper fits round the post.
 /// Errors as [`crate::body_mesh`] does when the post does not fit.
 pub fn tag_sheet_svg_with_post(
     marker: &Marker,
     body: BodyKind,
     params: &HarnessParams,
 ) -> Result<String, HarnessError> {
-    let post = checked_post(marker.edge, common_tag_size(marker)?, params)?;
+    let post = checked_post(marker.solid, marker.edge, common_tag_size(marker)?, params)?;
     let notches = post.layout.footprints(&post.solid, post.radius);
     render(marker, body, &notches)
 }
@@ -115,7 +117,7 @@ fn render(marker: &Marker, body: BodyKind, notches: &[(usize, Vec<Vector3<f64>>)
         return Err(HarnessError::NoTags);
     }
     tags.sort_by_key(|t| t.face);
-    let solid = Dodecahedron::new(marker.edge);
+    let solid = marker.geometry();
     for t in &tags {
         if t.face >= solid.faces().len() {
             return Err(HarnessError::BadFace { id: t.id, face: t.face });
@@ -129,7 +131,7 @@ fn render(marker: &Marker, body: BodyKind, notches: &[(usize, Vec<Vector3<f64>>)
         }
     }
 
-    // Every face is the same regular pentagon in its own frame; lay the sheet out on face 0's.
+    // Every face is the same regular polygon in its own frame; lay the sheet out on face 0's.
     let outline: Vec<Vector2<f64>> = solid.faces()[0].vertices.iter().map(|v| face_2d(&solid.faces()[0], v)).collect();
     let (xmin, xmax) =
         outline.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.x), hi.max(p.x)));
@@ -202,8 +204,10 @@ fn heading(svg: &mut String, marker: &Marker, body: BodyKind, tags: &[&Tag]) {
             3.0,
             "normal",
             format!(
-                "tag36h11 ids {} · dodecahedron edge {} mm · tag (black square) {} mm",
+                "{} ids {} · {} edge {} mm · tag (black square) {} mm",
+                marker.family.name,
                 id_list(tags),
+                marker.solid,
                 num(marker.edge),
                 sizes.join("/")
             ),
@@ -218,7 +222,8 @@ fn heading(svg: &mut String, marker: &Marker, body: BodyKind, tags: &[&Tag]) {
             2.6,
             "normal",
             format!(
-                "Cut each pentagon along the inside of its grey line; glue tag id N on face {}, the vertex marked “apex” on the face's apex.",
+                "Cut each {} along the inside of its grey line; glue tag id N on face {}, the vertex marked “apex” on the face's apex.",
+                marker.solid.face_shape(),
                 if body.first_id() == 0 { "N".to_string() } else { format!("N − {}", body.first_id()) }
             ),
         ),
@@ -237,11 +242,11 @@ fn heading(svg: &mut String, marker: &Marker, body: BodyKind, tags: &[&Tag]) {
     }
 }
 
-/// One tag: cut line, white pentagon, black square and white cells, labels, and the post's
+/// One tag: cut line, white face, black square and white cells, labels, and the post's
 /// notch if the post leaves this face.
 fn draw_tag(
     svg: &mut String,
-    solid: &Dodecahedron,
+    solid: &Solid,
     family: &TagFamily,
     tag: &Tag,
     origin: Vector2<f64>,
@@ -400,6 +405,7 @@ fn scale_bar(svg: &mut String) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use jawtrack_marker::{DEFAULT_EDGE_MM, SolidKind};
 
     /// Absolute path data (M, L, H, V, Z) as a list of subpaths of points.
     fn parse_path(d: &str) -> Vec<Vec<Vector2<f64>>> {
@@ -445,19 +451,24 @@ mod tests {
         g.descendants().filter(|n| n.attribute("class") == Some(class)).collect()
     }
 
-    fn sheets() -> Vec<(BodyKind, String)> {
-        let m = Marker::default();
+    /// Both bodies' sheets, with and without the post, of the default marker and of a cube
+    /// marker (whose one-cell margins leave room for a 2 mm post).
+    fn sheets() -> Vec<(Marker, BodyKind, String)> {
+        let cube = Marker::nominal_on(SolidKind::Cube, TagFamily::TAG36H11, DEFAULT_EDGE_MM, None).expect("cube");
         let mut out = Vec::new();
-        for kind in BodyKind::ALL {
-            out.push((kind, tag_sheet_svg(&m, kind).expect("sheet")));
-            out.push((kind, tag_sheet_svg_with_post(&m, kind, &HarnessParams::default()).expect("sheet")));
+        for (m, post) in [(Marker::default(), 4.0), (cube, 2.0)] {
+            let params = HarnessParams { post_diameter: post, ..HarnessParams::default() };
+            for kind in BodyKind::ALL {
+                out.push((m.clone(), kind, tag_sheet_svg(&m, kind).expect("sheet")));
+                out.push((m.clone(), kind, tag_sheet_svg_with_post(&m, kind, &params).expect("sheet")));
+            }
         }
         out
     }
 
     #[test]
     fn sheet_is_xml_in_millimetres_with_a_10_mm_bar() {
-        for (_, svg) in sheets() {
+        for (_, _, svg) in sheets() {
             let doc = roxmltree::Document::parse(&svg).expect("valid XML");
             let root = doc.root_element();
             assert_eq!(root.tag_name().name(), "svg");
@@ -477,24 +488,27 @@ mod tests {
 
     #[test]
     fn pentagons_match_the_faces_and_cells_match_the_bitmaps() {
-        let marker = Marker::default();
-        for (kind, svg) in sheets() {
+        let mut shapes = Vec::new();
+        for (marker, kind, svg) in sheets() {
+            shapes.push(marker.solid);
             let doc = roxmltree::Document::parse(&svg).expect("valid XML");
             let text: String = doc.descendants().filter_map(|n| n.text()).collect();
             assert!(text.contains(kind.name()), "body label");
             let groups: Vec<_> = doc.descendants().filter(|n| n.attribute("class") == Some("tag")).collect();
-            assert_eq!(groups.len(), 12);
+            assert_eq!(groups.len(), marker.solid.face_count());
+            assert!(text.contains(&format!("{} edge", marker.solid)), "the solid named in the heading");
             for g in groups {
                 let id: u32 = g.attribute("data-tag-id").expect("id").parse().expect("number");
                 let (body, tag) = marker.find_tag(id).expect("a tag of the marker");
                 assert_eq!(body, kind);
 
-                // The pentagon: five vertices, each edge the marker's edge.
+                // The face: a pentagon or a square, each edge the marker's edge.
                 let face = by_class(g, "face");
                 let pent = parse_path(face[0].attribute("d").expect("d")).remove(0);
-                assert_eq!(pent.len(), 5);
-                for i in 0..5 {
-                    let len = (pent[(i + 1) % 5] - pent[i]).norm();
+                let sides = marker.solid.face_sides();
+                assert_eq!(pent.len(), sides);
+                for i in 0..sides {
+                    let len = (pent[(i + 1) % sides] - pent[i]).norm();
                     assert!((len - marker.edge).abs() < 1e-6, "tag {id} edge {i}: {len}");
                 }
                 assert_eq!(
@@ -560,6 +574,8 @@ mod tests {
                 assert!((pent[0].y - bottom).abs() < 1e-9, "the apex is the lowest vertex on the page");
             }
         }
+        assert_eq!(shapes.iter().filter(|&&k| k == SolidKind::Cube).count(), 4, "four cube sheets checked");
+        assert_eq!(shapes.len(), 8, "sheets checked");
     }
 
     #[test]

@@ -1,195 +1,68 @@
-//! The regular dodecahedron in the body frame. This module is the only place that knows its
-//! shape; everything else asks it.
-//!
-//! Body frame: origin at the centroid; +Z through one vertex (the one that faces the camera);
-//! +X along the horizontal component of face 0's outward normal, so face 0 is one of the three
-//! faces around the +Z vertex; Y = Z × X.
-//!
-//! Faces are numbered by height, then by azimuth: the outward normals fall into four rings of
-//! three (around the +Z vertex, upper middle, lower middle, around the −Z vertex); within a
-//! ring faces go counter-clockwise seen from +Z (from the camera), starting from the smallest
-//! azimuth in [0°, 360°) measured from +X.
-//!
-//! Each face's vertices are listed counter-clockwise seen from outside, starting at its
-//! *apex*: the face has a mirror plane containing the Z axis, which passes through exactly one
-//! of its vertices (and the midpoint of the opposite edge); that vertex is the apex, and the
-//! tag's +y axis points at it.
+//! The regular dodecahedron's canonical coordinates and angles. [`crate::solid`] turns them into
+//! the body frame every solid shares; this module is the only place that knows the shape.
 
-use nalgebra::{Rotation3, Unit, Vector3};
+use nalgebra::Vector3;
 
 /// Dihedral angle between adjacent faces, arccos(−1/√5) in degrees (≈ 116.565°).
 pub fn dihedral_angle_deg() -> f64 {
     (-1.0 / 5f64.sqrt()).acos().to_degrees()
 }
 
-/// One face of the dodecahedron.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Face {
-    /// Face number, 0..12 (see the module doc for the order).
-    pub index: usize,
-    /// The five vertices (mm, body frame), counter-clockwise seen from outside, apex first.
-    pub vertices: [Vector3<f64>; 5],
-    /// Centre of the face (mm).
-    pub center: Vector3<f64>,
-    /// Outward unit normal.
-    pub normal: Vector3<f64>,
-    /// In-plane unit axis parallel to the edge opposite the apex; with `y` and `−normal` it
-    /// forms the right-handed frame of an upright tag (x right, y down, z into the face).
-    pub x_axis: Vector3<f64>,
-    /// In-plane unit axis from the centre toward the apex.
-    pub y_axis: Vector3<f64>,
-}
-
-impl Face {
-    /// Distance from the face centre to each edge (the pentagon's inradius, mm).
-    pub fn inradius(&self) -> f64 {
-        (0.5 * (self.vertices[0] + self.vertices[1]) - self.center).norm()
-    }
-
-    /// The outward in-plane unit normals of the five edges, edge i joining vertex i and i+1.
-    pub fn edge_normals(&self) -> [Vector3<f64>; 5] {
-        std::array::from_fn(|i| {
-            let a = self.vertices[i];
-            let b = self.vertices[(i + 1) % 5];
-            (b - a).cross(&self.normal).normalize()
-        })
-    }
-
-    /// Signed distance (mm) from an in-plane point to the pentagon's boundary: positive inside.
-    pub fn distance_inside(&self, p: &Vector3<f64>) -> f64 {
-        self.edge_normals().iter().enumerate().map(|(i, n)| (self.vertices[i] - p).dot(n)).fold(f64::INFINITY, f64::min)
-    }
-}
-
-/// A regular dodecahedron of a given edge length, in the body frame of the module doc.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Dodecahedron {
-    edge: f64,
-    vertices: [Vector3<f64>; 20],
-    faces: [Face; 12],
-}
-
-impl Dodecahedron {
-    /// Builds the solid; `edge` must be positive and finite (checked by the caller's API).
-    pub fn new(edge: f64) -> Self {
-        let phi = (1.0 + 5f64.sqrt()) / 2.0;
-        // Canonical coordinates have edge 2/φ.
-        let scale = edge * phi / 2.0;
-        let mut canon: Vec<Vector3<f64>> = Vec::with_capacity(20);
-        for &sx in &[-1.0, 1.0] {
-            for &sy in &[-1.0, 1.0] {
-                for &sz in &[-1.0, 1.0] {
-                    canon.push(Vector3::new(sx, sy, sz));
-                }
+/// The 20 vertices and 12 outward face normals of the dodecahedron of edge 2/φ centred on the
+/// origin, and the factor that scales it to `edge`.
+pub(crate) fn canonical(edge: f64) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>, f64) {
+    let phi = (1.0 + 5f64.sqrt()) / 2.0;
+    // Canonical coordinates have edge 2/φ.
+    let scale = edge * phi / 2.0;
+    let mut canon: Vec<Vector3<f64>> = Vec::with_capacity(20);
+    for &sx in &[-1.0, 1.0] {
+        for &sy in &[-1.0, 1.0] {
+            for &sz in &[-1.0, 1.0] {
+                canon.push(Vector3::new(sx, sy, sz));
             }
         }
-        for &a in &[-1.0, 1.0] {
-            for &b in &[-1.0, 1.0] {
-                canon.push(Vector3::new(0.0, a / phi, b * phi));
-                canon.push(Vector3::new(a / phi, b * phi, 0.0));
-                canon.push(Vector3::new(a * phi, 0.0, b / phi));
-            }
+    }
+    for &a in &[-1.0, 1.0] {
+        for &b in &[-1.0, 1.0] {
+            canon.push(Vector3::new(0.0, a / phi, b * phi));
+            canon.push(Vector3::new(a / phi, b * phi, 0.0));
+            canon.push(Vector3::new(a * phi, 0.0, b / phi));
         }
-        let mut face_normals: Vec<Vector3<f64>> = Vec::with_capacity(12);
-        for &a in &[-1.0, 1.0] {
-            for &b in &[-1.0, 1.0] {
-                face_normals.push(Vector3::new(0.0, a * phi, b).normalize());
-                face_normals.push(Vector3::new(a, 0.0, b * phi).normalize());
-                face_normals.push(Vector3::new(a * phi, b, 0.0).normalize());
-            }
+    }
+    let mut face_normals: Vec<Vector3<f64>> = Vec::with_capacity(12);
+    for &a in &[-1.0, 1.0] {
+        for &b in &[-1.0, 1.0] {
+            face_normals.push(Vector3::new(0.0, a * phi, b).normalize());
+            face_normals.push(Vector3::new(a, 0.0, b * phi).normalize());
+            face_normals.push(Vector3::new(a * phi, b, 0.0).normalize());
         }
-
-        // Turn vertex (1,1,1) onto +Z.
-        let to_z = Rotation3::rotation_between(&Vector3::new(1.0, 1.0, 1.0), &Vector3::z())
-            .unwrap_or_else(Rotation3::identity);
-        let canon: Vec<Vector3<f64>> = canon.iter().map(|v| to_z * v * scale).collect();
-        let mut normals: Vec<Vector3<f64>> = face_normals.iter().map(|n| to_z * n).collect();
-
-        // Rings by normal height (four distinct values), highest first.
-        let ring = |n: &Vector3<f64>| -> i32 { (-n.z * 4.0).round() as i32 };
-        // Fix X: the highest faces all have the same height; take the one with the smallest
-        // azimuth as face 0 and turn it onto +X.
-        normals.sort_by(|a, b| b.z.total_cmp(&a.z));
-        let az0 = normals[0].y.atan2(normals[0].x);
-        let yaw = Rotation3::from_axis_angle(&Vector3::z_axis(), -az0);
-        let vertices_vec: Vec<Vector3<f64>> = canon.iter().map(|v| yaw * v).collect();
-        let mut normals: Vec<Vector3<f64>> = normals.iter().map(|n| yaw * n).collect();
-        let azimuth = |n: &Vector3<f64>| {
-            let a = n.y.atan2(n.x);
-            // Snap tiny negatives (face 0 sits on +X) so it sorts first, not last.
-            if a < -1e-9 { a + std::f64::consts::TAU } else { a.max(0.0) }
-        };
-        normals.sort_by(|a, b| ring(a).cmp(&ring(b)).then(azimuth(a).total_cmp(&azimuth(b))));
-
-        let vertices: [Vector3<f64>; 20] = std::array::from_fn(|i| vertices_vec[i]);
-        let faces: [Face; 12] = std::array::from_fn(|index| Self::make_face(index, normals[index], &vertices));
-        Dodecahedron { edge, vertices, faces }
     }
+    (canon, face_normals, scale)
+}
 
-    fn make_face(index: usize, normal: Vector3<f64>, vertices: &[Vector3<f64>; 20]) -> Face {
-        let dmax = vertices.iter().map(|v| v.dot(&normal)).fold(f64::NEG_INFINITY, f64::max);
-        let mut ring: Vec<Vector3<f64>> =
-            vertices.iter().filter(|v| (v.dot(&normal) - dmax).abs() < 1e-9 * dmax.abs().max(1.0)).copied().collect();
-        debug_assert_eq!(ring.len(), 5);
-        let center = ring.iter().sum::<Vector3<f64>>() / 5.0;
-        // The mirror plane through Z meets the face along the projection of Z.
-        let up = Unit::new_normalize(Vector3::z() - normal * normal.z);
-        let apex_score = |v: &Vector3<f64>| {
-            let d = (v - center).normalize();
-            d.dot(&up).abs()
-        };
-        let apex = ring.iter().copied().max_by(|a, b| apex_score(a).total_cmp(&apex_score(b))).unwrap_or(ring[0]);
-        let y_axis = (apex - center).normalize();
-        let x_axis = normal.cross(&y_axis);
-        // Counter-clockwise seen from outside = increasing angle about the outward normal.
-        let angle = |v: &Vector3<f64>| {
-            let d = v - center;
-            // From the apex, turning from +y toward +x: x = n × y, so this is a positive turn
-            // about the outward normal.
-            let a = d.dot(&x_axis).atan2(d.dot(&y_axis));
-            if a < -1e-12 { a + std::f64::consts::TAU } else { a.max(0.0) }
-        };
-        ring.sort_by(|a, b| angle(a).total_cmp(&angle(b)));
-        Face { index, vertices: std::array::from_fn(|i| ring[i]), center, normal, x_axis, y_axis }
-    }
+/// Distance from the centroid to each vertex of a dodecahedron of this edge (mm).
+pub(crate) fn circumradius(edge: f64) -> f64 {
+    edge * 3f64.sqrt() * (1.0 + 5f64.sqrt()) / 4.0
+}
 
-    /// Edge length (mm).
-    pub fn edge(&self) -> f64 {
-        self.edge
-    }
+/// Distance from the centroid to each face (mm).
+pub(crate) fn inradius(edge: f64) -> f64 {
+    edge * 0.5 * (2.5 + 1.1 * 5f64.sqrt()).sqrt()
+}
 
-    /// The 20 vertices (mm).
-    pub fn vertices(&self) -> &[Vector3<f64>; 20] {
-        &self.vertices
-    }
-
-    /// The 12 faces in the documented order.
-    pub fn faces(&self) -> &[Face; 12] {
-        &self.faces
-    }
-
-    /// Distance from the centroid to each vertex (mm).
-    pub fn circumradius(&self) -> f64 {
-        self.edge * 3f64.sqrt() * (1.0 + 5f64.sqrt()) / 4.0
-    }
-
-    /// Distance from the centroid to each face (mm).
-    pub fn inradius(&self) -> f64 {
-        self.edge * 0.5 * (2.5 + 1.1 * 5f64.sqrt()).sqrt()
-    }
-
-    /// Volume (mm³): (15 + 7√5)/4 · a³.
-    pub fn volume(&self) -> f64 {
-        (15.0 + 7.0 * 5f64.sqrt()) / 4.0 * self.edge.powi(3)
-    }
+/// Volume (mm³): (15 + 7√5)/4 · a³.
+pub(crate) fn volume(edge: f64) -> f64 {
+    (15.0 + 7.0 * 5f64.sqrt()) / 4.0 * edge.powi(3)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn solid() -> Dodecahedron {
-        Dodecahedron::new(12.7)
+    use crate::solid::{Solid, SolidKind};
+
+    fn solid() -> Solid {
+        Solid::new(SolidKind::Dodecahedron, 12.7)
     }
 
     #[test]

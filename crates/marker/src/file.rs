@@ -6,7 +6,7 @@
 //!              "calibration": {"views": 18, "rms_before_px": 1.9, "rms_after_px": 0.21,
 //!                              "recordings": ["calibration_frames"]},
 //!              "tags": [{"id": 0, "face": 0, "size": 10.6,
-//!                        "corners": [[x,y,z] ×4], "center": [x,y,z], "face_polygon": [[x,y,z] ×5],
+//!                        "corners": [[x,y,z] ×4], "center": [x,y,z], "face_polygon": [[x,y,z] ×5 or ×4],
 //!                        "calibration": {"status": "calibrated", "views": 9,
 //!                                        "rms_before_px": 2.1, "rms_after_px": 0.2}}, …]},
 //!             {"name": "mandible", "tags": […]}]}
@@ -26,11 +26,12 @@
 //! its provenance unknown.
 //!
 //! **Family and solid** (version 3): the AprilTag family the tags are printed in (`tag36h11`,
-//! `tag25h9` or `tag16h5`; every tag id must be in it) and the solid that carries them (the
-//! `dodecahedron`, the one this build knows). Files of versions 1 and 2 are tag36h11 on a
-//! dodecahedron.
+//! `tag25h9` or `tag16h5`; every tag id must be in it) and the solid that carries them
+//! (`dodecahedron`, whose faces are pentagons, or `cube`, whose faces are squares; see
+//! [`crate::solid`]). Files of versions 1 and 2 are tag36h11 on a dodecahedron.
 
 use crate::MarkerError;
+use crate::SolidKind;
 use crate::model::{
     Body, BodyKind, BodyProvenance, Marker, Tag, TagProvenance, fitted_normal, newell_normal, plane_deviation,
 };
@@ -42,9 +43,6 @@ use std::path::Path;
 /// The marker file version this build writes; it reads this one, version 2 (which names no
 /// family or solid) and version 1 (which has no provenance either).
 pub const MARKER_FILE_VERSION: u32 = 3;
-
-/// The one solid this build knows.
-const SOLID: &str = "dodecahedron";
 
 /// How far (mm) a face's vertices, or a tag's corners, may stray from their common plane.
 /// Printed tags lie flat on a flat face; calibration noise is far below this.
@@ -98,7 +96,7 @@ struct FileTag {
     size: f64,
     corners: [[f64; 3]; 4],
     center: [f64; 3],
-    face_polygon: [[f64; 3]; 5],
+    face_polygon: Vec<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     calibration: Option<FileTagCalibration>,
 }
@@ -118,7 +116,7 @@ impl Marker {
             version: MARKER_FILE_VERSION,
             units: "mm".into(),
             family: Some(self.family.name.into()),
-            solid: Some(SOLID.into()),
+            solid: Some(self.solid.name().into()),
             edge: self.edge,
             bodies: self
                 .bodies
@@ -140,7 +138,7 @@ impl Marker {
                             size: t.size,
                             corners: t.corners.map(|c| arr(&c)),
                             center: arr(&t.center),
-                            face_polygon: t.face_polygon.map(|c| arr(&c)),
+                            face_polygon: t.face_polygon.iter().map(arr).collect(),
                             calibration: t.provenance.map(|p| match p {
                                 TagProvenance::Nominal { views } => FileTagCalibration::Nominal { views },
                                 TagProvenance::Calibrated { views, rms_before_px, rms_after_px } => {
@@ -254,7 +252,7 @@ impl Marker {
                 if body.tags[..ti].iter().any(|t| t.face == tag.face) {
                     return Err(field(&loc, "face", &format!("face {} carries two tags", tag.face)));
                 }
-                validate_tag(tag).map_err(|(f, reason)| field(&loc, f, &reason))?;
+                validate_tag(tag, self.solid).map_err(|(f, reason)| field(&loc, f, &reason))?;
                 validate_provenance(tag, body.provenance.is_some())
                     .map_err(|reason| field(&loc, "calibration", &reason))?;
             }
@@ -280,9 +278,13 @@ fn validate_provenance(t: &Tag, body_calibrated: bool) -> Result<(), String> {
     }
 }
 
-fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
-    if t.face >= 12 {
-        return Err(("face", format!("must be 0..11, got {}", t.face)));
+fn validate_tag(t: &Tag, solid: SolidKind) -> Result<(), (&'static str, String)> {
+    if t.face >= solid.face_count() {
+        return Err(("face", format!("must be 0..{} on a {solid}, got {}", solid.face_count() - 1, t.face)));
+    }
+    let sides = t.face_polygon.len();
+    if sides != solid.face_sides() {
+        return Err(("face_polygon", format!("has {sides} vertices; a face of a {solid} has {}", solid.face_sides())));
     }
     if !t.size.is_finite() || t.size <= 0.0 {
         return Err(("size", format!("must be a positive number of mm, got {}", t.size)));
@@ -300,13 +302,13 @@ fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
             return Err(("face_polygon", format!("vertex {i} is not finite")));
         }
     }
-    // Each vertex against the plane of the other four: a least-squares plane through all
-    // five would absorb part of a single misplaced vertex.
-    let off = (0..5)
+    // Each vertex against the plane of the others: a least-squares plane through all of them
+    // would absorb part of a single misplaced vertex.
+    let off = (0..sides)
         .map(|i| {
-            let others: Vec<Vector3<f64>> = (0..5).filter(|&k| k != i).map(|k| t.face_polygon[k]).collect();
+            let others: Vec<Vector3<f64>> = (0..sides).filter(|&k| k != i).map(|k| t.face_polygon[k]).collect();
             let n = fitted_normal(&others);
-            let mean = others.iter().sum::<Vector3<f64>>() / 4.0;
+            let mean = others.iter().sum::<Vector3<f64>>() / (sides - 1) as f64;
             (t.face_polygon[i] - mean).dot(&n).abs().max(plane_deviation(&others, &n))
         })
         .fold(0.0, f64::max);
@@ -322,15 +324,15 @@ fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
     if !n.iter().all(|v| v.is_finite()) {
         return Err(("face_polygon", "is degenerate (zero area)".into()));
     }
-    let poly_center = t.face_polygon.iter().sum::<Vector3<f64>>() / 5.0;
+    let poly_center = t.face_polygon.iter().sum::<Vector3<f64>>() / sides as f64;
     if n.dot(&poly_center) <= 0.0 {
         return Err(("face_polygon", "runs clockwise seen from outside (its normal points into the body)".into()));
     }
-    for i in 0..5 {
-        let a = t.face_polygon[(i + 1) % 5] - t.face_polygon[i];
-        let b = t.face_polygon[(i + 2) % 5] - t.face_polygon[(i + 1) % 5];
+    for i in 0..sides {
+        let a = t.face_polygon[(i + 1) % sides] - t.face_polygon[i];
+        let b = t.face_polygon[(i + 2) % sides] - t.face_polygon[(i + 1) % sides];
         if a.cross(&b).dot(&n) <= 0.0 {
-            return Err(("face_polygon", format!("is not convex at vertex {}", (i + 1) % 5)));
+            return Err(("face_polygon", format!("is not convex at vertex {}", (i + 1) % sides)));
         }
     }
     let mean = poly_center;
@@ -339,10 +341,10 @@ fn validate_tag(t: &Tag) -> Result<(), (&'static str, String)> {
         if d > PLANARITY_TOLERANCE_MM {
             return Err(("corners", format!("corner {i} is {d:.3} mm off its face's plane")));
         }
-        let inside = (0..5)
+        let inside = (0..sides)
             .map(|k| {
                 let a = t.face_polygon[k];
-                let b = t.face_polygon[(k + 1) % 5];
+                let b = t.face_polygon[(k + 1) % sides];
                 (a - c).dot(&(b - a).cross(&n).normalize())
             })
             .fold(f64::INFINITY, f64::min);
@@ -391,13 +393,17 @@ fn from_file(file: File) -> Result<Marker, MarkerError> {
             )
         })?,
     };
-    if let Some(solid) = file.solid.as_deref().filter(|&s| s != SOLID) {
-        return Err(field(
-            "marker file",
-            "solid",
-            &format!("names \"{solid}\"; this build knows the \"{SOLID}\" only"),
-        ));
-    }
+    let solid = match &file.solid {
+        None => SolidKind::Dodecahedron,
+        Some(name) => SolidKind::from_name(name).ok_or_else(|| {
+            let known: Vec<&str> = SolidKind::ALL.iter().map(|k| k.name()).collect();
+            field(
+                "marker file",
+                "solid",
+                &format!("names \"{name}\", not a solid this build knows ({})", known.join(", ")),
+            )
+        })?,
+    };
     let bodies = file
         .bodies
         .into_iter()
@@ -419,7 +425,7 @@ fn from_file(file: File) -> Result<Marker, MarkerError> {
                     size: t.size,
                     corners: t.corners.map(|c| vec3(&c)),
                     center: vec3(&t.center),
-                    face_polygon: t.face_polygon.map(|c| vec3(&c)),
+                    face_polygon: t.face_polygon.iter().map(vec3).collect(),
                     provenance: t.calibration.map(|c| match c {
                         FileTagCalibration::Nominal { views } => TagProvenance::Nominal { views },
                         FileTagCalibration::Calibrated { views, rms_before_px, rms_after_px } => {
@@ -437,7 +443,7 @@ fn from_file(file: File) -> Result<Marker, MarkerError> {
             Ok(Body { kind, tags, provenance })
         })
         .collect::<Result<Vec<_>, MarkerError>>()?;
-    Ok(Marker { family, edge: file.edge, bodies })
+    Ok(Marker { family, solid, edge: file.edge, bodies })
 }
 
 fn field(location: &str, field: &str, reason: &str) -> MarkerError {
@@ -570,15 +576,38 @@ mod tests {
     }
 
     #[test]
+    fn a_cube_marker_is_named_and_read_back() {
+        let m = Marker::nominal_on(SolidKind::Cube, TagFamily::TAG36H11, 12.7, None).expect("cube marker");
+        let v: Value = serde_json::from_str(&m.to_json()).expect("json");
+        assert_eq!(v["solid"], "cube");
+        assert_eq!(v["bodies"][0]["tags"].as_array().map(Vec::len), Some(6));
+        assert_eq!(v["bodies"][0]["tags"][0]["face_polygon"].as_array().map(Vec::len), Some(4));
+        let back = Marker::from_json(&m.to_json()).expect("own output parses");
+        assert_eq!(back, m);
+        assert_eq!((back.solid, back.geometry().faces().len()), (SolidKind::Cube, 6));
+        assert!(back.measured_tags().is_empty(), "a nominal cube read back is nominal");
+        // A tag on a seventh face of a cube.
+        let mut v = v;
+        v["bodies"][0]["tags"][5]["face"] = json!(6);
+        let e = err_of(&v);
+        assert!(e.contains("`face` must be 0..5 on a cube, got 6"), "{e}");
+    }
+
+    #[test]
     fn family_and_solid_are_checked() {
         let mut v = nominal_json();
         v["family"] = json!("tag99h1");
         let e = err_of(&v);
         assert!(e.contains("`family`") && e.contains("tag99h1") && e.contains("tag25h9"), "{e}");
         let mut v = nominal_json();
+        v["solid"] = json!("sphere");
+        let e = err_of(&v);
+        assert!(e.contains("`solid`") && e.contains("sphere") && e.contains("dodecahedron, cube"), "{e}");
+        // A dodecahedron's pentagons relabelled as a cube's faces.
+        let mut v = nominal_json();
         v["solid"] = json!("cube");
         let e = err_of(&v);
-        assert!(e.contains("`solid`") && e.contains("cube") && e.contains("dodecahedron"), "{e}");
+        assert!(e.contains("`face_polygon` has 5 vertices; a face of a cube has 4"), "{e}");
         for key in ["family", "solid"] {
             let mut v = nominal_json();
             v.as_object_mut().expect("object").remove(key);

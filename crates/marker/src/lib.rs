@@ -1,18 +1,22 @@
-//! The dodecahedron marker: its geometry ([`dodecahedron`]), the tags laid on its faces and the
-//! two jaw bodies that carry them ([`model`]), and the versioned JSON marker file ([`file`]).
+//! The marker: the solid a body is ([`solid`], the dodecahedron by default, or a cube), the
+//! tags laid on its faces and the two jaw bodies that carry them ([`model`]), and the versioned
+//! JSON marker file ([`file`]).
 //!
-//! All lengths are millimetres, all points in a body's frame (see [`dodecahedron`]).
+//! All lengths are millimetres, all points in a body's frame (see [`solid`]).
 
 pub mod dodecahedron;
 pub mod file;
 pub mod model;
+pub mod solid;
 
-pub use dodecahedron::{Dodecahedron, Face};
 pub use file::MARKER_FILE_VERSION;
+/// The tag family a marker is printed in (re-exported: it is part of [`Marker`]).
+pub use jawtrack_tag_family::TagFamily;
 pub use model::{
     Body, BodyKind, BodyProvenance, DEFAULT_EDGE_MM, Marker, PrintError, TAG_CORNERS, TAGS_PER_BODY, Tag,
-    TagProvenance, default_tag_size,
+    TagProvenance, default_tag_size, default_tag_size_of,
 };
+pub use solid::{Face, Solid, SolidKind};
 
 /// Errors from building, reading or checking a marker.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]

@@ -1,13 +1,13 @@
-//! Tags on the dodecahedron's faces and the two jaw bodies that carry them.
+//! Tags on a solid's faces and the two jaw bodies that carry them.
 //!
 //! A tag is the black-border square of side `size` (the "tag size" of AprilTag), centred on
 //! its face, its +y axis toward the face's apex and its +x axis parallel to the opposite edge
-//! (see [`crate::dodecahedron`]). Its corners are listed in the AprilTag reference library's
+//! (see [`crate::solid`]). Its corners are listed in the AprilTag reference library's
 //! detection order: tag coordinates (−1,+1), (+1,+1), (+1,−1), (−1,−1) with y down in the
 //! upright tag image — bottom-left, bottom-right, top-right, top-left.
 
 use crate::MarkerError;
-use crate::dodecahedron::{Dodecahedron, Face};
+use crate::solid::{Face, Solid, SolidKind};
 use jawtrack_tag_family::TagFamily;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
@@ -17,7 +17,8 @@ pub const TAG_CORNERS: [(f64, f64); 4] = [(-1.0, 1.0), (1.0, 1.0), (1.0, -1.0), 
 /// Default edge length of the printed dodecahedron (mm): half an inch.
 pub const DEFAULT_EDGE_MM: f64 = 12.7;
 
-/// Number of faces, and so of tags per body.
+/// Tag ids each body reserves: the mandible's nominal ids start here whatever the solid (the
+/// dodecahedron's 12 faces fill them; a cube's 6 leave ids 6–11 and 18–23 unused).
 pub const TAGS_PER_BODY: u32 = 12;
 
 /// Which jaw a marker body is attached to.
@@ -68,9 +69,9 @@ impl std::fmt::Display for BodyKind {
 /// One tag on one face of a body, every point in the body frame (mm).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tag {
-    /// tag36h11 id.
+    /// Id in the marker's family.
     pub id: u32,
-    /// Face number 0..12 it is glued on.
+    /// Number of the face it is glued on (0 to the solid's faces − 1).
     pub face: usize,
     /// Side of the black-border square (mm).
     pub size: f64,
@@ -78,8 +79,8 @@ pub struct Tag {
     pub corners: [Vector3<f64>; 4],
     /// Centre of the tag.
     pub center: Vector3<f64>,
-    /// The face's pentagon, apex first, counter-clockwise seen from outside.
-    pub face_polygon: [Vector3<f64>; 5],
+    /// The face's polygon, apex first, counter-clockwise seen from outside.
+    pub face_polygon: Vec<Vector3<f64>>,
     /// How its placement was established; `None` when unknown (a nominal marker, or a file
     /// from before marker file version 2).
     pub provenance: Option<TagProvenance>,
@@ -188,7 +189,9 @@ pub struct Body {
 pub struct Marker {
     /// The AprilTag family its tags are printed in (tag36h11 unless the file names another).
     pub family: TagFamily,
-    /// Nominal edge length of the dodecahedron (mm).
+    /// The solid each body is (the dodecahedron unless the file names another).
+    pub solid: SolidKind,
+    /// Nominal edge length of the solid (mm).
     pub edge: f64,
     /// The bodies, at most one of each kind.
     pub bodies: Vec<Body>,
@@ -214,13 +217,14 @@ fn margin(face: &Face, size: f64) -> f64 {
 /// face of a dodecahedron with this edge: size = min over edges of r / (½(|e·x| + |e·y|) + ⅛),
 /// with r the pentagon's inradius and e each edge's in-plane normal.
 pub fn default_tag_size(edge: f64) -> f64 {
-    default_tag_size_of(&TagFamily::TAG36H11, edge)
+    default_tag_size_of(SolidKind::Dodecahedron, &TagFamily::TAG36H11, edge)
 }
 
-/// [`default_tag_size`] for a tag of `family`, whose cell is size / (cells across its border).
-pub fn default_tag_size_of(family: &TagFamily, edge: f64) -> f64 {
+/// [`default_tag_size`] for a tag of `family`, whose cell is size / (cells across its border),
+/// on a face of `solid`.
+pub fn default_tag_size_of(solid: SolidKind, family: &TagFamily, edge: f64) -> f64 {
     let cell = 1.0 / family.width_at_border as f64;
-    let d = Dodecahedron::new(edge);
+    let d = Solid::new(solid, edge);
     let face = &d.faces()[0];
     let r = face.inradius();
     face.edge_normals()
@@ -238,29 +242,55 @@ impl Marker {
 
     /// [`Marker::nominal`] printed in `family` (its default tag size: [`default_tag_size_of`]).
     pub fn nominal_of(family: TagFamily, edge: f64, tag_size: Option<f64>) -> Result<Marker, MarkerError> {
-        if family.count() < (2 * TAGS_PER_BODY) as usize {
+        Marker::nominal_on(SolidKind::Dodecahedron, family, edge, tag_size)
+    }
+
+    /// The ideal marker pair on `solid` printed in `family`: one tag centred on each face,
+    /// maxilla ids from 0 and mandible ids from [`TAGS_PER_BODY`] in face order.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use jawtrack_marker::{BodyKind, Marker, SolidKind};
+    /// use jawtrack_tag_family::TagFamily;
+    ///
+    /// let cube = Marker::nominal_on(SolidKind::Cube, TagFamily::TAG36H11, 12.7, None)?;
+    /// let ids: Vec<u32> = cube.body(BodyKind::Mandible).unwrap().tags.iter().map(|t| t.id).collect();
+    /// assert_eq!(ids, [12, 13, 14, 15, 16, 17]);
+    /// // The largest tag that keeps one cell of white margin: 8 cells of 10 across the face.
+    /// assert!((cube.tags().next().unwrap().1.size - 0.8 * 12.7).abs() < 1e-9);
+    /// # Ok::<(), jawtrack_marker::MarkerError>(())
+    /// ```
+    pub fn nominal_on(
+        solid: SolidKind,
+        family: TagFamily,
+        edge: f64,
+        tag_size: Option<f64>,
+    ) -> Result<Marker, MarkerError> {
+        let faces = solid.face_count() as u32;
+        let last_id = BodyKind::Mandible.first_id() + faces - 1;
+        if family.count() <= last_id as usize {
             return Err(MarkerError::Params(format!(
-                "{} has {} tags; a marker pair needs ids 0–{}",
+                "{} has {} tags; a marker pair on a {solid} needs ids 0–{last_id}",
                 family.name,
                 family.count(),
-                2 * TAGS_PER_BODY - 1
             )));
         }
         if !edge.is_finite() || edge <= 0.0 {
             return Err(MarkerError::Params(format!("the edge length must be a positive number of mm, got {edge}")));
         }
-        let solid = Dodecahedron::new(edge);
-        let largest = default_tag_size_of(&family, edge);
+        let shape = Solid::new(solid, edge);
+        let largest = default_tag_size_of(solid, &family, edge);
         let cells = family.width_at_border as f64;
         let size = tag_size.unwrap_or(largest);
         if !size.is_finite() || size <= 0.0 {
             return Err(MarkerError::Params(format!("the tag size must be a positive number of mm, got {size}")));
         }
-        let face0 = &solid.faces()[0];
-        let half_diag_fits = margin(face0, size) >= 0.0;
-        if !half_diag_fits {
+        let face0 = &shape.faces()[0];
+        let polygon = solid.face_shape();
+        if margin(face0, size) < 0.0 {
             return Err(MarkerError::Params(format!(
-                "a {size} mm tag is larger than its face: it does not fit inside a pentagon of edge {edge} mm \
+                "a {size} mm tag is larger than its face: it does not fit inside a {polygon} of edge {edge} mm \
                  (the largest tag that keeps a one-cell white margin is {largest:.3} mm)"
             )));
         }
@@ -275,11 +305,17 @@ impl Marker {
             .iter()
             .map(|&kind| Body {
                 kind,
-                tags: solid.faces().iter().map(|f| nominal_tag(f, kind.first_id() + f.index as u32, size)).collect(),
+                tags: shape.faces().iter().map(|f| nominal_tag(f, kind.first_id() + f.index as u32, size)).collect(),
                 provenance: None,
             })
             .collect();
-        Ok(Marker { family, edge, bodies })
+        Ok(Marker { family, solid, edge, bodies })
+    }
+
+    /// The solid of this marker's kind and nominal edge, in the body frame: what harness,
+    /// renderer, viewer and registration draw.
+    pub fn geometry(&self) -> Solid {
+        Solid::new(self.solid, self.edge)
     }
 
     /// Refuses a marker without both bodies: a file describing one body reads, but can never
@@ -342,7 +378,7 @@ impl Marker {
     /// on its face (a calibrated file of version 1, or a print's true geometry). A tag of the
     /// nominal model is not.
     pub fn measured_tags(&self) -> Vec<u32> {
-        let solid = Dodecahedron::new(self.edge);
+        let solid = self.geometry();
         let moved = |t: &Tag| {
             solid.faces().get(t.face).is_none_or(|face| {
                 let ideal = nominal_tag(face, t.id, t.size);
@@ -387,7 +423,7 @@ fn nominal_tag(face: &Face, id: u32, size: f64) -> Tag {
         size,
         corners: TAG_CORNERS.map(|(u, v)| face.center + face.x_axis * (u * h) + face.y_axis * (v * h)),
         center: face.center,
-        face_polygon: face.vertices,
+        face_polygon: face.vertices.clone(),
         provenance: None,
     }
 }
@@ -426,7 +462,7 @@ mod tests {
     #[test]
     fn default_tag_size_leaves_exactly_one_cell() {
         let size = default_tag_size(DEFAULT_EDGE_MM);
-        let d = Dodecahedron::new(DEFAULT_EDGE_MM);
+        let d = Solid::new(SolidKind::Dodecahedron, DEFAULT_EDGE_MM);
         let m = margin(&d.faces()[0], size);
         assert!((m - size / 8.0).abs() < 1e-12, "margin {m} vs cell {}", size / 8.0);
         // Sanity: between the pentagon's inscribed-circle square and its inradius.
@@ -439,7 +475,7 @@ mod tests {
     #[test]
     fn corners_lie_inside_their_face_with_the_margin() {
         let m = Marker::default();
-        let d = Dodecahedron::new(m.edge);
+        let d = m.geometry();
         for (_, t) in m.tags() {
             let face = &d.faces()[t.face];
             for c in &t.corners {

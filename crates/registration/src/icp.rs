@@ -22,7 +22,7 @@
 //! the guess (reached from too far off, possibly a copy with other faces), fits badly, or
 //! found too little of the surface in the scan.
 
-use jawtrack_marker::{BodyKind, Dodecahedron, Marker};
+use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_mesh::Mesh;
 use jawtrack_mesh::distance::SurfaceIndex;
 use jawtrack_pose::Pose;
@@ -299,10 +299,10 @@ pub enum RegisterError {
 }
 
 /// Points and outward normals spread evenly (a square grid of `spacing_mm`, kept half a
-/// spacing inside the edges) over the 12 faces of `body`'s dodecahedron, in the marker's
-/// frame: the model [`register`] fits to a scan.
+/// spacing inside the edges) over the faces of `body`'s solid, in the marker's frame: the
+/// model [`register`] fits to a scan.
 ///
-/// The solid comes from [`jawtrack_marker::Dodecahedron`] with the marker's edge; the marker
+/// The solid is the marker's ([`Marker::geometry`]: its kind and nominal edge); the marker
 /// file's face polygons of the body must agree with it (a calibrated file refines where the
 /// tags sit on their faces, not the faces). Edges are left out because a print rounds them.
 pub fn marker_surface_samples(
@@ -315,15 +315,22 @@ pub fn marker_surface_samples(
     if !(edge.is_finite() && edge > 0.0) {
         return Err(RegisterError::MarkerGeometry { body, edge, reason: "the edge is not a positive length".into() });
     }
-    let solid = Dodecahedron::new(edge);
+    let solid = marker.geometry();
+    let faces = solid.faces().len();
     for tag in tags {
         let face = solid.faces().get(tag.face).ok_or_else(|| RegisterError::MarkerGeometry {
             body,
             edge,
-            reason: format!("tag {} is on face {}, but there are 12 faces (0–11)", tag.id, tag.face),
+            reason: format!(
+                "tag {} is on face {}, but a {} has {faces} faces (0–{})",
+                tag.id,
+                tag.face,
+                solid.kind(),
+                faces - 1
+            ),
         })?;
         let off = tag.face_polygon.iter().zip(&face.vertices).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-        if !at_most(off, FACE_TOLERANCE_MM) {
+        if tag.face_polygon.len() != face.vertices.len() || !at_most(off, FACE_TOLERANCE_MM) {
             return Err(RegisterError::MarkerGeometry {
                 body,
                 edge,
@@ -331,8 +338,15 @@ pub fn marker_surface_samples(
             });
         }
     }
-    // Pentagon area: (5/4)·e²·cot 36°.
-    let area = 12.0 * 1.25 * edge * edge / 36f64.to_radians().tan();
+    // A regular n-gon's area: (n/4)·e²·cot(180°/n).
+    let area: f64 = solid
+        .faces()
+        .iter()
+        .map(|f| {
+            let n = f.vertices.len() as f64;
+            0.25 * n * edge * edge / (std::f64::consts::PI / n).tan()
+        })
+        .sum();
     if !(spacing_mm.is_finite() && spacing_mm > 0.0) || area / (spacing_mm * spacing_mm) > MAX_SAMPLES as f64 {
         return Err(RegisterError::Spacing(spacing_mm));
     }
@@ -357,11 +371,11 @@ pub fn marker_surface_samples(
 /// An initial guess for a scan in the marker's orientation: no rotation, and the marker's
 /// centre (its frame's origin) on the centre of the scan surface nearest the scan's middle —
 /// mean shift from the area-weighted centroid of the whole scan, each step averaging the
-/// surface within the dodecahedron's circumradius. Good for a scan of the harness alone
+/// surface within the marker solid's circumradius. Good for a scan of the harness alone
 /// exported in (or near) the body frame; a scan with teeth, or turned, needs a real guess.
 /// `None` when the scan has no area.
-pub fn centred_init(scan: &Mesh, marker_edge_mm: f64) -> Option<Pose> {
-    let radius = Dodecahedron::new(marker_edge_mm).circumradius();
+pub fn centred_init(scan: &Mesh, marker: &Marker) -> Option<Pose> {
+    let radius = marker.geometry().circumradius();
     let pieces: Vec<(Vector3<f64>, f64)> = (0..scan.triangles.len())
         .map(|t| {
             let [a, b, c] = scan.corners(t);
@@ -616,7 +630,7 @@ mod tests {
     fn samples_lie_on_the_faces_and_cover_them_evenly() {
         let marker = Marker::default();
         let samples = marker_surface_samples(&marker, BodyKind::Maxilla, 0.5).expect("samples");
-        let solid = Dodecahedron::new(marker.edge);
+        let solid = marker.geometry();
         let face_area = 1.25 * marker.edge * marker.edge / 36f64.to_radians().tan();
         let mut per_face = [0usize; 12];
         for (p, n) in &samples {
@@ -633,6 +647,20 @@ mod tests {
         }
         assert!(matches!(marker_surface_samples(&marker, BodyKind::Maxilla, 0.0), Err(RegisterError::Spacing(_))));
         assert!(matches!(marker_surface_samples(&marker, BodyKind::Maxilla, 1e-4), Err(RegisterError::Spacing(_))));
+        // A cube marker is sampled on its six squares.
+        let cube = Marker::nominal_on(jawtrack_marker::SolidKind::Cube, marker.family, 12.0, None).expect("cube");
+        let samples = marker_surface_samples(&cube, BodyKind::Mandible, 0.5).expect("samples");
+        let solid = cube.geometry();
+        let mut per_face = [0usize; 6];
+        for (p, n) in &samples {
+            let face = solid.faces().iter().position(|f| (f.normal - n).norm() < 1e-12).expect("a cube face");
+            per_face[face] += 1;
+            assert!(solid.faces()[face].distance_inside(&p.coords) >= 0.25 - 1e-9, "inside, away from the edges");
+        }
+        for count in per_face {
+            let expected = (12.0 * 12.0 - 4.0 * 12.0 * 0.25) / 0.25;
+            assert!((count as f64 / expected - 1.0).abs() < 0.05, "{count} vs {expected}");
+        }
         let only_upper = Marker { bodies: vec![marker.bodies[0].clone()], ..marker.clone() };
         let err = marker_surface_samples(&only_upper, BodyKind::Mandible, 0.5).expect_err("no mandible");
         assert!(err.to_string().contains("no mandible body"), "{err}");

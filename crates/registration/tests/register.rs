@@ -18,7 +18,7 @@ use std::time::Instant;
 /// The body with its post, in the marker (body) frame.
 fn harness(marker: &Marker) -> Mesh {
     let size = marker.bodies[0].tags[0].size;
-    body_mesh(marker.edge, size, &HarnessParams::default()).expect("default harness")
+    body_mesh(marker.solid, marker.edge, size, &HarnessParams::default()).expect("default harness")
 }
 
 /// Each triangle split into four, `levels` times, sharing edge midpoints (the mesh stays closed).
@@ -90,7 +90,7 @@ fn rough_guess(truth: &Pose) -> Pose {
 /// the scan frame by `truth`.
 fn scene(marker: &Marker, levels: usize) -> Mesh {
     let body = cut(&subdivide(&harness(marker), levels), |p| p.x < 4.0);
-    let face = jawtrack_marker::Dodecahedron::new(marker.edge).faces()[7];
+    let face = marker.geometry().faces()[7].clone();
     let tooth = scenes::sphere(Point3::from(face.center + face.normal * 5.5), 5.0, 24);
     Mesh::concat(&[body, tooth]).0.transformed(|p| truth().transform_point(p))
 }
@@ -173,13 +173,13 @@ fn without_a_guess_a_scan_in_the_marker_orientation_is_found_from_its_centre() {
     let marker = Marker::default();
     let shift = Pose::from_axis_angle(Vector3::zeros(), Vector3::new(-20.0, 35.0, 7.5));
     let scan = harness(&marker).transformed(|p| shift.transform_point(p));
-    let init = centred_init(&scan, marker.edge).expect("a scan with area");
+    let init = centred_init(&scan, &marker).expect("a scan with area");
     // The post pulls the centre only a little.
     assert!((init.translation() - shift.translation()).norm() < 1.0, "{:?}", init.translation());
     let result = register(&samples(&marker), &scan, &init, &IcpOptions::default()).expect("registers");
     let (angle, mm) = result.scan_from_marker.distance_to(&shift);
     assert!(result.converged && mm < 1e-6 && angle < 1e-8, "{result:?}");
-    assert!(centred_init(&Mesh { vertices: vec![], triangles: vec![] }, marker.edge).is_none());
+    assert!(centred_init(&Mesh { vertices: vec![], triangles: vec![] }, &marker).is_none());
 }
 
 #[test]
@@ -212,7 +212,7 @@ fn a_guess_nearer_a_symmetric_copy_lands_on_that_copy() {
     // onto itself, so a guess 50° off converges, perfectly fitted, to the turned copy. This is
     // why the guess must be within about 30°, and why nothing here can flag it.
     let marker = Marker::default();
-    let face = jawtrack_marker::Dodecahedron::new(marker.edge).faces()[0];
+    let face = marker.geometry().faces()[0].clone();
     let turn = |deg: f64| Pose::from_axis_angle(face.normal * deg.to_radians(), Vector3::zeros());
     let scan = scene(&marker, 0);
     let result = register(&samples(&marker), &scan, &(truth() * turn(50.0)), &IcpOptions::default()).expect("fits");
@@ -228,7 +228,7 @@ fn a_guess_nearer_a_symmetric_copy_lands_on_that_copy() {
 fn an_unrelated_scan_is_refused_not_fitted() {
     let marker = Marker::default();
     let model = samples(&marker);
-    let solid = jawtrack_marker::Dodecahedron::new(marker.edge);
+    let solid = marker.geometry();
     let centre = truth().transform_point(&Point3::origin());
     let init = rough_guess(&truth());
     // A ball as wide as the dodecahedron's insphere, a flat plate through its centre, and a

@@ -9,7 +9,7 @@
 //! hundredths of a pixel in one row and far better along a whole edge.
 
 use jawtrack_apriltag::{TagBitmap, TagFamily};
-use jawtrack_marker::{Body, Dodecahedron};
+use jawtrack_marker::{Body, Solid, SolidKind};
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Point2, Vector2, Vector3};
 use rayon::prelude::*;
@@ -35,7 +35,9 @@ pub struct Camera {
 pub struct PlacedBody<'a> {
     /// The body's tags (the true geometry, print errors included).
     pub body: &'a Body,
-    /// Edge of the solid they are glued on (mm).
+    /// The solid they are glued on (the marker's) …
+    pub solid: SolidKind,
+    /// … and its edge (mm).
     pub edge: f64,
     /// The family the tags are printed in (the marker's).
     pub family: TagFamily,
@@ -157,7 +159,7 @@ impl Prepared {
             .bodies
             .iter()
             .map(|pb| {
-                let solid = Dodecahedron::new(pb.edge);
+                let solid = Solid::new(pb.solid, pb.edge);
                 let pose = &pb.camera_from_body;
                 let faces = solid
                     .faces()
@@ -421,7 +423,7 @@ pub fn body_window(scene: &RenderScene<'_>, index: usize) -> Option<[usize; 4]> 
     let cam = &scene.camera;
     let (w, h) = (f64::from(cam.width), f64::from(cam.height));
     let b = scene.bodies.get(index)?;
-    let b = sphere_bbox(cam, &b.camera_from_body.translation(), Dodecahedron::new(b.edge).circumradius())?;
+    let b = sphere_bbox(cam, &b.camera_from_body.translation(), Solid::new(b.solid, b.edge).circumradius())?;
     let x0 = b[0].floor().clamp(0.0, w) as usize;
     let y0 = b[1].floor().clamp(0.0, h) as usize;
     let x1 = (b[2].ceil() + 1.0).clamp(0.0, w) as usize;
@@ -541,13 +543,19 @@ mod tests {
         let pose = Pose::from_parts(UnitQuaternion::from_euler_angles(2.8, 0.3, 0.4), Vector3::new(28.0, 14.0, 110.0));
         let scene = RenderScene {
             camera: cam,
-            bodies: vec![PlacedBody { body, edge: marker.edge, family: marker.family, camera_from_body: pose }],
+            bodies: vec![PlacedBody {
+                body,
+                solid: marker.solid,
+                edge: marker.edge,
+                family: marker.family,
+                camera_from_body: pose,
+            }],
             planes: vec![],
             light_dir: Vector3::new(0.0, 0.0, -1.0),
             ambient: 0.35,
         };
         let img = render_linear(&scene);
-        let solid = Dodecahedron::new(marker.edge);
+        let solid = marker.geometry();
         let (mut checked, mut moved) = (0, 0.0f64);
         for tag in &body.tags {
             let face = &solid.faces()[tag.face];
@@ -589,6 +597,7 @@ mod tests {
             camera: cam,
             bodies: vec![PlacedBody {
                 body,
+                solid: marker.solid,
                 edge: marker.edge,
                 family: marker.family,
                 camera_from_body: Pose::from_axis_angle(Vector3::new(2.9, 0.2, 0.1), Vector3::new(0.0, 0.0, 120.0)),

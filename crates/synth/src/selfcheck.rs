@@ -7,7 +7,7 @@
 //! equals the length of the row's white part, so the edge position follows exactly.
 
 use crate::render::{Camera, INK_ALBEDO, PAPER_ALBEDO, PlacedBody, RenderScene, render_linear};
-use jawtrack_marker::{Dodecahedron, Marker};
+use jawtrack_marker::Marker;
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{Matrix3, Point2, Point3, Rotation3, UnitQuaternion, Vector3};
 
@@ -30,7 +30,7 @@ pub fn edge_self_check(side_px: f64, roll_deg: f64) -> EdgeCheck {
     let marker = Marker::default();
     let body = marker.body(jawtrack_marker::BodyKind::Maxilla).expect("the default marker has a maxilla");
     let tag = &body.tags[0];
-    let solid = Dodecahedron::new(marker.edge);
+    let solid = marker.geometry();
     let face = &solid.faces()[0];
     let (w, h) = (800u32, 800u32);
     let k = CameraIntrinsics::pinhole(1500.0, 1500.0, 399.5, 399.5);
@@ -46,7 +46,13 @@ pub fn edge_self_check(side_px: f64, roll_deg: f64) -> EdgeCheck {
     let cam = Camera { intrinsics: k, width: w, height: h };
     let scene = RenderScene {
         camera: cam,
-        bodies: vec![PlacedBody { body, edge: marker.edge, family: marker.family, camera_from_body: pose }],
+        bodies: vec![PlacedBody {
+            body,
+            solid: marker.solid,
+            edge: marker.edge,
+            family: marker.family,
+            camera_from_body: pose,
+        }],
         planes: vec![],
         light_dir: Vector3::new(0.0, 0.0, -1.0),
         ambient: 0.35,

@@ -153,7 +153,7 @@ pub(crate) fn seen_at(
 mod tests {
     use super::*;
     use crate::render::{Camera, INK_ALBEDO, PAPER_ALBEDO, PlacedBody, render_linear};
-    use jawtrack_marker::{BodyKind, Dodecahedron, Marker};
+    use jawtrack_marker::{BodyKind, Marker};
     use jawtrack_pose::{CameraIntrinsics, Pose};
     use nalgebra::{Matrix3, Point3, Rotation3, UnitQuaternion, Vector3};
 
@@ -176,7 +176,7 @@ mod tests {
         fn new(velocity: Vector3<f64>, accel: Vector3<f64>) -> Self {
             let marker = Marker::default();
             let tag = marker.body(BodyKind::Maxilla).expect("maxilla").tags[0].clone();
-            let solid = Dodecahedron::new(marker.edge);
+            let solid = marker.geometry();
             let face = &solid.faces()[tag.face];
             let r = Matrix3::from_rows(&[face.x_axis.transpose(), face.y_axis.transpose(), (-face.normal).transpose()]);
             let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
@@ -199,6 +199,7 @@ mod tests {
                 camera: self.camera(),
                 bodies: vec![PlacedBody {
                     body: self.marker.body(BodyKind::Maxilla).expect("maxilla"),
+                    solid: self.marker.solid,
                     edge: self.marker.edge,
                     family: self.marker.family,
                     camera_from_body: self.pose(t),

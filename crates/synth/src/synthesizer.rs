@@ -252,6 +252,7 @@ impl Synthesizer {
             .filter_map(|(k, pose)| {
                 self.true_marker.body(*k).map(|body| PlacedBody {
                     body,
+                    solid: self.true_marker.solid,
                     edge,
                     family: self.true_marker.family,
                     camera_from_body: pose,

@@ -1,6 +1,6 @@
 //! The web viewer's server: the page (`viewer/` in the repository, embedded in this library at
-//! build time with the three.js modules it imports), the scene (the two meshes, or the two
-//! marker dodecahedrons when no scan is given; the markers' tags; the head frame for the
+//! build time with the three.js modules it imports), the scene (the two meshes, or the marker
+//! file's solid at its edge when no scan is given; the markers' tags; the head frame for the
 //! grid and the view buttons; a hinge axis), live poses over a WebSocket for
 //! `jawtrack receive --serve`, and a whole recording for `jawtrack view` (with each frame's
 //! incisor and condyles).
@@ -20,7 +20,7 @@ use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Json, Response};
 use axum::routing::get;
 use jawtrack_kinematics::{AnatomicalPoints, Incisor, Mounting, Side};
-use jawtrack_marker::{BodyKind, DEFAULT_EDGE_MM, Dodecahedron, Marker};
+use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{BiteRecord, FrameRecord, SessionId};
 use jawtrack_registration::Registration;
@@ -96,7 +96,7 @@ pub struct ViewerOptions {
     /// A hinge axis to draw (`jawtrack hinge-axis`): a point and a unit direction in the
     /// maxilla marker's frame (mm).
     pub hinge_axis: Option<([f64; 3], [f64; 3])>,
-    /// The marker whose tags are drawn on the two dodecahedrons; default: the nominal one.
+    /// The marker whose solid and tags are drawn; default: the nominal one.
     pub marker: Option<Marker>,
     /// The meshes carry per-vertex colours to show as they are (the contact maps `jawtrack
     /// contacts` writes), not the viewer's own.
@@ -330,7 +330,7 @@ impl LiveState {
                 "format": format, "url": format!("/api/mesh/{name}"), "marker_from_mesh": self.marker_from_scan[i],
                 "coloured": self.coloured,
             }),
-            None => dodecahedron_mesh(),
+            None => solid_mesh(&self.marker),
         };
         let tags = |kind: BodyKind| -> Vec<Value> {
             self.marker
@@ -352,7 +352,7 @@ impl LiveState {
             "maxilla": mesh(0, "maxilla"),
             "mandible": mesh(1, "mandible"),
             "maxilla_from_mandible_rest": self.lock().rest,
-            "marker_solid": dodecahedron_mesh(),
+            "marker_solid": solid_mesh(&self.marker),
             "tags": {"maxilla": tags(BodyKind::Maxilla), "mandible": tags(BodyKind::Mandible)},
             "maxilla_from_head": self.mounting.head_from_maxilla.inverse(),
             "hinge_axis": self.hinge_axis.map(|(p, d)| json!({"point": p, "direction": d})),
@@ -365,16 +365,17 @@ fn condyles_of(m: Mounting) -> [Incisor; 2] {
     [Side::Left, Side::Right].map(|side| Incisor::fixed_at(m, &m.condyle(side)))
 }
 
-/// The marker solid as inline triangles (body frame, mm).
-fn dodecahedron_mesh() -> Value {
-    let solid = Dodecahedron::new(DEFAULT_EDGE_MM);
+/// The marker's solid (its kind and edge) as inline triangles (body frame, mm).
+fn solid_mesh(marker: &Marker) -> Value {
+    let solid = marker.geometry();
     let (mut positions, mut indices) = (Vec::new(), Vec::new());
     for face in solid.faces() {
         let base = positions.len() / 3;
         for v in &face.vertices {
             positions.extend([v.x, v.y, v.z]);
         }
-        for k in 1..4 {
+        // Each face is convex: a fan from its first corner.
+        for k in 1..face.vertices.len() - 1 {
             indices.extend([base, base + k, base + k + 1]);
         }
     }
@@ -576,6 +577,18 @@ mod tests {
             Some(12 * 3 * 3),
             "12 pentagons, 3 triangles each"
         );
+        // A cube marker's file is drawn as a cube of its edge, with its own tags.
+        let cube =
+            Marker::nominal_on(jawtrack_marker::SolidKind::Cube, jawtrack_marker::TagFamily::TAG36H11, 20.0, None)
+                .expect("cube marker");
+        let state = LiveState::new(&ViewerOptions { marker: Some(cube), ..options() }, "live").expect("state");
+        let scene = state.scene();
+        assert_eq!(scene["marker_solid"]["indices"].as_array().map(Vec::len), Some(6 * 2 * 3), "6 squares, 2 each");
+        let positions: Vec<f64> = serde_json::from_value(scene["marker_solid"]["positions"].clone()).expect("numbers");
+        assert_eq!(positions.len(), 6 * 4 * 3);
+        let reach = positions.chunks(3).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max);
+        assert!((reach - 20.0 * 3f64.sqrt() / 2.0).abs() < 1e-9, "corners at the 20 mm cube's circumradius: {reach}");
+        assert_eq!(scene["tags"]["mandible"].as_array().map(Vec::len), Some(6));
         let bad = ViewerOptions { maxilla: Some("a.dxf".into()), mandible: Some("b.stl".into()), ..options() };
         assert!(LiveState::new(&bad, "live").is_err_and(|e| e.to_string().contains("STL, PLY or OBJ")));
     }
