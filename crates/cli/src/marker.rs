@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use jawtrack_marker::{DEFAULT_EDGE_MM, Marker};
+use jawtrack_marker::{DEFAULT_EDGE_MM, Marker, SolidKind, TagFamily};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `jawtrack harness`.
@@ -12,6 +12,10 @@ pub(crate) struct HarnessArgs {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
+    /// Draw the harness of this marker file (its solid, family, edge and tag size) instead of
+    /// one made from the flags below.
+    #[arg(long, conflicts_with_all = ["edge", "tag_size", "solid", "family"])]
+    marker: Option<PathBuf>,
     #[command(flatten)]
     geometry: GeometryArgs,
     /// Length of the mounting post below the body's bottom vertex (mm).
@@ -25,7 +29,13 @@ pub(crate) struct HarnessArgs {
 /// The marker's printed geometry, shared by the commands that make a marker.
 #[derive(Args)]
 struct GeometryArgs {
-    /// Edge length of the dodecahedron (mm).
+    /// The solid each body is: `dodecahedron` (12 tags a body) or `cube` (6).
+    #[arg(long, default_value = "dodecahedron", value_parser = parse_solid)]
+    solid: SolidKind,
+    /// The AprilTag family the tags are printed in: `tag36h11`, `tag25h9` or `tag16h5`.
+    #[arg(long, default_value = "tag36h11", value_parser = parse_family)]
+    family: TagFamily,
+    /// Edge length of the solid (mm).
     #[arg(long, default_value_t = DEFAULT_EDGE_MM, allow_hyphen_values = true)]
     edge: f64,
     /// Side of each tag's black-border square (mm); default: the largest that leaves a
@@ -34,9 +44,23 @@ struct GeometryArgs {
     tag_size: Option<f64>,
 }
 
+fn parse_solid(name: &str) -> Result<SolidKind, String> {
+    SolidKind::from_name(name).ok_or_else(|| {
+        let known: Vec<&str> = SolidKind::ALL.iter().map(|k| k.name()).collect();
+        format!("not a solid this build knows ({})", known.join(", "))
+    })
+}
+
+fn parse_family(name: &str) -> Result<TagFamily, String> {
+    TagFamily::named(name).ok_or_else(|| {
+        let known: Vec<&str> = TagFamily::ALL.iter().map(|f| f.name).collect();
+        format!("not a tag family this build reads ({})", known.join(", "))
+    })
+}
+
 impl GeometryArgs {
     fn marker(&self) -> Result<Marker> {
-        Ok(Marker::nominal(self.edge, self.tag_size)?)
+        Ok(Marker::nominal_on(self.solid, self.family, self.edge, self.tag_size)?)
     }
 }
 
@@ -57,12 +81,23 @@ pub(crate) fn marker(a: &MarkerArgs) -> Result<()> {
     let m = a.geometry.marker()?;
     m.save(&a.out)?;
     let size = m.bodies[0].tags[0].size;
-    say!("wrote {} (edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
+    let what = match (m.solid, m.family == TagFamily::TAG36H11) {
+        (SolidKind::Dodecahedron, true) => String::new(),
+        (solid, _) => format!("{} on a {solid}, ", m.family.name),
+    };
+    say!("wrote {} ({what}edge {} mm, tag size {:.4} mm, {} tags)", a.out.display(), m.edge, size, m.tags().count());
     Ok(())
 }
 
 pub(crate) fn harness(a: &HarnessArgs) -> Result<()> {
-    let marker = a.geometry.marker()?;
+    let marker = match &a.marker {
+        Some(file) => {
+            let m = Marker::load(file)?;
+            m.require_both_bodies().map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+            m
+        }
+        None => a.geometry.marker()?,
+    };
     let params = jawtrack_harness::HarnessParams {
         post_length: a.post_length,
         post_diameter: a.post_diameter,
@@ -79,7 +114,7 @@ pub(crate) fn harness(a: &HarnessArgs) -> Result<()> {
 pub(crate) fn check_marker(file: &Path) -> Result<()> {
     let m = Marker::load(file)?;
     m.require_both_bodies().map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    say!("{}: valid marker file, edge {} mm", file.display(), m.edge);
+    say!("{}: valid marker file, {} on a {}, edge {} mm", file.display(), m.family.name, m.solid, m.edge);
     let calibrated = m.is_calibrated();
     if !calibrated {
         say!("  calibration: none recorded (a nominal marker, or a file from before marker file version 2)");
