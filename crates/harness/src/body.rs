@@ -568,13 +568,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn every_triangle_lies_on_the_union_s_surface_facing_out() {
-        // No internal faces, and every normal points out: just off each triangle's centroid
-        // along its normal is outside the union, just behind it is inside.
-        let params = HarnessParams::default();
-        let m = default_mesh();
-        let u = Union::new(SolidKind::Dodecahedron, DEFAULT_EDGE_MM, &params);
+    /// No internal faces, and every normal points out: just off each triangle's centroid along
+    /// its normal is outside the union, just behind it is inside.
+    fn assert_on_the_surface(m: &Mesh, u: &Union) {
         for i in 0..m.triangles.len() {
             let [a, b, c] = m.corners(i).map(v3);
             let centroid = (a + b + c) / 3.0;
@@ -582,6 +578,14 @@ mod tests {
             assert!(!u.contains(&(centroid + n * 1e-6)), "triangle {i}: outside side is inside the union");
             assert!(u.contains(&(centroid - n * 1e-6)), "triangle {i}: inside side is outside the union");
         }
+    }
+
+    #[test]
+    fn every_triangle_lies_on_the_union_s_surface_facing_out() {
+        let params = HarnessParams::default();
+        let m = default_mesh();
+        let u = Union::new(SolidKind::Dodecahedron, DEFAULT_EDGE_MM, &params);
+        assert_on_the_surface(&m, &u);
     }
 
     #[test]
@@ -664,13 +668,7 @@ mod tests {
         // and the post's walls and cap: F·(sides − 2) + 4N.
         assert_eq!(m.triangles.len(), 6 * 2 + 4 * params.post_segments);
         let u = Union::new(SolidKind::Cube, edge, &params);
-        for i in 0..m.triangles.len() {
-            let [a, b, c] = m.corners(i).map(v3);
-            let centroid = (a + b + c) / 3.0;
-            let n = m.area_normal(i).normalize();
-            assert!(!u.contains(&(centroid + n * 1e-6)), "triangle {i}: outside side is inside the union");
-            assert!(u.contains(&(centroid - n * 1e-6)), "triangle {i}: inside side is outside the union");
-        }
+        assert_on_the_surface(&m, &u);
         let post = m.volume() - edge.powi(3);
         assert!(post > 0.0 && post < params.post_diameter.powi(2) * (params.post_length + edge), "{post}");
         let layout = PostLayout::new(&Solid::new(SolidKind::Cube, edge), 48).expect("layout");
