@@ -18,7 +18,9 @@ type Fit<'a> = dyn FnMut(i64, bool, Option<&mut [f64]>, f64) -> Option<(f64, boo
 /// gradient found along its normal, and the corners re-intersected. `lut` maps pixel values
 /// before interpolation (identity for C's behaviour, sRGB → linear for unbiased edges);
 /// `recentre` re-centres the search window on the edge (C does not); `ramps` widens it over
-/// the ramp of an edge smeared by motion ([`crate::DetectorConfig::smeared_edges`]).
+/// the ramp of an edge smeared by motion ([`crate::DetectorConfig::smeared_edges`]). `cells`
+/// is the family's width at the border (8 for tag36h11): a cell is the quad's side over it, the
+/// farthest a window may reach before it sees the next edge inside the tag.
 pub(super) fn refine_edges(
     im: &ImageView<'_>,
     quad: &mut Quad,
@@ -26,6 +28,7 @@ pub(super) fn refine_edges(
     lut: &[f64; 256],
     recentre: bool,
     ramps: bool,
+    cells: f64,
 ) {
     let (w, h) = (im.width() as i64, im.height() as i64);
     let px = |x: i64, y: i64| lut[usize::from(im.get(x as usize, y as usize).unwrap_or(0))];
@@ -49,7 +52,7 @@ pub(super) fn refine_edges(
         let (qa, qb) = (quad.p[(edge + 2) & 3].map(f64::from), quad.p[(edge + 3) & 3].map(f64::from));
         let (ux, uy) = (qb[0] - qa[0], qb[1] - qa[1]);
         let across = |x0: f64, y0: f64| ((ux * (y0 - qa[1]) - uy * (x0 - qa[0])) / ux.hypot(uy)).abs();
-        let widest_cell = across(pa[0], pa[1]).max(across(pb[0], pb[1])) / 8.0;
+        let widest_cell = across(pa[0], pa[1]).max(across(pb[0], pb[1])) / cells;
         let mut cache: Vec<Option<Option<f64>>> = Vec::new();
         let (mut grads, mut vals): (Vec<f64>, Vec<Option<f64>>) = (Vec::new(), Vec::new());
         // Sample `s`'s fit: the offset of the edge along the normal, whether it took one edge of
@@ -67,7 +70,7 @@ pub(super) fn refine_edges(
             let across = across(x0, y0);
             let mut reach = (base as f64).min((across / 16.0).max(1.0));
             if ramp > 0.0 {
-                reach = reach.max((ramp + RAMP_MARGIN).min(across / 8.0));
+                reach = reach.max((ramp + RAMP_MARGIN).min(across / cells));
             }
             // The image along the normal, sampled once per quarter pixel from −(range + far + 1)
             // to range + far + 1 px (windows of ±reach centred within ±range), as each window
@@ -114,7 +117,7 @@ pub(super) fn refine_edges(
             }
             // Cells wider than the farthest the window looks (its centre moves up to ±range,
             // gradients and blur reach ~3 px beyond it, the quad is off by ~1 px): one edge.
-            let lone = across / 8.0 > range as f64 + reach + 4.0;
+            let lone = across / cells > range as f64 + reach + 4.0;
             // The gradient profile over 1 px (what `one_edge` splits), to sum along the side.
             if let Some(profile) = sum {
                 if !lone {

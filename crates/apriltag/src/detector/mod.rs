@@ -215,11 +215,12 @@ impl Detector {
             }
         }
         let lut = if c.linear_edges { &*SRGB_TO_LINEAR } else { &IDENTITY };
+        let cells = c.family.width_at_border as f64;
         let decode = |q: &Quad| decode_quad(im, &homography(q)?, &c.family, &self.table, c.decode_sharpening);
         let dets = self.workers.filter_map(&quads, |q0| {
             let mut q = *q0;
             if c.refine_edges {
-                refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges, c.linear_edges && smeared);
+                refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges, c.linear_edges && smeared, cells);
             }
             let d = decode(&q).or_else(|| {
                 // Our fit can be pulled off by a bright edge near a small tag (linear light
@@ -229,7 +230,7 @@ impl Detector {
                     return None;
                 }
                 let mut q = *q0;
-                refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false, false);
+                refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false, false, cells);
                 decode(&q)
             })?;
             Some(if c.linear_edges && c.blur_aware_edges {
