@@ -1,32 +1,19 @@
 //! `jawtrack track`: tracks recorded frames (image files, folders of them sorted by name, or a
 //! video decoded by ffmpeg) and writes one JSON line per frame in the recording schema
 //! (`jawtrack_recording`), after a header line naming the camera, marker and settings. Every
-//! line is flushed as it is written, so a killed run leaves a readable file.
+//! line is flushed as it is written, so a killed run leaves a readable file. The run and the
+//! rules of which camera, marker and settings apply are `jawtrack_offline::track`'s; this file
+//! gives it the flags, draws its bars and prints what it says.
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
 use indicatif::ProgressBar;
-use jawtrack_apriltag::DetectorConfig;
-use jawtrack_camera_calibration::CameraFile;
-use jawtrack_frames::{FrameSource, open_frames};
-use jawtrack_marker::Marker;
-use jawtrack_offline::{FocalViews, Kept, RecordedCapture, Summary, closing_warnings, refine_marker, track_frame};
+use jawtrack_calibration::Refinement;
+use jawtrack_offline::{OfflineError, Pass, Said, TrackEvents, TrackOptions, track};
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, create_file};
-use jawtrack_registration::Registration;
-use jawtrack_tracker::{FrameResult, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use jawtrack_recording::create_file;
 use std::io::Write;
-use std::path::{Path, PathBuf};
-
-/// What `--like` takes from a recording, said on standard error.
-fn like(path: Option<&Path>) -> Result<RecordedCapture> {
-    let Some(path) = path else { return Ok(RecordedCapture::default()) };
-    let recording = jawtrack_recording::open(path)?;
-    let like = RecordedCapture::of(&recording).with_context(|| format!("--like {}", path.display()))?;
-    like.warnings.iter().for_each(|w| eprintln!("warning: like {}: {w}", path.display()));
-    eprintln!("note: like {}: {} (each unless given)", path.display(), like.describe());
-    Ok(like)
-}
+use std::path::PathBuf;
 
 /// Arguments of `jawtrack track`.
 #[derive(Args)]
@@ -115,236 +102,95 @@ pub(crate) struct TrackArgs {
     frames: Vec<PathBuf>,
 }
 
-/// What a run tracks with, from the flags (and `--camera`, `--like`).
-struct Setup {
-    intrinsics: CameraIntrinsics,
-    readout_s: f64,
-    exposure_s: Option<f64>,
-    marker: Marker,
-    registration: Option<Registration>,
+impl TrackArgs {
+    /// The flags as the library's options.
+    fn options(&self) -> TrackOptions {
+        TrackOptions {
+            marker: self.marker.clone(),
+            intrinsics: self.intrinsics,
+            camera: self.camera.clone(),
+            lens_position: self.lens_position,
+            zoom: self.zoom,
+            like: self.like.clone(),
+            registration: self.registration.clone(),
+            fps: self.fps,
+            readout_ms: self.readout_ms,
+            exposure_ms: self.exposure_ms,
+            decimate: self.decimate,
+            threads: self.threads,
+            linear_edges: self.linear_edges,
+            region_search: self.region_search,
+            smooth: self.smooth,
+            out: self.out.clone(),
+            refine_marker: self.refine_marker.clone(),
+            video: self.video.clone(),
+            frames: self.frames.clone(),
+        }
+    }
 }
 
-/// Checks the flags and reads the camera, marker and registration they name.
-fn setup(a: &TrackArgs) -> Result<Setup> {
-    if let Some(fps) = a.fps
-        && !(fps.is_finite() && fps > 0.0)
-    {
-        bail!("--fps must be a positive number, got {fps}");
-    }
-    if let Some(r) = a.readout_ms
-        && !(r.is_finite() && (0.0..1000.0).contains(&r))
-    {
-        bail!("--readout-ms must be at least 0 and under 1000 ms, got {r}");
-    }
-    if let Some(e) = a.exposure_ms
-        && !(e.is_finite() && e > 0.0 && e < 1000.0)
-    {
-        bail!("--exposure-ms must be a number of milliseconds above 0 and under 1000, got {e}");
-    }
-    let like = like(a.like.as_deref())?;
-    let camera = a.camera.as_deref().map(CameraFile::load).transpose()?;
-    let intrinsics = match (a.intrinsics, &camera, like.intrinsics) {
-        (Some(k), ..) => k,
-        (None, Some(c), _) => c.calibration.intrinsics,
-        (None, None, Some(k)) => k,
-        (None, None, None) => bail!("--like's header names no intrinsics: give --intrinsics fx,fy,cx,cy[,k1,k2]"),
-    };
-    intrinsics.validate().context(if a.intrinsics.is_some() { "--intrinsics" } else { "the intrinsics" })?;
-    let readout_s = a
-        .readout_ms
-        .map(|r| r / 1000.0)
-        .or(camera.as_ref().map(|c| c.calibration.readout_s.max(0.0)))
-        .or(like.readout_s)
-        .unwrap_or(0.0);
-    for (flag, v, ok) in [
-        ("--lens-position", a.lens_position, a.lens_position.is_none_or(|p| p.is_finite() && (0.0..=1.0).contains(&p))),
-        ("--zoom", a.zoom, a.zoom.is_none_or(|z| z.is_finite() && z >= 1.0)),
-    ] {
-        if !ok {
-            bail!("{flag} is out of range (lens position 0–1, zoom at least 1), got {}", v.unwrap_or(f64::NAN));
+/// Draws a run's bars and prints what it says; refuses outputs that exist and opens `--out`.
+struct Printed<'a> {
+    a: &'a TrackArgs,
+    bar: Option<ProgressBar>,
+}
+
+impl TrackEvents for Printed<'_> {
+    fn said(&mut self, said: Said) {
+        let line = match said {
+            Said::Note(n) => format!("note: {n}"),
+            Said::Warning(w) => format!("warning: {w}"),
+            Said::Wrote(w) => w,
+        };
+        match &self.bar {
+            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
         }
     }
-    if let Some(c) = &camera {
-        let lens = a.lens_position.or(like.lens_position);
-        for d in c.calibrated_at.differences(lens, a.zoom.or(like.zoom)) {
-            eprintln!(
-                "warning: {d}: the camera file's intrinsics do not hold for these frames; calibrate at the focus and zoom you \
-                 record with (lock focus where `jawtrack plan` says)"
-            );
-        }
+    fn pass(&mut self, pass: Pass, frames: Option<u64>) {
+        let what = match pass {
+            Pass::Only => "tracking",
+            Pass::First => "tracking (1 of 2)",
+            Pass::Second => "tracking (2 of 2)",
+        };
+        self.bar = Some(crate::progress::bar(what, frames, "frames"));
     }
-    let exposure_s = a.exposure_ms.map(|e| e / 1000.0).or(like.exposure_s);
-    let marker = match (&a.marker, like.marker) {
-        (Some(p), _) => {
-            let m = Marker::load(p)?;
-            m.require_both_bodies().map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-            m
+    fn frame(&mut self) {
+        self.bar.iter().for_each(|b| b.inc(1));
+    }
+    fn pass_done(&mut self) {
+        self.bar.take().iter().for_each(ProgressBar::finish_and_clear);
+    }
+    fn ready(&mut self) -> Result<(), OfflineError> {
+        let refused = |e: anyhow::Error| OfflineError::Caller(e.into());
+        if self.a.out.as_os_str() != "-" {
+            self.a.force.check_file(&self.a.out).map_err(refused)?;
         }
-        (None, Some(m)) => m,
-        (None, None) => {
-            eprintln!("note: no --marker given; using the nominal 12.7 mm marker (calibrate yours for sub-0.1 mm)");
-            Marker::default()
+        if let Some(path) = &self.a.refine_marker {
+            self.a.force.check_file(path).map_err(refused)?;
         }
-    };
-    let registration = match &a.registration {
-        Some(p) => Some(Registration::load(p).with_context(|| format!("registration file {}", p.display()))?),
-        None => None,
-    };
-    Ok(Setup { intrinsics, readout_s, exposure_s, marker, registration })
+        Ok(())
+    }
+    fn refined(&mut self, refinement: &Refinement, seconds: f64) {
+        // With `--out -` the recording is standard output: the report goes to standard error.
+        crate::print::print_refinement(refinement, seconds, self.a.out.as_os_str() == "-");
+    }
+    fn output(&mut self) -> Result<Box<dyn Write>, OfflineError> {
+        let a = self.a;
+        if a.out.as_os_str() == "-" {
+            return Ok(Box::new(std::io::stdout()));
+        }
+        let file =
+            create_file(&a.out, a.force.overwrite()).map_err(|e| OfflineError::Caller(a.force.explain(e).into()))?;
+        Ok(Box::new(file))
+    }
 }
 
 pub(crate) fn run(a: &TrackArgs) -> Result<()> {
-    let Setup { intrinsics, readout_s, exposure_s, marker, registration } = setup(a)?;
-    let mut source = open_frames(a.video.as_deref(), &a.frames, a.fps)?;
-    if a.video.is_none() && a.fps.is_none() {
-        eprintln!("note: image files carry no time: frame times assume 30 fps (--fps sets the rate)");
-    }
-    let config = TrackerConfig {
-        detector: DetectorConfig {
-            quad_decimate: a.decimate,
-            nthreads: a.threads,
-            linear_edges: a.linear_edges,
-            ..DetectorConfig::default()
-        },
-        search: SearchConfig { region_search: a.region_search, ..SearchConfig::default() },
-        smoother: a.smooth.then(SmootherConfig::default),
-        readout_s,
-        exposure_s: exposure_s.unwrap_or(TrackerConfig::default().exposure_s),
-        ..TrackerConfig::default()
-    };
-    if a.out.as_os_str() != "-" {
-        a.force.check_file(&a.out)?;
-    }
-    if let Some(path) = &a.refine_marker {
-        a.force.check_file(path)?;
-    }
-    let mut tracker = Tracker::new(marker, config)?;
-    tracker.set_registration(registration);
-    // With --refine-marker, a first pass keeps every frame's detections; the refined marker
-    // then solves them again, and only that second pass is written.
-    let kept = match &a.refine_marker {
-        None => None,
-        Some(path) => {
-            let kept = first_pass(&mut tracker, source.as_mut(), &intrinsics)?;
-            let refined = refine(a, tracker.marker(), &kept, &intrinsics, path)?;
-            let mut again = Tracker::new(refined, config)?;
-            again.set_registration(tracker.registration().cloned());
-            tracker = again;
-            Some(kept)
-        }
-    };
-    let out: Box<dyn Write> = if a.out.as_os_str() == "-" {
-        Box::new(std::io::stdout())
-    } else {
-        Box::new(create_file(&a.out, a.force.overwrite()).map_err(|e| a.force.explain(e))?)
-    };
-    let mut out = RecordingWriter::new(
-        out,
-        header(a, &tracker, intrinsics, readout_s, exposure_s),
-        &a.out.display().to_string(),
-    )?;
-    let mut summary = Summary::default();
-    let mut views = FocalViews::default();
-    let mut index = 0;
-    let mut write =
-        |bar: &ProgressBar, tracker: &mut Tracker, name: &str, t: f64, tracked: Result<FrameResult, String>| {
-            let record = match tracked {
-                Ok(r) => {
-                    summary.add(&r, tracker.uncalibrated_tags());
-                    views.add(&r, &intrinsics);
-                    r.to_record(index, Some(name))
-                }
-                Err(why) => {
-                    if let Some(w) = summary.skip(&why) {
-                        bar.suspend(|| eprintln!("warning: {name}: {w}"));
-                    }
-                    FrameRecord::unreadable(index as u64, Some(name), t)
-                }
-            };
-            index += 1;
-            out.append(&record)
-        };
-    match kept {
-        Some(kept) => {
-            let bar = crate::progress::bar("tracking (2 of 2)", Some(kept.len() as u64), "frames");
-            for k in kept {
-                let tracked = k.tracked.map(|d| d.solve(&mut tracker, &intrinsics, k.t));
-                write(&bar, &mut tracker, &k.name, k.t, tracked)?;
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-        }
-        None => {
-            let bar = crate::progress::bar("tracking", source.frame_count().map(|n| n as u64), "frames");
-            while let Some(frame) = source.next_frame()? {
-                // A frame that cannot be decoded or tracked keeps its line, flagged, and the run goes on.
-                let tracked = track_frame(&mut tracker, &frame, &intrinsics);
-                write(&bar, &mut tracker, &frame.name, frame.t, tracked)?;
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-        }
-    }
-    if summary.read == 0 {
-        bail!(
-            "none of the {index} frames could be read{}: nothing tracked ({} lists them, flagged `unreadable`)",
-            if index == 0 { "" } else { " or tracked" },
-            a.out.display()
-        );
-    }
-    eprintln!("tracked {index} frames: {}; poses in {}", summary.describe(), a.out.display());
-    for w in closing_warnings(&summary, &views, &tracker) {
+    let mut tracked = track(&a.options(), &mut Printed { a, bar: None })?;
+    eprintln!("tracked {} frames: {}; poses in {}", tracked.frames, tracked.summary.describe(), a.out.display());
+    for w in &tracked.warnings {
         eprintln!("warning: {w}");
     }
     Ok(())
-}
-
-/// The recording's header: the camera, the marker tracked with and the settings.
-fn header(
-    a: &TrackArgs,
-    tracker: &Tracker,
-    intrinsics: CameraIntrinsics,
-    readout_s: f64,
-    exposure_s: Option<f64>,
-) -> RecordingHeader {
-    let mut header = RecordingHeader::new("jawtrack track");
-    header.intrinsics = Some(intrinsics);
-    header.readout_s = Some(readout_s);
-    header.exposure_s = exposure_s;
-    header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
-    header.settings = serde_json::json!({
-        "decimate": a.decimate, "threads": a.threads, "linear_edges": a.linear_edges, "region_search": a.region_search,
-        "smooth": a.smooth, "registration": a.registration.as_ref().map(|p| p.display().to_string()),
-        "refine_marker": a.refine_marker.as_ref().map(|p| p.display().to_string()),
-    });
-    header
-}
-
-/// The first pass of `--refine-marker`, with a bar.
-fn first_pass(tracker: &mut Tracker, source: &mut dyn FrameSource, intrinsics: &CameraIntrinsics) -> Result<Vec<Kept>> {
-    let bar = crate::progress::bar("tracking (1 of 2)", source.frame_count().map(|n| n as u64), "frames");
-    let kept = jawtrack_offline::first_pass(tracker, source, intrinsics, &mut || bar.inc(1))?;
-    bar.finish_and_clear();
-    Ok(kept)
-}
-
-/// Refines `marker` from the first pass, says what changed, writes it to `path` and returns it.
-fn refine(
-    a: &TrackArgs,
-    marker: &Marker,
-    kept: &[Kept],
-    intrinsics: &CameraIntrinsics,
-    path: &std::path::Path,
-) -> Result<Marker> {
-    let recording = match &a.video {
-        Some(v) => v.display().to_string(),
-        None => a.frames.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
-    };
-    let started = std::time::Instant::now();
-    let refinement = refine_marker(marker, kept, intrinsics, &recording)?;
-    // With `--out -` the recording is standard output: the report goes to standard error.
-    crate::print::print_refinement(&refinement, started.elapsed().as_secs_f64(), a.out.as_os_str() == "-");
-    refinement.marker.save(path).with_context(|| format!("writing {}", path.display()))?;
-    eprintln!("wrote the refined marker to {}", path.display());
-    Ok(refinement.marker)
 }

@@ -31,10 +31,12 @@
 
 mod like;
 mod passes;
+mod run;
 mod summary;
 
 pub use like::RecordedCapture;
 pub use passes::{Detected, Kept, first_pass, refine_marker, track_frame};
+pub use run::{Pass, Said, TrackEvents, TrackOptions, Tracked, track};
 pub use summary::{FocalViews, Summary, closing_warnings, intrinsics_warning};
 
 /// Why a run could not go on.
@@ -52,4 +54,69 @@ pub enum OfflineError {
     /// A recording's marker is not a valid marker file.
     #[error("its marker: {0}")]
     Marker(jawtrack_marker::MarkerError),
+    /// An option out of range, or a combination that cannot be; the message names the flag.
+    #[error("{0}")]
+    Refused(String),
+    /// A recording could not be read, or the recording not written.
+    #[error(transparent)]
+    Recording(#[from] jawtrack_recording::RecordingError),
+    /// The `like` recording gives nothing to track with.
+    #[error("--like {path}")]
+    Like {
+        /// The recording, as given.
+        path: String,
+        /// Why.
+        #[source]
+        source: Box<OfflineError>,
+    },
+    /// The camera file could not be read.
+    #[error(transparent)]
+    Camera(#[from] jawtrack_camera_calibration::CameraFileError),
+    /// The intrinsics are not a camera.
+    #[error("{what}")]
+    Intrinsics {
+        /// Whose: the flag's, or those taken from elsewhere.
+        what: &'static str,
+        /// Why not.
+        #[source]
+        source: jawtrack_pose::GeometryError,
+    },
+    /// The marker file could not be read.
+    #[error(transparent)]
+    MarkerFile(jawtrack_marker::MarkerError),
+    /// The registration file could not be read.
+    #[error("registration file {path}")]
+    Registration {
+        /// The file, as given.
+        path: String,
+        /// Why.
+        #[source]
+        source: jawtrack_registration::RegistrationError,
+    },
+    /// The tracker could not be made.
+    #[error(transparent)]
+    Tracker(#[from] jawtrack_tracker::TrackError),
+    /// The refined marker could not be written.
+    #[error("writing {path}")]
+    SaveMarker {
+        /// The file, as given.
+        path: String,
+        /// Why.
+        #[source]
+        source: jawtrack_marker::MarkerError,
+    },
+    /// Not one frame could be read or tracked.
+    #[error(
+        "none of the {frames} frames could be read{}: nothing tracked ({out} lists them, flagged `unreadable`)",
+        if *frames == 0 { "" } else { " or tracked" }
+    )]
+    NothingTracked {
+        /// Frames written, each flagged `unreadable`.
+        frames: usize,
+        /// The recording's name.
+        out: String,
+    },
+    /// The caller refused to go on (e.g. an output that exists), or could not open the output.
+    #[error(transparent)]
+    Caller(Box<dyn std::error::Error + Send + Sync + 'static>),
 }
