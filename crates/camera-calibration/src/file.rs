@@ -50,6 +50,36 @@ impl CalibratedAt {
         }
         out
     }
+
+    /// What was given, each value not given taken from `recorded` (the app's recording of the
+    /// calibration video); refused outside AVFoundation's lens positions (0–1) and the zooms a
+    /// phone films at (1–20).
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use jawtrack_camera_calibration::CalibratedAt;
+    /// let given = CalibratedAt { lens_position: Some(0.4), zoom: None };
+    /// let recorded = CalibratedAt { lens_position: Some(0.7), zoom: Some(2.0) };
+    /// assert_eq!(given.or_recorded(recorded).unwrap(), CalibratedAt { lens_position: Some(0.4), zoom: Some(2.0) });
+    /// ```
+    pub fn or_recorded(self, recorded: CalibratedAt) -> Result<Self, CameraFileError> {
+        let at = CalibratedAt {
+            lens_position: self.lens_position.or(recorded.lens_position),
+            zoom: self.zoom.or(recorded.zoom),
+        };
+        if let Some(p) = at.lens_position.filter(|p| !(p.is_finite() && (0.0..=1.0).contains(p))) {
+            return Err(CameraFileError::OutOfRange(format!(
+                "--lens-position is AVFoundation's lens position, within 0–1; got {p}"
+            )));
+        }
+        if let Some(z) = at.zoom.filter(|z| !(z.is_finite() && (1.0..=20.0).contains(z))) {
+            return Err(CameraFileError::OutOfRange(format!(
+                "--zoom must be at least 1 (1, or the native crop's 2), got {z}"
+            )));
+        }
+        Ok(at)
+    }
 }
 
 /// The camera file.
@@ -77,6 +107,9 @@ pub enum CameraFileError {
         /// Why.
         reason: String,
     },
+    /// A lens position or zoom to record with the calibration is out of range.
+    #[error("{0}")]
+    OutOfRange(String),
     /// Not a camera file of this version.
     #[error("{path}: not a camera file from `jawtrack calibrate-camera` ({reason})")]
     Format {
@@ -189,5 +222,19 @@ mod tests {
         let d = at.differences(Some(0.62), Some(1.0));
         assert!(d.len() == 2 && d[0].contains("focus moved") && d[1].contains("zoom was 1×"), "{d:?}");
         assert!(at.differences(None, None).is_empty(), "nothing to compare");
+    }
+
+    #[test]
+    fn what_is_given_wins_and_out_of_range_values_are_refused() {
+        let recorded = CalibratedAt { lens_position: Some(0.5), zoom: Some(2.0) };
+        let given = CalibratedAt { lens_position: None, zoom: Some(1.0) };
+        assert_eq!(
+            given.or_recorded(recorded).expect("in range"),
+            CalibratedAt { lens_position: Some(0.5), zoom: Some(1.0) }
+        );
+        let far = CalibratedAt { lens_position: Some(1.5), zoom: None }.or_recorded(recorded).expect_err("beyond 1");
+        assert!(far.to_string().starts_with("--lens-position"), "{far}");
+        let wide = CalibratedAt { lens_position: None, zoom: Some(0.5) }.or_recorded(CalibratedAt::default());
+        assert!(wide.expect_err("below 1").to_string().starts_with("--zoom"));
     }
 }

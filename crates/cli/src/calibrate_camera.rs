@@ -122,33 +122,17 @@ fn calibrated_at(a: &CalibrateCameraArgs) -> Result<CalibratedAt> {
     if a.like.is_some() && like.is_none() && (a.lens_position.is_none() || a.zoom.is_none()) {
         eprintln!("note: --like's recording has no capture plan: its lens position and zoom are not known");
     }
-    let at = CalibratedAt {
-        lens_position: a.lens_position.or(like.as_ref().and_then(|c| c.lens_position)),
-        zoom: a.zoom.or(like.as_ref().map(|c| c.zoom)),
+    let recorded = CalibratedAt {
+        lens_position: like.as_ref().and_then(|c| c.lens_position),
+        zoom: like.as_ref().map(|c| c.zoom),
     };
-    if let Some(p) = at.lens_position.filter(|p| !(p.is_finite() && (0.0..=1.0).contains(p))) {
-        bail!("--lens-position is AVFoundation's lens position, within 0–1; got {p}");
-    }
-    if let Some(z) = at.zoom.filter(|z| !(z.is_finite() && (1.0..=20.0).contains(z))) {
-        bail!("--zoom must be at least 1 (1, or the native crop's 2), got {z}");
-    }
-    Ok(at)
+    Ok(CalibratedAt { lens_position: a.lens_position, zoom: a.zoom }.or_recorded(recorded)?)
 }
 
 /// Detects the marker's tags in every frame, with a progress bar; the frames and their size.
 fn detect(a: &CalibrateCameraArgs, marker: &Marker) -> Result<(Vec<CameraFrame>, u32, u32)> {
     let frames = detect_marker_tags(open_frames(a.video.as_deref(), &a.frames, a.fps)?, marker, a.linear_edges)?;
-    let (w, h) = frames[0].size;
-    if let Some(f) = frames.iter().find(|f| f.size != (w, h)) {
-        bail!(
-            "{} is {}×{}, {} is {w}×{h}: one calibration is of one camera at one resolution",
-            f.name,
-            f.size.0,
-            f.size.1,
-            frames[0].name
-        );
-    }
-    let (Ok(w), Ok(h)) = (u32::try_from(w), u32::try_from(h)) else { bail!("frames of {w}×{h} px are too large") };
+    let (w, h) = jawtrack_frames::one_size(&frames)?;
     Ok((frames.into_iter().map(|f| CameraFrame { t: f.t, tags: f.tags }).collect(), w, h))
 }
 

@@ -36,6 +36,9 @@ pub enum FramesError {
     /// The detector refused a setting or an image.
     #[error("{0}")]
     Detect(#[from] DetectError),
+    /// Frames of different sizes, or too large.
+    #[error("{0}")]
+    Size(String),
     /// No frame could be read.
     #[error("none of the frames could be read: nothing to calibrate from")]
     NothingReadable,
@@ -144,6 +147,24 @@ pub fn detect_marker_tags(
         return Err(FramesError::NothingReadable);
     }
     Ok(frames)
+}
+
+/// The one size (px) of `frames`, as a camera calibration needs it: refused when a frame
+/// differs from the first (one calibration is of one camera at one resolution) or when there
+/// is no frame.
+pub fn one_size(frames: &[TaggedFrame]) -> Result<(u32, u32)> {
+    let first = frames.first().ok_or(FramesError::NothingReadable)?;
+    let (w, h) = first.size;
+    if let Some(f) = frames.iter().find(|f| f.size != (w, h)) {
+        return Err(FramesError::Size(format!(
+            "{} is {}×{}, {} is {w}×{h}: one calibration is of one camera at one resolution",
+            f.name, f.size.0, f.size.1, first.name
+        )));
+    }
+    match (u32::try_from(w), u32::try_from(h)) {
+        (Ok(w), Ok(h)) => Ok((w, h)),
+        _ => Err(FramesError::Size(format!("frames of {w}×{h} px are too large"))),
+    }
 }
 
 /// Where frames come from.
@@ -388,4 +409,24 @@ pub fn frame_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(name: &str, size: (usize, usize)) -> TaggedFrame {
+        TaggedFrame { name: name.into(), t: 0.0, size, tags: Vec::new() }
+    }
+
+    #[test]
+    fn a_calibration_takes_frames_of_one_size() {
+        assert_eq!(one_size(&[frame("a", (1920, 1080)), frame("b", (1920, 1080))]).expect("one size"), (1920, 1080));
+        let mixed = one_size(&[frame("a", (1920, 1080)), frame("b", (1280, 720))]).expect_err("two sizes");
+        assert_eq!(
+            mixed.to_string(),
+            "b is 1280×720, a is 1920×1080: one calibration is of one camera at one resolution"
+        );
+        assert!(matches!(one_size(&[]), Err(FramesError::NothingReadable)));
+    }
 }

@@ -53,6 +53,19 @@ pub fn run_summary(c: &Counters, acks: u64, elapsed_s: f64, cpu_s: Option<f64>) 
     v
 }
 
+/// The address a phone should send to when the receiver listens on `listen`: that address, or,
+/// when it listens on every interface, the one this computer uses toward the network (learnt
+/// from a connected UDP socket: no packet is sent).
+pub fn reachable_address(listen: SocketAddr) -> std::net::IpAddr {
+    if !listen.ip().is_unspecified() {
+        return listen.ip();
+    }
+    std::net::UdpSocket::bind("0.0.0.0:0")
+        .and_then(|s| s.connect("192.0.2.1:9").and_then(|()| s.local_addr()))
+        .map(|a| a.ip())
+        .unwrap_or(listen.ip())
+}
+
 /// CPU time of this process so far (s), from /proc (Linux only).
 pub fn process_cpu_seconds() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
@@ -131,6 +144,16 @@ mod tests {
         assert_eq!((v["cpu_s"].as_f64(), v["cpu_share_of_one_core"].as_f64()), (Some(0.5), Some(0.25)));
         assert!(run_summary(&c, 0, 1.0, None)["cpu_share_of_one_core"].is_null());
         assert_eq!(c.describe(), "received 3, accepted 2, lost 0, reordered 0, duplicated 0, rejected 0");
+    }
+
+    #[test]
+    fn a_receiver_on_one_address_is_reached_there() {
+        let listen: SocketAddr = "192.168.1.20:5005".parse().expect("address");
+        assert_eq!(reachable_address(listen), listen.ip());
+        let any: SocketAddr = "0.0.0.0:5005".parse().expect("address");
+        // Without a network the unspecified address comes back; with one, a concrete address.
+        let reached = reachable_address(any);
+        assert!(reached.is_ipv4(), "{reached}");
     }
 
     #[test]

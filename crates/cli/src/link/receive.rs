@@ -10,7 +10,7 @@ use clap::Args;
 use jawtrack_recording::RecordingWriter;
 use jawtrack_viewer::{LiveServer, LiveState};
 use jawtrack_wire::link::LinkConfig;
-use jawtrack_wire::receiver::{Receiver, process_cpu_seconds, recording_header, run_summary};
+use jawtrack_wire::receiver::{Receiver, process_cpu_seconds, reachable_address, recording_header, run_summary};
 use jawtrack_wire::{Key, Security, unix_ms};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
@@ -50,18 +50,6 @@ pub(crate) struct ReceiveArgs {
     /// phone's settings screen to scan. It shows the key: only where no one else can see.
     #[arg(long)]
     qr: bool,
-}
-
-/// The address the phone should send to: the listening address, or, when it listens on every
-/// interface, the one this computer uses toward the network (no packet is sent to learn it).
-fn reachable_address(listen: SocketAddr) -> std::net::IpAddr {
-    if !listen.ip().is_unspecified() {
-        return listen.ip();
-    }
-    UdpSocket::bind("0.0.0.0:0")
-        .and_then(|s| s.connect("192.0.2.1:9").and_then(|()| s.local_addr()))
-        .map(|a| a.ip())
-        .unwrap_or(listen.ip())
 }
 
 fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
