@@ -107,7 +107,7 @@ pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
     let c = calibrate_camera(&frames, width, height, &marker, &options)?;
     print_result(&c, started.elapsed().as_secs_f64());
     let file = CameraFile::new(c, calibrated_at);
-    std::fs::write(&a.out, file.to_json() + "\n").with_context(|| format!("writing {}", a.out.display()))?;
+    a.force.write_file(&a.out, (file.to_json() + "\n").as_bytes())?;
     say!("wrote {}", a.out.display());
     say!("track with: jawtrack track --camera {} … (or {})", a.out.display(), file.track_flags);
     Ok(())

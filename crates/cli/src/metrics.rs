@@ -155,7 +155,9 @@ fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Re
     }
     let json_path = out.join("metrics.json");
     let text = serde_json::to_string_pretty(report).context("metrics as JSON")?;
-    std::fs::write(&json_path, text + "\n").with_context(|| format!("writing {}", json_path.display()))?;
+    // The folder was checked for an earlier metrics.json (--force) before any work.
+    let replace = jawtrack_recording::Overwrite::Replace;
+    jawtrack_recording::write_file_atomic(&json_path, (text + "\n").as_bytes(), replace)?;
     eprintln!("wrote {}", json_path.display());
     Ok(())
 }

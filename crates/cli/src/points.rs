@@ -4,7 +4,7 @@
 
 use crate::numbers::{fixed, parse_numbers};
 use crate::output::ForceArgs;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use jawtrack_kinematics::AnatomicalPoints;
 use jawtrack_kinematics::anatomy::{BALKWILL_DEG, BONWILL_SIDE_MM, Condyles, OcclusalPlane};
@@ -71,7 +71,7 @@ pub(crate) fn run(a: &PointsArgs) -> Result<()> {
     };
     a.force.check_file(out)?;
     let p = AnatomicalPoints::new(occlusal, lower_incisal, a.condyles)?;
-    std::fs::write(out, p.to_json() + "\n").with_context(|| format!("writing {}", out.display()))?;
+    a.force.write_file(out, (p.to_json() + "\n").as_bytes())?;
     say!("wrote {}", out.display());
     describe(&p);
     Ok(())

@@ -1,5 +1,5 @@
 //! `jawtrack register`: where a marker sits in the scan of its printed harness, by ICP of the
-//! body's dodecahedron onto the scan (`jawtrack_registration::icp`), written into the
+//! body's solid (the marker file's) onto the scan (`jawtrack_registration::icp`), written into the
 //! registration file `jawtrack track --registration` reads. Each run fills in one body's
 //! entry, keeping whatever else the file holds, so the maxilla and the mandible are
 //! registered into one file one after the other.
@@ -9,6 +9,7 @@ use clap::Args;
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_occlusion::Mesh;
 use jawtrack_pose::Pose;
+use jawtrack_recording::Overwrite;
 use jawtrack_registration::Registration;
 use jawtrack_registration::icp::{
     Acceptance, IcpOptions, IcpResult, centred_init, marker_surface_samples, register, set_entry,
@@ -119,7 +120,9 @@ pub(crate) fn run(a: &RegisterArgs) -> Result<()> {
     result.check(&limits).with_context(|| format!("not written to {}", a.out.display()))?;
 
     let (field, kept) = set_entry(&mut registration, a.body, result.scan_from_marker);
-    std::fs::write(&a.out, registration.to_json() + "\n").with_context(|| format!("writing {}", a.out.display()))?;
+    // The file was read above and its other entries kept: replacing it whole is the update.
+    jawtrack_recording::write_file_atomic(&a.out, (registration.to_json() + "\n").as_bytes(), Overwrite::Replace)
+        .with_context(|| format!("writing {}", a.out.display()))?;
     say!("wrote {}: {field} set, {kept} and the intercuspation pose kept", a.out.display());
     Ok(())
 }
@@ -134,7 +137,7 @@ fn report(a: &RegisterArgs, r: &IcpResult) {
         r.iterations
     );
     say!(
-        "  residual {:.4} mm RMS over {} of {} model points ({:.0} % of the dodecahedron's surface found in the scan)",
+        "  residual {:.4} mm RMS over {} of {} model points ({:.0} % of the marker solid's surface found in the scan)",
         r.rms_mm,
         r.inliers,
         r.samples,

@@ -117,7 +117,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
             .map_or(0.0, |d| d.as_secs_f64()),
     };
     let report = jawtrack_report::render(&inputs);
-    std::fs::write(&a.out, &report.html).with_context(|| format!("writing {}", a.out.display()))?;
+    a.force.write_file(&a.out, report.html.as_bytes())?;
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
