@@ -127,11 +127,10 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// The plots `plot` writes, each as SVG and PNG.
-const PLOTS: [&str; 4] = ["incisor_sagittal", "incisor_frontal", "incisor_transverse", "incisor_opening"];
-
 pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
-    let files: Vec<String> = PLOTS.iter().flat_map(|p| [format!("{p}.svg"), format!("{p}.png")]).collect();
+    // The charts `plot` writes, each as SVG and PNG.
+    let stems = jawtrack_report::incisor_chart_stems();
+    let files: Vec<String> = stems.iter().flat_map(|p| [format!("{p}.svg"), format!("{p}.png")]).collect();
     a.force.check_folder(&a.out, &files.iter().map(String::as_str).collect::<Vec<_>>())?;
     let rec = load(&a.recording, a.session)?;
     let rest = require_rest(&rec, a.rest_frame, &a.recording, "plot")?.pose();

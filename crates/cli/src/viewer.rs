@@ -48,11 +48,7 @@ pub(crate) fn view(a: &ViewArgs) -> Result<()> {
     }
     options.hinge_axis = a.hinge_axis.as_deref().map(read_hinge_axis).transpose()?;
     let rec = crate::flags::load(&a.recording, a.session)?;
-    options.marker = rec
-        .header
-        .as_ref()
-        .and_then(|h| h.marker.as_ref())
-        .and_then(|m| jawtrack_marker::Marker::from_json(&m.to_string()).ok());
+    options.marker = rec.header.as_ref().and_then(|h| h.tracked_marker()).and_then(Result::ok);
     let header = rec.header.as_ref().and_then(|h| serde_json::to_value(h).ok());
     // The one rest rule (`jawtrack_session::rest_of`), as every other command measures from.
     let rest = jawtrack_session::rest_of(&rec, None)?.map(|r| r.pose());

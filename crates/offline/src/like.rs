@@ -34,10 +34,7 @@ impl RecordedCapture {
             v.sort_by(f64::total_cmp);
             v.get(v.len() / 2).copied()
         };
-        let marker = match &h.marker {
-            Some(m) => Some(Marker::from_json(&m.to_string()).map_err(OfflineError::Marker)?),
-            None => None,
-        };
+        let marker = h.tracked_marker().transpose().map_err(OfflineError::Marker)?;
         let positions: Vec<f64> = recording.frames.iter().filter_map(|f| f.lens_position).collect();
         let mut warnings = Vec::new();
         let (lo, hi) = positions.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));

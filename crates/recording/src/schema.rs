@@ -118,6 +118,12 @@ impl RecordingHeader {
         }
     }
 
+    /// The marker the frames were tracked with, read from its file's JSON: `None` when the
+    /// header records none, an error when what it records is not a valid marker file.
+    pub fn tracked_marker(&self) -> Option<Result<jawtrack_marker::Marker, jawtrack_marker::MarkerError>> {
+        self.marker.as_ref().map(|m| jawtrack_marker::Marker::from_json(&m.to_string()))
+    }
+
     /// The header as its JSON line (without the newline).
     pub fn to_line(&self) -> String {
         serde_json::json!({ "recording": self }).to_string()
@@ -292,6 +298,23 @@ impl FrameRecord {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_tracked_marker_reads_from_the_header() {
+        let mut h = RecordingHeader::new("test");
+        assert!(h.tracked_marker().is_none(), "none recorded");
+        let cube = jawtrack_marker::Marker::nominal_on(
+            jawtrack_marker::SolidKind::Cube,
+            jawtrack_marker::TagFamily::TAG25H9,
+            12.7,
+            None,
+        )
+        .expect("marker");
+        h.marker = Some(serde_json::from_str(&cube.to_json()).expect("json"));
+        assert_eq!(h.tracked_marker().map(|m| m.expect("valid")), Some(cube));
+        h.marker = Some(serde_json::json!({"version": 99}));
+        assert!(h.tracked_marker().is_some_and(|m| m.is_err()), "an invalid marker is an error, not none");
+    }
 
     #[test]
     fn a_session_id_is_sixteen_hex_digits_both_ways() {

@@ -7,9 +7,17 @@ use jawtrack_plot::{self as plot, Document, Series, Style};
 /// A frame's time (s) and the incisor's displacement from rest.
 type Timed = (f64, Displacement);
 
+/// The file stems [`incisor_charts`] saves its charts under, in its order: the path in each
+/// plane (`incisor_sagittal`, …), then `incisor_opening`.
+pub fn incisor_chart_stems() -> [String; 4] {
+    let [a, b, c] = PlaneView::ALL.map(|v| format!("incisor_{}", v.name()));
+    [a, b, c, "incisor_opening".into()]
+}
+
 /// The lower incisor's path (time in s, displacement from rest) in each plane, then its opening
 /// over time; each chart with the file stem it is saved under.
 pub fn incisor_charts(path: &[Timed]) -> Vec<(String, Document)> {
+    let [sagittal, frontal, transverse, opening] = incisor_chart_stems();
     let series = |f: &dyn Fn(&Timed) -> (f64, f64)| {
         vec![Series {
             name: "lower incisor",
@@ -20,14 +28,15 @@ pub fn incisor_charts(path: &[Timed]) -> Vec<(String, Document)> {
     };
     let mut charts: Vec<(String, _)> = PlaneView::ALL
         .iter()
-        .map(|&v| {
+        .zip([sagittal, frontal, transverse])
+        .map(|(&v, stem)| {
             let (x, y) = v.axes();
             let title = format!("Lower incisor, {}", v.title());
-            (format!("incisor_{}", v.name()), plot::chart(&title, x, y, &series(&|(_, d)| v.project(d)), true))
+            (stem, plot::chart(&title, x, y, &series(&|(_, d)| v.project(d)), true))
         })
         .collect();
     charts.push((
-        "incisor_opening".into(),
+        opening,
         plot::chart(
             "Lower incisor opening over time",
             "time (s)",

@@ -12,7 +12,7 @@ mod html;
 mod pdf;
 mod sections;
 
-pub use charts::{envelope_chart, incisor_charts};
+pub use charts::{envelope_chart, incisor_chart_stems, incisor_charts};
 use jawtrack_kinematics::Anatomy;
 pub use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;

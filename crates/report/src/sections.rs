@@ -168,8 +168,7 @@ fn marker_words(inputs: &Inputs) -> String {
 }
 
 fn marker_measured(inputs: &Inputs) -> Option<usize> {
-    let m = inputs.recording.header.as_ref()?.marker.as_ref()?;
-    let marker = jawtrack_marker::Marker::from_json(&m.to_string()).ok()?;
+    let marker = inputs.recording.header.as_ref()?.tracked_marker()?.ok()?;
     Some(marker.measured_tags().len())
 }
 

@@ -78,10 +78,8 @@ fn poses_in(rec: &Recording, w: Window) -> Vec<Pose> {
 /// solid puts them and not where the print did: on rendered border movements with a print's
 /// usual error (0.2 mm RMS per tag), `what` moved (docs/kinematics.md).
 pub fn nominal_marker_warning(rec: &Recording, what: &str) -> Option<String> {
-    let marker = rec.header.as_ref().and_then(|h| h.marker.as_ref());
-    let nominal = marker
-        .and_then(|m| jawtrack_marker::Marker::from_json(&m.to_string()).ok())
-        .is_some_and(|m| m.measured_tags().is_empty());
+    let marker = rec.header.as_ref().and_then(|h| h.tracked_marker()).and_then(Result::ok);
+    let nominal = marker.is_some_and(|m| m.measured_tags().is_empty());
     nominal.then(|| {
         format!(
             "this recording was tracked with the nominal marker: against a print's tag errors, {what}; calibrate \
