@@ -65,7 +65,7 @@ struct Cli {
 enum Command {
     /// Render a short session on built-in defaults and summarise it (no phone needed).
     Demo(demo::DemoArgs),
-    /// Write the marker file of the ideal dodecahedron pair.
+    /// Write the marker file of an ideal marker pair (dodecahedrons by default).
     Marker(marker::MarkerArgs),
     /// Check a marker file and print what it describes.
     CheckMarker {
@@ -92,7 +92,7 @@ enum Command {
     /// Where and how to film with a phone: camera, format, zoom and the distance to hold it at,
     /// beyond where its lens can focus, with focus locked there.
     Plan(plan::PlanArgs),
-    /// Register a marker to the scan of its printed harness (ICP of the dodecahedron from an
+    /// Register a marker to the scan of its printed harness (ICP of the marker's solid from an
     /// initial guess), writing its entry of the registration file `track` reads.
     Register(register::RegisterArgs),
     /// Make a pairing key for the phone link (prints it; keep it secret).

@@ -20,7 +20,7 @@ use std::path::PathBuf;
 /// Arguments of `jawtrack register`.
 #[derive(Args)]
 pub(crate) struct RegisterArgs {
-    /// The marker file (its edge gives the dodecahedron's size).
+    /// The marker file (its solid and edge give the model's shape and size).
     #[arg(long)]
     marker: PathBuf,
     /// Which body the scan shows: maxilla or mandible.
@@ -32,7 +32,7 @@ pub(crate) struct RegisterArgs {
     scan: PathBuf,
     /// Initial guess of scan_from_marker: "rx,ry,rz,tx,ty,tz" (rotation vector in degrees,
     /// translation in mm) or 16 numbers, a 4×4 row-major matrix as in the registration file.
-    /// It must be within about 30° and 3 mm of the truth: the dodecahedron looks the same
+    /// It must be within about 30° and 3 mm of the truth: the marker's solid looks the same
     /// turned 72° about a face, so the guess decides which face is which. Default: the
     /// marker's axes at the centre of the scan's surface, for a scan in the marker's
     /// orientation.
@@ -49,7 +49,7 @@ pub(crate) struct RegisterArgs {
     /// Largest accepted RMS residual (mm).
     #[arg(long, default_value_t = 0.2)]
     max_rms: f64,
-    /// Smallest accepted fraction of the dodecahedron's surface found in the scan (0–1).
+    /// Smallest accepted fraction of the marker solid's surface found in the scan (0–1).
     #[arg(long, default_value_t = 0.3)]
     min_overlap: f64,
     /// Spacing of the model points on the faces (mm).

@@ -215,7 +215,7 @@ fn bad_inputs_fail_naming_the_problem_and_write_nothing() {
         "--min-overlap",
         "0.9",
     ]);
-    refused(&strict, "of the dodecahedron's surface matched");
+    refused(&strict, "of the marker solid's surface matched");
     assert!(!out.exists(), "nothing was written");
 
     let not_registration = dir.path().join("notes.json");

@@ -2,12 +2,12 @@
 //! writes so that a marker pair can be made by hand.
 //!
 //! * [`sheet`]: printable tag sheets, one per jaw body, as SVG in true millimetres — each tag
-//!   printed on a pentagon that is cut out and glued on its face.
-//! * [`body`]: the dodecahedron body fused with a cylindrical mounting post that leaves the
+//!   printed on its face's polygon (a pentagon, or a cube's square), cut out and glued on.
+//! * [`body`]: the marker's solid fused with a cylindrical mounting post that leaves the
 //!   −Z vertex, as a closed triangle mesh ([`Mesh`], from [`jawtrack_mesh`]) written as binary STL.
 //! * [`write_harness`]: writes all of it, plus the marker file, into one folder.
 //!
-//! The dodecahedron's geometry comes from [`jawtrack_marker`] and the tag patterns from
+//! The solid's geometry comes from [`jawtrack_marker`] and the tag patterns from
 //! [`jawtrack_apriltag`]; nothing here recomputes either. All lengths are millimetres.
 
 pub mod body;
@@ -172,16 +172,25 @@ pub enum HarnessError {
         /// Its different size (mm).
         other: f64,
     },
-    /// A tag id the tag36h11 family does not have.
-    #[error("tag id {0} is not in the tag36h11 family (ids 0–586)")]
-    UnknownTag(u32),
-    /// A tag on a face number the dodecahedron does not have.
-    #[error("tag {id} is on face {face}, but the dodecahedron's faces are 0–11")]
+    /// A tag id the marker's family does not have.
+    #[error("tag id {id} is not in the {family} family (ids 0–{last})")]
+    UnknownTag {
+        /// The id.
+        id: u32,
+        /// The marker's family.
+        family: &'static str,
+        /// Its last id.
+        last: usize,
+    },
+    /// A tag on a face number the marker's solid does not have.
+    #[error("tag {id} is on face {face}, but the marker's solid has faces 0–{last}")]
     BadFace {
         /// The tag id.
         id: u32,
         /// Its face number.
         face: usize,
+        /// The solid's last face number.
+        last: usize,
     },
     /// The tags are too large for one A4 sheet.
     #[error("the tags of a marker with edge {edge} mm do not fit on one A4 sheet (210 × 297 mm)")]

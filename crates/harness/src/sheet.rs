@@ -120,7 +120,7 @@ fn render(marker: &Marker, body: BodyKind, notches: &[(usize, Vec<Vector3<f64>>)
     let solid = marker.geometry();
     for t in &tags {
         if t.face >= solid.faces().len() {
-            return Err(HarnessError::BadFace { id: t.id, face: t.face });
+            return Err(HarnessError::BadFace { id: t.id, face: t.face, last: solid.faces().len() - 1 });
         }
         if !t.size.is_finite() || t.size <= 0.0 {
             return Err(MarkerError::Params(format!(
@@ -252,7 +252,8 @@ fn draw_tag(
     origin: Vector2<f64>,
     notch: Option<&[Vector3<f64>]>,
 ) -> Result<(), HarnessError> {
-    let bitmap = family.bitmap(tag.id).ok_or(HarnessError::UnknownTag(tag.id))?;
+    let unknown = || HarnessError::UnknownTag { id: tag.id, family: family.name, last: family.count() - 1 };
+    let bitmap = family.bitmap(tag.id).ok_or_else(unknown)?;
     let face = &solid.faces()[tag.face];
     // Face points in page coordinates: the face's 2D frame (x right, y toward the apex, both as
     // on the page) shifted to this tag's place.
@@ -612,7 +613,9 @@ mod tests {
         assert!(matches!(tag_sheet_svg(&one, BodyKind::Mandible), Err(HarnessError::MissingBody(BodyKind::Mandible))));
         let mut odd = Marker::default();
         odd.bodies[0].tags[0].id = 5000;
-        assert!(matches!(tag_sheet_svg(&odd, BodyKind::Maxilla), Err(HarnessError::UnknownTag(5000))));
+        let err = tag_sheet_svg(&odd, BodyKind::Maxilla).expect_err("id 5000");
+        assert!(matches!(err, HarnessError::UnknownTag { id: 5000, .. }), "{err}");
+        assert!(err.to_string().contains("not in the tag36h11 family (ids 0–586)"), "{err}");
         let too_thick = HarnessParams { post_diameter: 30.0, ..HarnessParams::default() };
         let err = tag_sheet_svg_with_post(&Marker::default(), BodyKind::Maxilla, &too_thick).expect_err("too thick");
         assert!(err.to_string().contains("post_diameter"), "{err}");

@@ -1,9 +1,10 @@
 //! Registration of a marker to a scan of its printed harness: where the marker's frame sits in
 //! the scan's frame (`scan_from_marker`, what the registration file's
 //! `maxilla_scan_from_maxilla_marker` and `mandible_scan_from_mandible_marker` hold), found by
-//! point-to-plane ICP of the body's dodecahedron onto the scanned surface.
+//! point-to-plane ICP of the body's solid (the marker's: a dodecahedron or a cube) onto the
+//! scanned surface.
 //!
-//! The model is the ideal dodecahedron of the marker's edge, sampled evenly over its 12 faces
+//! The model is the ideal solid of the marker's kind and edge, sampled evenly over its faces
 //! ([`marker_surface_samples`]). The scan is any triangle mesh in mm showing (part of) the
 //! printed body, with the mounting post, teeth or anything else around it. [`register`] starts
 //! from an initial guess; each iteration pairs every sample with its nearest scan point, keeps
@@ -12,9 +13,9 @@
 //! not on the model (the post, teeth) and model faces the scanner did not see then simply find
 //! no partner, which is what makes it work on partial scans.
 //!
-//! The dodecahedron looks the same after 60 different rotations, so its surface alone cannot
-//! say which face is which: the initial guess must be within about 30° (and a few mm) of the
-//! truth, and ICP lands on the symmetric copy nearest to it. [`centred_init`] is a guess for a
+//! The dodecahedron looks the same after 60 different rotations (a cube after 24), so its
+//! surface alone cannot say which face is which: the initial guess must be within about 30°
+//! (and a few mm) of the truth, and ICP lands on the symmetric copy nearest to it. [`centred_init`] is a guess for a
 //! scan that is already in the marker's orientation; otherwise the caller supplies one (for
 //! instance by placing the harness STL roughly on the scan in a mesh editor).
 //!
@@ -34,7 +35,7 @@ pub type SurfaceSample = (Point3<f64>, Vector3<f64>);
 /// Most samples [`marker_surface_samples`] makes: a spacing typo must not eat the memory.
 pub const MAX_SAMPLES: usize = 500_000;
 
-/// How far (mm) a tag's face polygon in the marker file may be from the regular dodecahedron's
+/// How far (mm) a tag's face polygon in the marker file may be from the regular solid's
 /// face before the file is refused as describing a different solid.
 const FACE_TOLERANCE_MM: f64 = 0.05;
 
@@ -183,7 +184,8 @@ pub struct Acceptance {
 impl Default for Acceptance {
     /// 0.2 mm RMS, 30 % of the surface, 6 mm (twice the default first pairing distance) and
     /// 36°: half of the 72° turn about a face that maps the dodecahedron onto itself, beyond
-    /// which the guess was as near another copy, with other faces, as the one found.
+    /// which the guess was as near another copy, with other faces, as the one found (a cube's
+    /// 90° turn would allow 45°; 36° is kept for both, the stricter).
     fn default() -> Self {
         Acceptance { max_rms_mm: 0.2, min_overlap: 0.3, max_shift_mm: 6.0, max_turn_deg: 36.0 }
     }
@@ -195,8 +197,8 @@ pub enum RegisterError {
     /// The marker file has no body of that kind.
     #[error("the marker has no {0} body")]
     MissingBody(BodyKind),
-    /// The marker describes a solid that is not the regular dodecahedron of its edge.
-    #[error("the marker's {body} body does not lie on a regular dodecahedron of edge {edge} mm: {reason}")]
+    /// The marker describes a solid that is not the regular solid of its kind and edge.
+    #[error("the marker's {body} body does not lie on the regular solid its file names, of edge {edge} mm: {reason}")]
     MarkerGeometry {
         /// Which body.
         body: BodyKind,
@@ -236,7 +238,7 @@ pub enum RegisterError {
     /// parts of the scan matched).
     #[error(
         "in iteration {iteration} the matched scan surface does not determine the pose (it lets the model slide \
-         or turn freely, as a single plane or a cylinder would): the scan shows too little of the dodecahedron near \
+         or turn freely, as a single plane or a cylinder would): the scan shows too little of the marker's solid near \
          the initial guess"
     )]
     Degenerate {
@@ -259,7 +261,7 @@ pub enum RegisterError {
     /// The fit ended far from the initial guess.
     #[error(
         "ICP moved the marker {shift_mm:.1} mm and turned it {turn_deg:.1}° away from the initial guess (at most \
-         {max_shift_mm} mm and {max_turn_deg}° accepted): the guess was too far off, and since the dodecahedron \
+         {max_shift_mm} mm and {max_turn_deg}° accepted): the guess was too far off, and since the marker's solid \
          looks the same turned 72° about a face, a fit found that far away may have its faces mislabelled; give a \
          closer initial guess"
     )]
@@ -276,7 +278,7 @@ pub enum RegisterError {
     /// The fit converged but the model stays too far from the scan.
     #[error(
         "the residual is {rms_mm:.3} mm RMS, above the {max_mm} mm accepted: the scan does not match the \
-         dodecahedron well here (wrong marker edge, a deformed print, or a wrong local fit from a poor initial guess)"
+         marker's solid well here (wrong marker edge, a deformed print, or a wrong local fit from a poor initial guess)"
     )]
     Residual {
         /// The residual (mm).
@@ -286,7 +288,7 @@ pub enum RegisterError {
     },
     /// The fit converged on too small a part of the model.
     #[error(
-        "only {:.0} % of the dodecahedron's surface matched the scan (at least {:.0} % required): the fit \
+        "only {:.0} % of the marker solid's surface matched the scan (at least {:.0} % required): the fit \
          probably locked onto something else; check the scan shows the body and give a closer initial guess",
         fraction * 100.0, min * 100.0
     )]
