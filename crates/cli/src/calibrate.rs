@@ -76,7 +76,7 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
         print_report(&cal);
         cal.marker
     };
-    calibrated.save(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    a.force.write_file(&a.out, (calibrated.to_json() + "\n").as_bytes())?;
     say!("wrote {}", a.out.display());
     Ok(())
 }

@@ -79,7 +79,7 @@ pub(crate) struct MarkerArgs {
 pub(crate) fn marker(a: &MarkerArgs) -> Result<()> {
     a.force.check_file(&a.out)?;
     let m = a.geometry.marker()?;
-    m.save(&a.out)?;
+    a.force.write_file(&a.out, (m.to_json() + "\n").as_bytes())?;
     let size = m.bodies[0].tags[0].size;
     let what = match (m.solid, m.family == TagFamily::TAG36H11) {
         (SolidKind::Dodecahedron, true) => String::new(),

@@ -103,7 +103,7 @@ pub enum OfflineError {
         path: String,
         /// Why.
         #[source]
-        source: jawtrack_marker::MarkerError,
+        source: jawtrack_recording::RecordingError,
     },
     /// Not one frame could be read or tracked.
     #[error(

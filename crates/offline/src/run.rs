@@ -278,9 +278,9 @@ fn refine_pass(
     let started = std::time::Instant::now();
     let refinement = refine_marker(tracker.marker(), &kept, intrinsics, &recording)?;
     events.refined(&refinement, started.elapsed().as_secs_f64());
-    refinement
-        .marker
-        .save(path)
+    // `ready` refused an existing file unless replacing was asked for: written whole or not at all.
+    let text = refinement.marker.to_json() + "\n";
+    jawtrack_recording::write_file_atomic(path, text.as_bytes(), jawtrack_recording::Overwrite::Replace)
         .map_err(|source| OfflineError::SaveMarker { path: path.display().to_string(), source })?;
     events.said(Said::Wrote(format!("wrote the refined marker to {}", path.display())));
     let mut again = Tracker::new(refinement.marker, config)?;
