@@ -12,15 +12,17 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_pose::Pose;
+use jawtrack_recording::Recording;
+use jawtrack_wire::replay::{ReplayOptions, send_packets};
 use jawtrack_wire::{Key, PacketBody, PosePacket, Security, Session, encode_pose, unix_ms};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
-use std::net::UdpSocket;
+use std::net::{SocketAddr, UdpSocket};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Arguments of `jawtrack-bench link`.
 #[derive(Args)]
@@ -70,8 +72,8 @@ impl Receiver {
         Ok(Receiver { child, port })
     }
 
-    fn to(&self) -> String {
-        format!("127.0.0.1:{}", self.port)
+    fn to(&self) -> SocketAddr {
+        SocketAddr::from(([127, 0, 0, 1], self.port))
     }
 
     /// Waits for the receiver to go idle and exit; its summary.
@@ -126,41 +128,82 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let key = Key::generate();
+    let soak = soak(&key, &a.out.join("soak.jsonl"), a.rate, duration)?;
+    let garbage = garbage(&key, &a.out.join("garbage.jsonl"), random)?;
+    print_table(a.rate, duration, random, &soak, &garbage);
+    if !(soak.ok() && garbage.ok()) {
+        bail!("the link missed a target (see the table)");
+    }
+    if soak.cpu_share.is_some_and(|c| c >= 0.05) {
+        bail!("the receiver used {:.1}% of a core (target < 5%)", soak.cpu_share.unwrap_or(0.0) * 100.0);
+    }
+    Ok(())
+}
+
+/// What the soak gave: the datagrams sent, the receiver's summary and recording, the
+/// acknowledgements heard and the receiver's share of one core.
+struct Soak {
+    total: u64,
+    summary: Value,
+    recorded: Recording,
+    acks: u64,
+    cpu_share: Option<f64>,
+}
+
+impl Soak {
+    /// Every datagram accepted and recorded, none lost.
+    fn ok(&self) -> bool {
+        self.summary["accepted"].as_u64() == Some(self.total)
+            && self.summary["lost"] == 0
+            && self.recorded.frames.len() as u64 == self.total
+            && self.recorded.skipped.is_empty()
+    }
+}
+
+/// Phase 1, the soak: sealed pose datagrams at `rate` for `duration` (s) to a receiver
+/// recording to `file`.
+fn soak(key: &Key, file: &Path, rate: f64, duration: f64) -> Result<Soak> {
+    let receiver = Receiver::start(key, file)?;
+    let total = (rate * duration).round() as u64;
+    let bar = crate::progress_bar("soak", total, "datagrams");
+    let options = ReplayOptions { rate, ..ReplayOptions::default() };
+    let security = Security::Sealed(key.clone());
+    let sent = send_packets(receiver.to(), security, &options, total, |i| packet(i, rate), |n| bar.set_position(n))?;
+    bar.finish_and_clear();
+    let summary = receiver.finish()?;
+    let recorded = jawtrack_recording::open(file)?;
+    // Over the soak itself: the receiver's idle second before it exits adds no CPU time.
+    let cpu_share = summary["cpu_s"].as_f64().map(|c| c / duration);
+    Ok(Soak { total, summary, recorded, acks: sent.acks.read, cpu_share })
+}
+
+/// What the garbage phase gave: the receiver's summary, the datagrams that must have been
+/// rejected, the replays sent, and how many of those were refused as stale.
+struct Garbage {
+    summary: Value,
+    sent: u64,
+    rejected: u64,
+    replays: u64,
+    stale: u64,
+}
+
+impl Garbage {
+    /// The genuine datagrams accepted, everything else counted as rejected or duplicated.
+    fn ok(&self) -> bool {
+        let g = &self.summary;
+        g["accepted"] == 101
+            && g["duplicated"].as_u64().map(|d| d + self.stale) == Some(self.replays)
+            && g["rejected"].as_u64() == Some(self.rejected + self.stale)
+            && g["received"].as_u64() == Some(self.sent)
+    }
+}
+
+/// Phase 2: `random` datagrams of garbage, forgeries and replays, then a genuine one, to a
+/// receiver recording to `file`.
+fn garbage(key: &Key, file: &Path, random: u64) -> Result<Garbage> {
     let socket = UdpSocket::bind("127.0.0.1:0")?;
     socket.set_nonblocking(true)?;
-    let mut buf = [0u8; 2048];
-
-    // 1. Soak.
-    let soak_file = a.out.join("soak.jsonl");
-    let receiver = Receiver::start(&key, &soak_file)?;
-    let mut session = Session::new(Security::Sealed(key.clone()));
-    let total = (a.rate * duration).round() as u64;
-    let bar = crate::progress_bar("soak", total, "datagrams");
-    let (start, period) = (Instant::now(), Duration::from_secs_f64(1.0 / a.rate));
-    let mut acks = 0u64;
-    for i in 0..total {
-        if let Some(wait) = (start + period.mul_f64(i as f64)).checked_duration_since(Instant::now()) {
-            std::thread::sleep(wait);
-        }
-        socket.send_to(&session.pose_datagram(&packet(i, a.rate)), receiver.to()).context("sending")?;
-        while let Ok((n, _)) = socket.recv_from(&mut buf) {
-            acks += u64::from(session.read_ack(&buf[..n]).is_ok());
-        }
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let soak = receiver.finish()?;
-    let recorded = jawtrack_recording::open(&soak_file)?;
-    // Over the soak itself: the receiver's idle second before it exits adds no CPU time.
-    let cpu_share = soak["cpu_s"].as_f64().map(|c| c / duration);
-    let soak_ok = soak["accepted"].as_u64() == Some(total)
-        && soak["lost"] == 0
-        && recorded.frames.len() as u64 == total
-        && recorded.skipped.is_empty();
-
-    // 2. Garbage, forgeries and replays.
-    let garbage_file = a.out.join("garbage.jsonl");
-    let receiver = Receiver::start(&key, &garbage_file)?;
+    let receiver = Receiver::start(key, file)?;
     let mut session = Session::new(Security::Sealed(key.clone()));
     let genuine: Vec<Vec<u8>> = (0..100).map(|i| session.pose_datagram(&packet(i, 30.0))).collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
@@ -168,7 +211,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     let bar = crate::progress_bar("garbage", random, "datagrams");
     let send = |d: &[u8], sent: &mut u64| -> Result<()> {
         // Paced so that loopback's queue never overflows: a datagram the kernel drops would
-        // never be counted, and the comparison below would fail.
+        // never be counted, and the comparison in `Garbage::ok` would fail.
         if sent.is_multiple_of(20) {
             std::thread::sleep(Duration::from_millis(1));
         }
@@ -180,21 +223,7 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     }
     let other = Security::Sealed(Key::generate());
     for i in 0..random {
-        let n = rng.random_range(0..600);
-        let mut d: Vec<u8> = (0..n).map(|_| rng.random()).collect();
-        if i % 3 == 0 && n >= 5 {
-            d[..5].copy_from_slice(b"JAWT\x01");
-        }
-        if i % 100 == 0 {
-            // A forgery under another key, or a genuine datagram with one bit flipped.
-            d = encode_pose((session.id(), 1000 + i, unix_ms()), &packet(i, 30.0), &other);
-            if i % 200 == 0 {
-                d = genuine[(i / 200 % 100) as usize].clone();
-                let bit = rng.random_range(0..d.len() * 8);
-                d[bit / 8] ^= 1 << (bit % 8);
-            }
-        }
-        send(&d, &mut sent)?;
+        send(&garbage_datagram(i, &mut rng, &session, &genuine, &other), &mut sent)?;
         rejected += 1;
         if i % 1000 == 0 {
             send(&genuine[(i / 1000 % 100) as usize], &mut sent)?;
@@ -206,39 +235,53 @@ pub(crate) fn run(a: &LinkBenchArgs) -> Result<()> {
     std::thread::sleep(Duration::from_millis(100));
     socket.send_to(&session.pose_datagram(&packet(100, 30.0)), receiver.to())?;
     sent += 1;
-    let garbage = receiver.finish()?;
+    let summary = receiver.finish()?;
     // A replay is refused as a duplicate, or as stale once its datagram is older than the
     // receiver's clock-skew bound (a long garbage phase outlasts it).
-    let stale = garbage["rejected_by_reason"]["stale"].as_u64().unwrap_or(0);
-    let garbage_ok = garbage["accepted"] == 101
-        && garbage["duplicated"].as_u64().map(|d| d + stale) == Some(replays)
-        && garbage["rejected"].as_u64() == Some(rejected + stale)
-        && garbage["received"].as_u64() == Some(sent);
+    let stale = summary["rejected_by_reason"]["stale"].as_u64().unwrap_or(0);
+    Ok(Garbage { summary, sent, rejected, replays, stale })
+}
 
+/// The `i`th datagram the receiver must reject: random bytes (a third starting with the right
+/// magic and version), or, one in a hundred, a forgery under `other` key or one of the
+/// `genuine` datagrams with one bit flipped.
+fn garbage_datagram(i: u64, rng: &mut impl Rng, session: &Session, genuine: &[Vec<u8>], other: &Security) -> Vec<u8> {
+    let n = rng.random_range(0..600);
+    let mut d: Vec<u8> = (0..n).map(|_| rng.random()).collect();
+    if i.is_multiple_of(3) && n >= 5 {
+        d[..5].copy_from_slice(b"JAWT\x01");
+    }
+    if i.is_multiple_of(100) {
+        d = encode_pose((session.id(), 1000 + i, unix_ms()), &packet(i, 30.0), other);
+        if i.is_multiple_of(200) {
+            d = genuine[(i / 200 % 100) as usize].clone();
+            let bit = rng.random_range(0..d.len() * 8);
+            d[bit / 8] ^= 1 << (bit % 8);
+        }
+    }
+    d
+}
+
+/// The results as a Markdown table on stdout.
+fn print_table(rate: f64, duration: f64, random: u64, soak: &Soak, garbage: &Garbage) {
+    let (total, s, acks) = (soak.total, &soak.summary, soak.acks);
+    let (g, replays, rejected, stale) = (&garbage.summary, garbage.replays, garbage.rejected, garbage.stale);
     println!("| measure | target | result |");
     println!("|---|---|---|");
     println!(
-        "| soak: {total} sealed datagrams at {} /s for {duration:.0} s | all accepted and recorded | sent {total}, accepted {}, lost {}, recorded {} frames ({} unreadable lines); {acks} acknowledgements |",
-        a.rate,
-        soak["accepted"],
-        soak["lost"],
-        recorded.frames.len(),
-        recorded.skipped.len()
+        "| soak: {total} sealed datagrams at {rate} /s for {duration:.0} s | all accepted and recorded | sent {total}, accepted {}, lost {}, recorded {} frames ({} unreadable lines); {acks} acknowledgements |",
+        s["accepted"],
+        s["lost"],
+        soak.recorded.frames.len(),
+        soak.recorded.skipped.len()
     );
     println!(
         "| receiver CPU during the soak | < 5% of one core | {} ({} s CPU over the {duration:.0} s soak) |",
-        cpu_share.map_or("unknown (no /proc)".into(), |c| format!("{:.2}%", c * 100.0)),
-        soak["cpu_s"],
+        soak.cpu_share.map_or("unknown (no /proc)".into(), |c| format!("{:.2}%", c * 100.0)),
+        s["cpu_s"],
     );
     println!(
         "| {random} random datagrams (1% forged or bit-flipped) + {replays} replays | 0 accepted, all counted | accepted {} (the 101 genuine); the replays refused as duplicates ({}) or stale ({stale}); rejected {} = {rejected} + {stale}; by reason {} |",
-        garbage["accepted"], garbage["duplicated"], garbage["rejected"], garbage["rejected_by_reason"]
+        g["accepted"], g["duplicated"], g["rejected"], g["rejected_by_reason"]
     );
-    if !(soak_ok && garbage_ok) {
-        bail!("the link missed a target (see the table)");
-    }
-    if cpu_share.is_some_and(|c| c >= 0.05) {
-        bail!("the receiver used {:.1}% of a core (target < 5%)", cpu_share.unwrap_or(0.0) * 100.0);
-    }
-    Ok(())
 }

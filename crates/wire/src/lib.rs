@@ -13,6 +13,7 @@
 //! [`link`] holds the receiver's accounting: sequence gaps, reordering, duplicates and replays.
 
 pub mod link;
+pub mod options;
 pub mod receiver;
 pub mod replay;
 

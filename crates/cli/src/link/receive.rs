@@ -7,11 +7,13 @@ use super::KeyArgs;
 use crate::flags::ViewerArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_recording::RecordingWriter;
+use jawtrack_recording::{FrameRecord, RecordingWriter};
 use jawtrack_viewer::{LiveServer, LiveState};
-use jawtrack_wire::link::LinkConfig;
-use jawtrack_wire::receiver::{Receiver, process_cpu_seconds, reachable_address, recording_header, run_summary};
-use jawtrack_wire::{Key, Security, unix_ms};
+use jawtrack_wire::link::Counters;
+use jawtrack_wire::receiver::{
+    ReceiveOptions, ReceiveSink, process_cpu_seconds, reachable_address, receive, recording_header,
+};
+use jawtrack_wire::{Key, Security};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -68,19 +70,45 @@ fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
     Ok(())
 }
 
-/// Refuses times that cannot be, naming the flag.
-fn check_times(a: &ReceiveArgs) -> Result<()> {
-    if !(a.max_clock_skew.is_finite() && a.max_clock_skew >= 0.0) {
-        bail!("--max-clock-skew must be a number of seconds ≥ 0, got {}", a.max_clock_skew);
+/// Where `receive` puts what the link gives: the recording, the live viewer and stderr.
+struct Sink<'a> {
+    out: RecordingWriter<std::fs::File>,
+    live: &'a LiveState,
+    tty: bool,
+}
+
+impl ReceiveSink for Sink<'_> {
+    type Error = anyhow::Error;
+
+    fn frame(&mut self, record: &FrameRecord, seq: u64) -> Result<()> {
+        self.out.append(record)?;
+        self.live.pose(record, Some(seq));
+        Ok(())
     }
-    for (name, v) in [("--duration", a.duration), ("--idle-exit", a.idle_exit)] {
-        if let Some(v) = v
-            && !(v.is_finite() && v > 0.0)
-        {
-            bail!("{name} must be a positive number of seconds, got {v}");
+
+    /// The viewer's Calibrate accepted a held bite: its rest goes into the recording.
+    fn poll(&mut self) -> Result<()> {
+        for bite in self.live.take_bites() {
+            self.out.append_bite(&bite)?;
+            eprintln!(
+                "bite accepted at t = {:.3} s ({} frames, held within {:.2} mm)",
+                bite.t, bite.frames, bite.spread_mm
+            );
+        }
+        Ok(())
+    }
+
+    fn live(&mut self, counters: &Counters, last_arrival: Option<Instant>) {
+        self.live.status(counters, last_arrival);
+    }
+
+    fn report(&mut self, counters: &Counters) {
+        if self.tty {
+            eprint!("\r\x1b[K{}", counters.describe());
+        } else {
+            eprintln!("{}", counters.describe());
         }
     }
-    Ok(())
 }
 
 pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
@@ -88,7 +116,11 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     if security == Security::Plaintext {
         eprintln!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
     }
-    check_times(a)?;
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let &ReceiveArgs { max_clock_skew, duration, idle_exit, .. } = a;
+    let report_every = Duration::from_secs(if tty { 1 } else { 10 });
+    let options = ReceiveOptions { max_clock_skew, duration, idle_exit, report_every };
+    options.check()?;
     let viewer = a.viewer.options()?;
     if let Some(addr) = a.serve {
         crate::flags::warn_if_exposed(addr);
@@ -100,21 +132,15 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
             Security::Plaintext => bail!("--qr shows the pairing key: there is none with --insecure-plaintext"),
         }
     }
-    socket.set_read_timeout(Some(Duration::from_millis(100)))?;
     // The viewer's port before the file: a run that cannot start leaves no empty recording.
     let live = Arc::new(LiveState::new(&viewer, "live")?);
-    let _server = match a.serve {
-        Some(addr) => Some(LiveServer::start(addr, live.clone())?),
-        None => None,
-    };
-    let mut out =
+    let _server = a.serve.map(|addr| LiveServer::start(addr, live.clone())).transpose()?;
+    let out =
         RecordingWriter::create(&a.out, recording_header(a.listen, a.max_clock_skew, &security), a.force.overwrite())
             .map_err(|e| a.force.explain(e))?;
     let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst)).context("installing the Ctrl-C handler")?;
-    }
+    let on_ctrl_c = stop.clone();
+    ctrlc::set_handler(move || on_ctrl_c.store(true, Ordering::SeqCst)).context("installing the Ctrl-C handler")?;
     eprintln!(
         "listening on {} ({}); recording to {}{}",
         socket.local_addr()?,
@@ -122,81 +148,15 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
         a.out.display(),
         a.serve.map(|s| format!("; viewer at http://{s}/")).unwrap_or_default()
     );
-
-    let config = LinkConfig {
-        max_clock_skew_ms: (a.max_clock_skew > 0.0).then_some((a.max_clock_skew * 1e3) as u64),
-        ..LinkConfig::default()
-    };
-    let mut receiver = Receiver::new(config, security, rand::random());
-    let started = Instant::now();
-    let (mut last_status, mut last_live, mut last_arrival) = (Instant::now(), Instant::now(), None::<Instant>);
-    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    // Longer than any datagram, so an oversized one shows as a wrong length, not a cut one.
-    let mut buf = [0u8; 2048];
-    while !stop.load(Ordering::SeqCst) {
-        if a.duration.is_some_and(|d| started.elapsed().as_secs_f64() >= d)
-            || a.idle_exit.zip(last_arrival).is_some_and(|(idle, t)| t.elapsed().as_secs_f64() >= idle)
-        {
-            break;
-        }
-        // The viewer's Calibrate accepted a held bite: its rest goes into the recording (checked
-        // every pass: the socket's read timeout keeps passes short when no datagram comes).
-        for bite in live.take_bites() {
-            out.append_bite(&bite)?;
-            eprintln!(
-                "bite accepted at t = {:.3} s ({} frames, held within {:.2} mm)",
-                bite.t, bite.frames, bite.spread_mm
-            );
-        }
-        if last_live.elapsed() >= Duration::from_millis(500) {
-            last_live = Instant::now();
-            live.status(&receiver.link().counters(), last_arrival);
-        }
-        if last_status.elapsed() >= Duration::from_secs(if tty { 1 } else { 10 }) {
-            last_status = Instant::now();
-            let c = receiver.link().counters();
-            if tty {
-                eprint!("\r\x1b[K{}", c.describe());
-            } else {
-                eprintln!("{}", c.describe());
-            }
-        }
-        let (n, from) = match socket.recv_from(&mut buf) {
-            Ok(x) => x,
-            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => continue,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            // ICMP errors from earlier acknowledgements (the phone went away) surface here.
-            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
-            Err(e) => return Err(e).context("receiving"),
-        };
-        let now = Instant::now();
-        last_arrival = Some(now);
-        let got = receiver.datagram(&buf[..n], from, unix_ms(), now);
-        if let Some((record, seq)) = got.frame {
-            out.append(&record)?;
-            live.pose(&record, Some(seq));
-        }
-        // A phone that vanished is not an error for the receiver.
-        if let Some(ack) = got.ack
-            && socket.send_to(&ack, from).is_ok()
-        {
-            receiver.ack_sent(from, now);
-        }
-    }
+    let got = receive(&socket, security, &options, &stop, &mut Sink { out, live: &live, tty })?;
     if tty {
         eprintln!();
     }
-    let c = receiver.link().counters();
-    eprintln!(
-        "stopped after {:.1} s: {}; recording in {}",
-        started.elapsed().as_secs_f64(),
-        c.describe(),
-        a.out.display()
-    );
+    let c = &got.counters;
+    eprintln!("stopped after {:.1} s: {}; recording in {}", got.elapsed_s, c.describe(), a.out.display());
     for (reason, n) in &c.rejected {
         eprintln!("  rejected as {reason}: {n}");
     }
-    let elapsed = started.elapsed().as_secs_f64();
-    say!("{}", run_summary(&c, receiver.acks_sent(), elapsed, process_cpu_seconds()));
+    say!("{}", got.summary(process_cpu_seconds()));
     Ok(())
 }
