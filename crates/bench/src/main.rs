@@ -47,12 +47,7 @@ fn main() {
     }
 }
 
-/// A bar labelled `what` over `len` items called `unit`, on stderr when it is a terminal.
-fn progress_bar(what: &str, len: u64, unit: &str) -> indicatif::ProgressBar {
-    let style =
-        indicatif::ProgressStyle::with_template(&format!("{{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{elapsed}}"))
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
-    let bar = indicatif::ProgressBar::new(len).with_style(style);
-    bar.set_message(what.to_owned());
-    bar
+/// A bar labelled `what` over `len` items called `unit`: the tools' one bar.
+fn progress_bar(what: &str, len: u64, unit: &str) -> jawtrack_progress::ProgressBar {
+    jawtrack_progress::bar(what, Some(len), unit)
 }

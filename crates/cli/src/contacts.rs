@@ -19,14 +19,12 @@
 //! and `summary.json` with per-tooth totals.
 
 use crate::flags::{SessionArg, load, registration};
-use crate::numbers::fixed;
 use anyhow::{Result, bail};
 use clap::{ArgAction, Args, ValueEnum};
 use jawtrack_occlusion::contacts::{ContactSettings, THRESHOLD_RANGE_MM};
 use jawtrack_occlusion::dynamics::{DynamicsOptions, PathSummary};
-use jawtrack_occlusion::teeth::Tooth;
 use jawtrack_session::PoseSource;
-use jawtrack_session::contact_run::{self, ContactEvents, ContactJob, ContactReport};
+use jawtrack_session::contact_run::{self, ContactEvents, ContactJob};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 
@@ -134,7 +132,7 @@ fn check_options(a: &ContactsArgs) -> Result<()> {
 /// Prints what a run does as it goes, and draws its progress unless `--quiet`.
 struct Printed {
     quiet: bool,
-    bar: Option<indicatif::ProgressBar>,
+    bar: Option<jawtrack_progress::ProgressBar>,
 }
 
 impl ContactEvents for Printed {
@@ -154,13 +152,14 @@ impl ContactEvents for Printed {
         }
     }
     fn begin(&mut self, what: &'static str, total: usize) {
-        self.bar = Some(if self.quiet { indicatif::ProgressBar::hidden() } else { crate::progress_bar(what, total) });
+        self.bar =
+            Some(if self.quiet { jawtrack_progress::ProgressBar::hidden() } else { crate::progress_bar(what, total) });
     }
     fn progress(&mut self, done: usize) {
         self.bar.iter().for_each(|b| b.set_position(done as u64));
     }
     fn end(&mut self) {
-        self.bar.take().iter().for_each(indicatif::ProgressBar::finish_and_clear);
+        self.bar.take().iter().for_each(jawtrack_progress::ProgressBar::finish_and_clear);
     }
     fn simulated(&mut self, s: &PathSummary) {
         let c = &s.intercuspation_correction;
@@ -201,54 +200,13 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
         out: &a.out,
     };
     let found = contact_run::run(&job, &rec, &source, &mut Printed { quiet: a.quiet, bar: None })?;
-    print_findings(&found, settings.threshold_mm, source.describe());
+    let (lines, warning) = jawtrack_report::contact_findings(&found, settings.threshold_mm, source.describe());
+    lines.iter().for_each(|l| say!("{l}"));
+    warning.iter().for_each(|w| eprintln!("warning: {w}"));
     let s = &found.summary;
     say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), found.setup_ms);
     for p in &found.written {
         say!("wrote {}", p.display());
     }
     Ok(())
-}
-
-/// Prints what the run found: frames checked, the deepest contact, per-tooth totals.
-fn print_findings(found: &ContactReport, threshold_mm: f64, source: &str) {
-    let (s, teeth, read, skipped_no_pose) = (&found.summary, &found.teeth, found.read, found.skipped_no_pose);
-    let skipped =
-        if skipped_no_pose > 0 { format!(", {skipped_no_pose} without a pose skipped") } else { String::new() };
-    let (checked, near, deep) = (s.frames, s.with_contact, s.penetrating);
-    let t = threshold_mm;
-    say!("{checked} frames checked of {read}{skipped}; {near} within {t} mm, {deep} penetrating");
-    match s.deepest {
-        Some(d) if d.depth_mm > 0.0 => {
-            say!("deepest penetration {} mm at frame {} (t {} s)", fixed(d.depth_mm, 3), d.frame, fixed(d.t, 3))
-        }
-        Some(d) => {
-            say!(
-                "no penetration; smallest gap {} mm at frame {} (t {} s)",
-                fixed(-d.depth_mm, 3),
-                d.frame,
-                fixed(d.t, 3)
-            )
-        }
-        None => {
-            say!("no contact within {t} mm");
-            eprintln!(
-                "warning: the arches never came within {t} mm in any of the {checked} frames checked: a recording \
-                 that includes the bite always touches; check that the scans and the poses ({}) belong together",
-                source
-            );
-        }
-    }
-    if !teeth.is_empty() {
-        say!("tooth          frames in contact   largest area   deepest");
-        for t in teeth {
-            let label = t.fdi.and_then(Tooth::fdi).map_or_else(|| t.name.clone(), Tooth::label);
-            say!(
-                "{label:<14} {:>17}   {:>9} mm²   {:>7} mm",
-                t.frames_in_contact,
-                fixed(t.max_area_mm2, 2),
-                fixed(t.max_depth_mm, 3)
-            );
-        }
-    }
 }

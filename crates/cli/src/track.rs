@@ -7,10 +7,10 @@
 
 use anyhow::Result;
 use clap::Args;
-use indicatif::ProgressBar;
 use jawtrack_calibration::Refinement;
 use jawtrack_offline::{OfflineError, Pass, Said, TrackEvents, TrackOptions, track};
 use jawtrack_pose::CameraIntrinsics;
+use jawtrack_progress::ProgressBar;
 use jawtrack_recording::create_file;
 use std::io::Write;
 use std::path::PathBuf;

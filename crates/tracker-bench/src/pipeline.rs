@@ -85,13 +85,11 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
             ..SynthConfig::new(SceneKind::Hinge)
         })?;
         let camera = synth.header().intrinsics;
-        let bar = indicatif::ProgressBar::new(synth.len() as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len}, {elapsed} elapsed, ~{eta} left")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                .progress_chars("=> "),
+        let bar = jawtrack_progress::bar(
+            &format!("rendering {}", resolution_name(resolution)),
+            Some(synth.len() as u64),
+            "frames",
         );
-        bar.set_message(format!("rendering {}", resolution_name(resolution)));
         let mut frames = Vec::with_capacity(synth.len());
         for i in 0..synth.len() {
             frames.push(synth.render(i)?);

@@ -22,22 +22,21 @@ pub mod capture;
 pub mod chew;
 pub mod hinge_axis;
 mod session;
+mod stages;
 mod tables;
 
 pub use session::{SessionSummary, report as session_report};
 pub use tables::*;
 
-use crate::frames::{self, Request};
+use crate::frames::Request;
 #[cfg(feature = "reference")]
 use crate::{opencv::OpenCv, reference};
 use anyhow::{Context, Result, bail};
-use jawtrack_apriltag::{Detection, Detector, DetectorConfig, ImageView};
+use jawtrack_apriltag::{Detection, DetectorConfig, ImageView};
 #[cfg(feature = "reference")]
 use jawtrack_apriltag_reference::{ReferenceDetector, ReferenceParams};
-use jawtrack_calibration::{CalibrationFrame, CalibrationOptions, SeenTag, calibrate};
 use jawtrack_marker::Marker;
 use jawtrack_pose::{CameraIntrinsics, Pose};
-use jawtrack_registration::{Registration, calibrate_intercuspation};
 use jawtrack_synth::SceneKind;
 use jawtrack_synth::scenes::{JawMotion, View};
 use jawtrack_tracker::{Tracker, TrackerConfig};
@@ -273,155 +272,26 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str, usize, usize)) -> R
     if reference_stack.is_some() {
         columns.extend(MarkerFile::ALL.map(|marker| Column { stack: Stack::Reference, marker }));
     }
-
-    let req = options.request(SceneKind::Calibration);
-    let scene = frames::scene(&options.cache, &req, &mut |d, t| progress("rendering the calibration recording", d, t))?;
-    let config = tracker_config(&scene.truth);
-    let detector = Detector::new(config.detector)?;
-    let nominal = Marker::default();
-    let mut views = Vec::new();
-    for (i, f) in scene.truth.frames.iter().enumerate() {
-        progress("detecting tags in the calibration recording", i, scene.truth.frames.len());
-        let img = read_luma(&scene.dir.join(&f.file))?;
-        let tags = detector
-            .detect(&img.view()?)?
-            .into_iter()
-            .filter(|d| nominal.find_tag(d.id).is_some())
-            .map(|d| SeenTag { id: d.id, corners: d.corners })
-            .collect();
-        views.push(CalibrationFrame { camera: scene.truth.intrinsics, tags });
-    }
-    let cal = calibrate(&nominal, &views, &CalibrationOptions::default()).context("calibrating the marker")?;
-    let front = calibrate(&nominal, &session::front_faces_only(&views, &nominal), &CalibrationOptions::default())
-        .context("calibrating the marker from its front faces")?;
-    let summarise = |c: &jawtrack_calibration::Calibration| -> Vec<BodySummary> {
-        c.bodies
-            .iter()
-            .map(|b| BodySummary {
-                body: b.body.to_string(),
-                views: b.views,
-                rms_before_px: b.rms_before_px,
-                rms_after_px: b.rms_after_px,
-                calibrated_tags: b.tags.len(),
-                findings: b.findings.iter().map(ToString::to_string).collect(),
-            })
-            .collect()
-    };
-    let (calibration, front_only) = (summarise(&cal), summarise(&front));
-
+    let calibrated = stages::calibrate_markers(options, progress)?;
     let mut stacks = Stacks { reference: reference_stack };
-
-    // The bite step: each stack's poses of the closed jaw in the calibration recording,
-    // mapped onto the scanned bite (here the true rest pose, as a bite scan would give it).
-    let calibration_frames = scene.truth.frames.len();
-    let printed = Marker::from_json(&scene.truth.true_marker.to_string())
-        .context("calibration: the marker as printed in its ground truth")?;
-    let markers = [nominal.clone(), cal.marker.clone(), printed];
-    let mut trackers = new_trackers(&markers, &scene.truth)?;
-    let mut closed: [Vec<Pose>; 2] = [Vec::new(), Vec::new()];
-    // A bite is filmed as a clinician films the patient, from the front: the recording's
-    // views at the face's level within 45° of straight ahead. (The oblique views see tags
-    // that stay nominal, which would bias the mean.)
-    let bite_frames: Vec<_> = scene
-        .truth
-        .frames
-        .iter()
-        .filter(|f| f.spec.view.elevation_deg == 0.0 && f.spec.view.azimuth_deg.abs() <= BITE_AZIMUTH_DEG)
-        .collect();
-    for (i, f) in bite_frames.iter().enumerate() {
-        progress("tracking the closed jaw for the bite step", i, bite_frames.len());
-        let r = stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?;
-        closed[0].extend(r.ours[1]);
-        closed[1].extend(r.theirs.and_then(|t| t[1]));
-    }
-    let bite = scene.truth.frames.first().map(|f| f.maxilla_from_mandible).context("an empty calibration recording")?;
-    let scanned = Registration { maxilla_scan_from_mandible_scan_at_intercuspation: bite, ..Registration::identity() };
-    let mut bites = Vec::new();
-    for samples in &closed {
-        bites.push(calibrate_intercuspation(&scanned, samples).ok());
-    }
-    let bite_steps: Vec<Option<BiteStep>> = bites
-        .iter()
-        .map(|b| {
-            b.as_ref().map(|b| BiteStep {
-                samples: b.samples,
-                translation_mm: b.translation_mm,
-                rotation_deg: b.rotation_deg,
-                spread_mm: b.spread_mm,
-            })
-        })
-        .collect();
-    // With the stack's estimates for [nominal, calibrated, printed], the columns' estimates.
-    let expand = |estimates: [Option<Pose>; 3], stack: usize| -> Vec<Option<Pose>> {
-        MarkerFile::ALL
-            .map(|m| match m {
-                MarkerFile::Nominal => estimates[0],
-                MarkerFile::Calibrated => estimates[1],
-                MarkerFile::CalibratedBite => bites[stack]
-                    .as_ref()
-                    .and_then(|b| estimates[1].map(|e| b.registration.maxilla_scan_from_mandible_scan(&e))),
-                MarkerFile::Printed => estimates[2],
-                // Not in `ALL`: the session columns come from `session::judge`.
-                MarkerFile::FrontOnly | MarkerFile::Refined | MarkerFile::FrontOnlyRefined => None,
-            })
-            .to_vec()
-    };
-
+    let bites = calibrated.bite_step(&mut stacks, progress)?;
+    let judge = stages::Judge { options, calibrated: &calibrated, bites: &bites };
     let mut records = Vec::new();
     let mut sessions = Vec::new();
     for kind in [SceneKind::Static, SceneKind::Hinge, SceneKind::Excursion] {
-        let name = kind.name();
-        let req = options.request(kind);
-        let scene =
-            frames::scene(&options.cache, &req, &mut |d, t| progress(&format!("rendering the {name} scene"), d, t))?;
-        let printed = Marker::from_json(&scene.truth.true_marker.to_string())
-            .with_context(|| format!("{name}: the marker as printed in its ground truth"))?;
-        let markers = [nominal.clone(), cal.marker.clone(), printed];
-        let mut trackers = new_trackers(&markers, &scene.truth)?;
-        let total = scene.truth.frames.len();
-        let mut tracked = Vec::with_capacity(total);
-        for (i, f) in scene.truth.frames.iter().enumerate() {
-            progress(&format!("tracking the {name} scene"), i, total);
-            tracked.push(stacks.frame(&mut trackers, &markers, &scene.dir.join(&f.file), &scene.truth, f.t)?);
-        }
-        // The session cases need the whole scene's detections before judging any frame.
-        let detections: Vec<&[Detection]> = tracked.iter().map(|r| r.detections.as_slice()).collect();
-        let (session, summary) = session::judge(
-            kind,
-            &detections,
-            &scene.truth,
-            [&front.marker, &cal.marker],
-            &tracker_config(&scene.truth),
-        )?;
-        sessions.push(summary);
-        for ((f, r), extra) in scene.truth.frames.iter().zip(tracked).zip(session) {
-            let mut estimates = expand(r.ours, 0);
-            estimates.extend(extra);
-            if let Some(theirs) = r.theirs {
-                estimates.extend(expand(theirs, 1));
-            }
-            records.push(FrameRecord {
-                scene: kind,
-                index: f.index,
-                t: f.t,
-                view: f.spec.view,
-                motion: f.spec.motion,
-                truth: f.maxilla_from_mandible,
-                estimates,
-            });
-        }
-        progress(&format!("tracking the {name} scene"), total, total);
+        sessions.push(judge.scene(kind, &mut stacks, progress, &mut records)?);
     }
+    let stages::Calibrated { scene, cal, front, .. } = calibrated;
     Ok(Run {
         columns,
         reference,
-        calibration,
+        calibration: stages::summarise(&cal),
         calibrated_marker: cal.marker,
-        front_only,
+        front_only: stages::summarise(&front),
         front_only_marker: front.marker,
         sessions,
-        bite_steps,
-        calibration_frames,
+        bite_steps: stages::bite_steps(&bites),
+        calibration_frames: scene.truth.frames.len(),
         frames: records,
     })
 }
