@@ -541,9 +541,66 @@ fn arch_regions(
     let reach = settings.above_mm();
     // NaN (out of the band) compares false: not in contact.
     let in_contact = |x: f32| x as f64 <= t;
-    // One walk over the triangles around the vertices in contact, including any that the
-    // lookups add: each triangle is kept once, with its corners' places in the list, and
-    // the edges joining two vertices in contact are noted for the union-find.
+    let (triangles, joins) = contact_triangles(arch, found, t, lookup);
+    let flagged: Vec<usize> = (0..found.vertices.len()).filter(|&k| in_contact(found.values[k])).collect();
+    if flagged.is_empty() {
+        return Vec::new();
+    }
+    // Union-find over places in the list.
+    let mut sets = DisjointSets::new(found.vertices.len());
+    joins.into_iter().for_each(|(a, b)| sets.union(a, b));
+    // Per region root, its accumulator's place, in order of first appearance.
+    let mut slot_of = vec![u32::MAX; found.vertices.len()];
+    let mut accs: Vec<Acc> = Vec::new();
+    for &k in &flagged {
+        let root = sets.find(k);
+        if slot_of[root] == u32::MAX {
+            slot_of[root] = accs.len() as u32;
+            accs.push(Acc {
+                area: 0.0,
+                moment: Vector3::zeros(),
+                depth: f64::NEG_INFINITY,
+                vertices: 0,
+                tooth_area: Vec::new(),
+            });
+        }
+        let acc = &mut accs[slot_of[root] as usize];
+        acc.depth = acc.depth.max(-(found.values[k] as f64));
+        acc.vertices += 1;
+    }
+    for (tri, places) in triangles {
+        let Some(&first) = places.iter().find(|&&at| in_contact(found.values[at])) else { continue };
+        let values = places.map(|at| match found.values[at] {
+            x if x.is_nan() => reach,
+            x => x as f64,
+        });
+        let (area, centroid) = clipped_area(&arch.walk.corners(tri), &values, t);
+        let acc = &mut accs[slot_of[sets.find(first)] as usize];
+        acc.area += area;
+        acc.moment += centroid.coords * area;
+        let tooth = arch.tooth_of_triangle[tri];
+        match acc.tooth_area.iter_mut().find(|x| x.0 == tooth) {
+            Some(x) => x.1 += area,
+            None => acc.tooth_area.push((tooth, area)),
+        }
+    }
+    accs.into_iter().map(|acc| acc.region(arch, side, to_upper)).collect()
+}
+
+/// A triangle and its corners' places in `found`.
+type Placed = (usize, [usize; 3]);
+
+/// The triangles around the vertices in contact (within `t`), each as (triangle, its corners'
+/// places in `found`), and the edges joining two vertices in contact (as places). One walk,
+/// including the vertices that the lookups of missing corners add; each triangle is kept once.
+fn contact_triangles(
+    arch: &Arch,
+    found: &mut Found,
+    t: f64,
+    lookup: impl Fn(&Point3<f64>) -> Lookup,
+) -> (Vec<Placed>, Vec<(usize, usize)>) {
+    // NaN (out of the band) compares false: not in contact.
+    let in_contact = |x: f32| x as f64 <= t;
     let (mut triangles, mut joins) = (Vec::new(), Vec::new());
     let mut k = 0;
     while k < found.vertices.len() {
@@ -584,74 +641,37 @@ fn arch_regions(
         }
         k += 1;
     }
-    let flagged: Vec<usize> = (0..found.vertices.len()).filter(|&k| in_contact(found.values[k])).collect();
-    if flagged.is_empty() {
-        return Vec::new();
-    }
-    // Union-find over places in the list.
-    let mut sets = DisjointSets::new(found.vertices.len());
-    joins.into_iter().for_each(|(a, b)| sets.union(a, b));
-    struct Acc {
-        area: f64,
-        moment: Vector3<f64>,
-        depth: f64,
-        vertices: usize,
-        tooth_area: Vec<(u16, f64)>,
-    }
-    // Per region root, its accumulator's place, in order of first appearance.
-    let mut slot_of = vec![u32::MAX; found.vertices.len()];
-    let mut accs: Vec<Acc> = Vec::new();
-    for &k in &flagged {
-        let root = sets.find(k);
-        if slot_of[root] == u32::MAX {
-            slot_of[root] = accs.len() as u32;
-            accs.push(Acc {
-                area: 0.0,
-                moment: Vector3::zeros(),
-                depth: f64::NEG_INFINITY,
-                vertices: 0,
-                tooth_area: Vec::new(),
-            });
-        }
-        let acc = &mut accs[slot_of[root] as usize];
-        acc.depth = acc.depth.max(-(found.values[k] as f64));
-        acc.vertices += 1;
-    }
-    for (tri, places) in triangles {
-        let Some(&first) = places.iter().find(|&&at| in_contact(found.values[at])) else { continue };
-        let values = places.map(|at| match found.values[at] {
-            x if x.is_nan() => reach,
-            x => x as f64,
-        });
-        let (area, centroid) = clipped_area(&arch.walk.corners(tri), &values, t);
-        let acc = &mut accs[slot_of[sets.find(first)] as usize];
-        acc.area += area;
-        acc.moment += centroid.coords * area;
-        let tooth = arch.tooth_of_triangle[tri];
-        match acc.tooth_area.iter_mut().find(|x| x.0 == tooth) {
-            Some(x) => x.1 += area,
-            None => acc.tooth_area.push((tooth, area)),
+    (triangles, joins)
+}
+
+/// One region's sums while `arch_regions` gathers it.
+struct Acc {
+    area: f64,
+    moment: Vector3<f64>,
+    depth: f64,
+    vertices: usize,
+    tooth_area: Vec<(u16, f64)>,
+}
+
+impl Acc {
+    /// The region: its centroid in the upper arch's frame, on the tooth with most of its area.
+    fn region(self, arch: &Arch, side: Side, to_upper: &Pose) -> Region {
+        let local = if self.area > 0.0 { Point3::from(self.moment / self.area) } else { Point3::origin() };
+        let c = to_upper.transform_point(&local);
+        let tooth = self
+            .tooth_area
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .and_then(|(k, _)| arch.teeth.get(*k as usize).cloned());
+        Region {
+            arch: side,
+            tooth,
+            centroid: [c.x, c.y, c.z],
+            area_mm2: self.area,
+            depth_mm: self.depth,
+            vertices: self.vertices,
         }
     }
-    accs.into_iter()
-        .map(|acc| {
-            let local = if acc.area > 0.0 { Point3::from(acc.moment / acc.area) } else { Point3::origin() };
-            let c = to_upper.transform_point(&local);
-            let tooth = acc
-                .tooth_area
-                .iter()
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-                .and_then(|(k, _)| arch.teeth.get(*k as usize).cloned());
-            Region {
-                arch: side,
-                tooth,
-                centroid: [c.x, c.y, c.z],
-                area_mm2: acc.area,
-                depth_mm: acc.depth,
-                vertices: acc.vertices,
-            }
-        })
-        .collect()
 }
 
 /// The area and centroid of the part of triangle `p` where the linear interpolation of

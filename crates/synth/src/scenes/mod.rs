@@ -491,158 +491,186 @@ pub const BORDER_TRAVEL_MM: f64 = 6.0;
 pub fn scene_frames(kind: SceneKind, opts: &SceneOptions, seed: u64) -> Vec<FrameSpec> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_cee5);
     let dt = 1.0 / opts.fps;
-    let mut frames = Vec::new();
     match kind {
-        SceneKind::Static => {
-            let mut t = 0.0;
-            let distances = opts.distance_mm.map_or(STATIC_DISTANCES_MM.to_vec(), |d| vec![d]);
-            for hand in [false, true] {
-                for &distance in &distances {
-                    for azimuth in [0.0, 30.0, 60.0] {
-                        let view = View {
-                            distance_mm: distance,
-                            azimuth_deg: azimuth,
-                            elevation_deg: 0.0,
-                            target: [0.0, 0.0, -38.0],
-                            hand_seed: hand.then(|| rng.random()),
-                            orientation: Orientation::Upright,
-                        };
-                        for _ in 0..opts.frames_per_view {
-                            frames.push(FrameSpec { t, view, motion: JawMotion::Rest, wave: None });
-                            t += dt;
-                        }
-                        // A second between views, as when the tripod is moved.
-                        t += 1.0;
-                    }
-                }
-            }
-        }
-        SceneKind::Hinge => {
-            let view = OPENING_VIEW;
-            let period = 2.0;
-            let mut start = 0.0;
-            // Rounds of the four openings, so that the first rounds of a long session are a
-            // shorter session (a cached render serves both).
-            for _ in 0..opts.cycles {
-                for opening in [10.0, 20.0, 30.0, 40.0] {
-                    let motion = JawMotion::Hinge { opening_mm: opening, start_s: start, period_s: period };
-                    frames.extend(one_cycle(start, period, dt, view, motion));
-                    start += period;
-                }
-            }
-        }
-        SceneKind::Excursion => {
-            let period = 2.0;
-            let mut start = 0.0;
-            for (i, direction) in [Glide::Left, Glide::Right, Glide::Protrusive].into_iter().enumerate() {
+        SceneKind::Static => static_frames(opts, dt, &mut rng),
+        SceneKind::Hinge => hinge_frames(opts, dt),
+        SceneKind::Excursion => excursion_frames(opts, dt, &mut rng),
+        SceneKind::Chew => chew_frames(opts, dt, &mut rng),
+        SceneKind::Calibration => calibration_frames(opts, dt),
+        SceneKind::Border => border_frames(opts, dt),
+        SceneKind::Wave => wave_frames(opts, dt, &mut rng),
+    }
+}
+
+/// The static scene: the jaw at rest, seen from each distance and azimuth on a tripod, then
+/// hand-held (each hand-held view's tremor seeded from `rng`).
+fn static_frames(opts: &SceneOptions, dt: f64, rng: &mut ChaCha8Rng) -> Vec<FrameSpec> {
+    let mut frames = Vec::new();
+    let mut t = 0.0;
+    let distances = opts.distance_mm.map_or(STATIC_DISTANCES_MM.to_vec(), |d| vec![d]);
+    for hand in [false, true] {
+        for &distance in &distances {
+            for azimuth in [0.0, 30.0, 60.0] {
                 let view = View {
-                    distance_mm: 100.0,
-                    azimuth_deg: [0.0, 30.0, -30.0][i],
+                    distance_mm: distance,
+                    azimuth_deg: azimuth,
                     elevation_deg: 0.0,
-                    target: [0.0, 2.0, -38.0],
-                    hand_seed: None,
+                    target: [0.0, 0.0, -38.0],
+                    hand_seed: hand.then(|| rng.random()),
                     orientation: Orientation::Upright,
                 };
-                for _ in 0..opts.cycles {
-                    let amplitude_mm = rng.random_range(4.0..6.0);
-                    let motion = JawMotion::Glide { direction, amplitude_mm, start_s: start, period_s: period };
-                    frames.extend(one_cycle(start, period, dt, view, motion));
-                    start += period;
+                for _ in 0..opts.frames_per_view {
+                    frames.push(FrameSpec { t, view, motion: JawMotion::Rest, wave: None });
+                    t += dt;
                 }
+                // A second between views, as when the tripod is moved.
+                t += 1.0;
             }
-        }
-        SceneKind::Chew => {
-            let view = View {
-                distance_mm: opts.distance_mm.unwrap_or(CHEW_DISTANCE_MM),
-                azimuth_deg: 0.0,
-                elevation_deg: 0.0,
-                target: CHEW_TARGET,
-                hand_seed: None,
-                orientation: opts.orientation,
-            };
-            let mut cycles = Vec::with_capacity(opts.cycles);
-            let mut start_s = 0.0;
-            for i in 0..opts.cycles {
-                // The first cycle fast: 23–25 mm in 0.60–0.62 s peaks above 115 mm/s.
-                let (opening_mm, period_s) = if i == 0 {
-                    (rng.random_range(23.0..25.0), rng.random_range(0.60..0.62))
-                } else {
-                    (rng.random_range(15.0..25.0), rng.random_range(0.6..0.8))
-                };
-                let lateral_mm = rng.random_range(3.0..6.0);
-                cycles.push(JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s });
-                start_s += period_s;
-            }
-            // The camera runs at a steady rate through the cycles; each frame moves as the cycle
-            // it falls in.
-            let n = (start_s / dt).round() as usize;
-            frames.extend((0..n).map(|k| {
-                let t = k as f64 * dt;
-                let motion = cycles
-                    .iter()
-                    .copied()
-                    .rfind(|m| matches!(m, JawMotion::Chew { start_s, .. } if *start_s <= t))
-                    .unwrap_or(JawMotion::Rest);
-                FrameSpec { t, view, motion, wave: None }
-            }));
-        }
-        SceneKind::Calibration => {
-            let mut t = 0.0;
-            for elevation in [-45.0, 0.0, 45.0] {
-                for azimuth in [-75.0, -45.0, -15.0, 15.0, 45.0, 75.0] {
-                    let view = View {
-                        distance_mm: 110.0,
-                        azimuth_deg: azimuth,
-                        elevation_deg: elevation,
-                        target: [0.0, 0.0, -38.0],
-                        hand_seed: None,
-                        orientation: Orientation::Upright,
-                    };
-                    for _ in 0..opts.frames_per_view {
-                        frames.push(FrameSpec { t, view, motion: JawMotion::Rest, wave: None });
-                        t += dt;
-                    }
-                    t += 1.0;
-                }
-            }
-        }
-        SceneKind::Border => {
-            let view = OPENING_VIEW;
-            let (period, mut start) = (2.0, 0.0);
-            for _ in 0..opts.cycles {
-                for movement in [Glide::Protrusive, Glide::Left, Glide::Right] {
-                    let motion = JawMotion::Border {
-                        movement,
-                        guidance: Guidance::default(),
-                        travel_mm: BORDER_TRAVEL_MM,
-                        start_s: start,
-                        period_s: period,
-                    };
-                    frames.extend(one_cycle(start, period, dt, view, motion));
-                    start += period;
-                }
-            }
-        }
-        SceneKind::Wave => {
-            let wave = Wave::draw(&mut rng);
-            let view = View {
-                distance_mm: wave.depth_mm[0],
-                azimuth_deg: 0.0,
-                elevation_deg: 0.0,
-                target: WAVE_TARGET,
-                hand_seed: None,
-                orientation: Orientation::Upright,
-            };
-            let n = (opts.cycles as f64 * WAVE_S / dt).round() as usize;
-            frames.extend((0..n).map(|k| FrameSpec {
-                t: k as f64 * dt,
-                view,
-                motion: JawMotion::Rest,
-                wave: Some(wave),
-            }));
         }
     }
     frames
+}
+
+/// The hinge scene: rounds of 10/20/30/40 mm openings, 2 s each.
+fn hinge_frames(opts: &SceneOptions, dt: f64) -> Vec<FrameSpec> {
+    let mut frames = Vec::new();
+    let view = OPENING_VIEW;
+    let period = 2.0;
+    let mut start = 0.0;
+    // Rounds of the four openings, so that the first rounds of a long session are a
+    // shorter session (a cached render serves both).
+    for _ in 0..opts.cycles {
+        for opening in [10.0, 20.0, 30.0, 40.0] {
+            let motion = JawMotion::Hinge { opening_mm: opening, start_s: start, period_s: period };
+            frames.extend(one_cycle(start, period, dt, view, motion));
+            start += period;
+        }
+    }
+    frames
+}
+
+/// The excursion scene: left, right and protrusive glides, each filmed from its own side,
+/// with amplitudes drawn from `rng`.
+fn excursion_frames(opts: &SceneOptions, dt: f64, rng: &mut ChaCha8Rng) -> Vec<FrameSpec> {
+    let mut frames = Vec::new();
+    let period = 2.0;
+    let mut start = 0.0;
+    for (i, direction) in [Glide::Left, Glide::Right, Glide::Protrusive].into_iter().enumerate() {
+        let view = View {
+            distance_mm: 100.0,
+            azimuth_deg: [0.0, 30.0, -30.0][i],
+            elevation_deg: 0.0,
+            target: [0.0, 2.0, -38.0],
+            hand_seed: None,
+            orientation: Orientation::Upright,
+        };
+        for _ in 0..opts.cycles {
+            let amplitude_mm = rng.random_range(4.0..6.0);
+            let motion = JawMotion::Glide { direction, amplitude_mm, start_s: start, period_s: period };
+            frames.extend(one_cycle(start, period, dt, view, motion));
+            start += period;
+        }
+    }
+    frames
+}
+
+/// The chew scene: chewing cycles drawn from `rng`, filmed straight on at a steady rate.
+fn chew_frames(opts: &SceneOptions, dt: f64, rng: &mut ChaCha8Rng) -> Vec<FrameSpec> {
+    let view = View {
+        distance_mm: opts.distance_mm.unwrap_or(CHEW_DISTANCE_MM),
+        azimuth_deg: 0.0,
+        elevation_deg: 0.0,
+        target: CHEW_TARGET,
+        hand_seed: None,
+        orientation: opts.orientation,
+    };
+    let mut cycles = Vec::with_capacity(opts.cycles);
+    let mut start_s = 0.0;
+    for i in 0..opts.cycles {
+        // The first cycle fast: 23–25 mm in 0.60–0.62 s peaks above 115 mm/s.
+        let (opening_mm, period_s) = if i == 0 {
+            (rng.random_range(23.0..25.0), rng.random_range(0.60..0.62))
+        } else {
+            (rng.random_range(15.0..25.0), rng.random_range(0.6..0.8))
+        };
+        let lateral_mm = rng.random_range(3.0..6.0);
+        cycles.push(JawMotion::Chew { opening_mm, lateral_mm, start_s, period_s });
+        start_s += period_s;
+    }
+    // The camera runs at a steady rate through the cycles; each frame moves as the cycle
+    // it falls in.
+    let n = (start_s / dt).round() as usize;
+    (0..n)
+        .map(|k| {
+            let t = k as f64 * dt;
+            let motion = cycles
+                .iter()
+                .copied()
+                .rfind(|m| matches!(m, JawMotion::Chew { start_s, .. } if *start_s <= t))
+                .unwrap_or(JawMotion::Rest);
+            FrameSpec { t, view, motion, wave: None }
+        })
+        .collect()
+}
+
+/// The calibration recording: the jaw at rest (closed), seen from 18 angles.
+fn calibration_frames(opts: &SceneOptions, dt: f64) -> Vec<FrameSpec> {
+    let mut frames = Vec::new();
+    let mut t = 0.0;
+    for elevation in [-45.0, 0.0, 45.0] {
+        for azimuth in [-75.0, -45.0, -15.0, 15.0, 45.0, 75.0] {
+            let view = View {
+                distance_mm: 110.0,
+                azimuth_deg: azimuth,
+                elevation_deg: elevation,
+                target: [0.0, 0.0, -38.0],
+                hand_seed: None,
+                orientation: Orientation::Upright,
+            };
+            for _ in 0..opts.frames_per_view {
+                frames.push(FrameSpec { t, view, motion: JawMotion::Rest, wave: None });
+                t += dt;
+            }
+            t += 1.0;
+        }
+    }
+    frames
+}
+
+/// The border scene: rounds of protrusive, left and right border movements, 2 s each.
+fn border_frames(opts: &SceneOptions, dt: f64) -> Vec<FrameSpec> {
+    let mut frames = Vec::new();
+    let view = OPENING_VIEW;
+    let (period, mut start) = (2.0, 0.0);
+    for _ in 0..opts.cycles {
+        for movement in [Glide::Protrusive, Glide::Left, Glide::Right] {
+            let motion = JawMotion::Border {
+                movement,
+                guidance: Guidance::default(),
+                travel_mm: BORDER_TRAVEL_MM,
+                start_s: start,
+                period_s: period,
+            };
+            frames.extend(one_cycle(start, period, dt, view, motion));
+            start += period;
+        }
+    }
+    frames
+}
+
+/// The wave scene: the jaw at rest while the camera moves as a wave drawn from `rng`.
+fn wave_frames(opts: &SceneOptions, dt: f64, rng: &mut ChaCha8Rng) -> Vec<FrameSpec> {
+    let wave = Wave::draw(rng);
+    let view = View {
+        distance_mm: wave.depth_mm[0],
+        azimuth_deg: 0.0,
+        elevation_deg: 0.0,
+        target: WAVE_TARGET,
+        hand_seed: None,
+        orientation: Orientation::Upright,
+    };
+    let n = (opts.cycles as f64 * WAVE_S / dt).round() as usize;
+    (0..n).map(|k| FrameSpec { t: k as f64 * dt, view, motion: JawMotion::Rest, wave: Some(wave) }).collect()
 }
 
 #[cfg(test)]
