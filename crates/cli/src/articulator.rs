@@ -4,12 +4,10 @@
 //! object.
 
 use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, registration, warn_if_nominal};
-use crate::numbers::fixed;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_kinematics::Anatomy;
-use jawtrack_kinematics::articulator::name;
-use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, CoMi, Movements, Side, co_mi};
+use jawtrack_kinematics::{ArticulatorOptions, ArticulatorValues, Movements, co_mi};
+use jawtrack_report::{articulator_summary, co_mi_summary};
 use jawtrack_session::measures::articulator_json;
 use jawtrack_session::rest_of;
 use std::path::PathBuf;
@@ -74,42 +72,12 @@ pub(crate) fn run(a: &ArticulatorArgs) -> Result<()> {
         say!("{report}");
     } else {
         if a.moves.any_border() {
-            print_summary(&v, &options, &anatomy, &rest.describe());
+            articulator_summary(&v, &options, &anatomy, &rest.describe()).iter().for_each(|l| say!("{l}"));
         }
         if let Some(s) = slide {
             let mi = if a.moves.mi.is_some() { "the --mi window".to_string() } else { rest.describe() };
-            print_co_mi(&s, &mi);
+            co_mi_summary(&s, &mi).iter().for_each(|l| say!("{l}"));
         }
     }
     Ok(())
-}
-
-fn print_co_mi(s: &CoMi, mi: &str) {
-    let mm = |x: f64| fixed(x, 2);
-    say!("CO–MI slide, from centric occlusion into maximal intercuspation ({mi}), mm:");
-    say!("                          forward     down   toward left   length");
-    for (name, d) in
-        [("lower incisal point", s.incisor), ("left condyle", s.condyles[0]), ("right condyle", s.condyles[1])]
-    {
-        say!("{name:<22} {:>10} {:>8} {:>13} {:>8}", mm(d.protrusive), mm(d.opening), mm(d.lateral), mm(d.norm()));
-    }
-}
-
-fn print_summary(v: &ArticulatorValues, o: &ArticulatorOptions, anatomy: &Anatomy, rest: &str) {
-    let deg = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{}°", fixed(x, 1)));
-    let mm = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{} mm", fixed(x, 2)));
-    say!("read over the first {} mm of each path, from {rest}", fixed(o.over_mm, 1));
-    say!("                         left condyle   right condyle");
-    say!(
-        "condylar inclination     {:>12}   {:>13}",
-        deg(v.condylar_inclination_deg[0]),
-        deg(v.condylar_inclination_deg[1])
-    );
-    say!("Bennett angle            {:>12}   {:>13}", deg(v.bennett_deg[0]), deg(v.bennett_deg[1]));
-    say!("immediate side shift     {:>12}   {:>13}", mm(v.side_shift_mm[0]), mm(v.side_shift_mm[1]));
-    say!("protrusive incisal guidance {}", deg(v.protrusive_guidance_deg));
-    for (k, side) in [Side::Left, Side::Right].iter().enumerate() {
-        say!("lateral incisal guidance toward the {} {}", name(*side), deg(v.lateral_guidance_deg[k]));
-    }
-    say!("angles are to {}; the landmarks are {}", anatomy.reference_plane, anatomy.landmarks);
 }

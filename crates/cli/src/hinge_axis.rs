@@ -3,15 +3,14 @@
 //! the upper scan's; printed, or as one JSON object other tools read.
 
 use crate::flags::{PointsArg, SessionArg, anatomy, load, registration};
-use crate::numbers::{fixed, parse_numbers};
+use crate::numbers::parse_numbers;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_kinematics::{HingeAxis, HingeOptions, hinge};
+use jawtrack_kinematics::{HingeOptions, hinge};
 use jawtrack_pose::Pose;
 use jawtrack_registration::Registration;
-use jawtrack_session::Rest;
 use jawtrack_session::measures::{HingeReport, hinge_condyles, hinge_window};
-use nalgebra::{Point3, Unit, Vector3};
+use nalgebra::Point3;
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack hinge-axis`.
@@ -91,48 +90,11 @@ pub(crate) fn run(a: &HingeAxisArgs) -> Result<()> {
         window: [a.from, a.to],
         recording: &a.recording,
         condyles: (condyles, whose),
-    }
-    .to_json();
+    };
     if a.json {
-        say!("{report}");
+        say!("{}", report.to_json());
     } else {
-        print_summary(&axis, scan, rest, window.len());
-        let [l, r] = condyles;
-        for (name, c) in [("left", l), ("right", r)] {
-            let p = axis.project(&c).coords;
-            say!(
-                "{name} condyle on the axis ({}, {}, {}) mm, moved {} mm ({whose})",
-                fixed(p.x, 2),
-                fixed(p.y, 2),
-                fixed(p.z, 2),
-                fixed(axis.distance_to(&c), 2)
-            );
-        }
+        jawtrack_report::hinge_summary(&report).iter().for_each(|l| say!("{l}"));
     }
     Ok(())
-}
-
-fn print_summary(axis: &HingeAxis, scan: Option<(Point3<f64>, Unit<Vector3<f64>>)>, rest: Rest, frames: usize) {
-    let v = |v: &Vector3<f64>, digits: usize| {
-        format!("({}, {}, {})", fixed(v.x, digits), fixed(v.y, digits), fixed(v.z, digits))
-    };
-    say!(
-        "poses              {} of {frames} in the window, turned up to {}° from the closed jaw ({})",
-        axis.poses,
-        fixed(axis.max_rotation_deg, 1),
-        rest.describe()
-    );
-    say!("point              {} mm in the maxilla marker's frame", v(&axis.point.coords, 2));
-    say!("direction          {}", v(&axis.direction, 4));
-    if let Some((p, d)) = scan {
-        say!("point (upper scan) {} mm", v(&p.coords, 2));
-        say!("direction (scan)   {}", v(&d, 4));
-    }
-    say!(
-        "uncertainty (1σ)   {} mm across the axis, {}° in direction; residual RMS {} mm",
-        fixed(axis.point_sigma_mm, 2),
-        fixed(axis.direction_sigma_deg, 2),
-        fixed(axis.rms_mm, 3)
-    );
-    say!("the point is the axis's nearest to the mandible marker at rest, about midway between the condyles");
 }

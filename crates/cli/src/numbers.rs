@@ -20,6 +20,12 @@ pub(crate) fn parse_numbers(s: &str, count: usize, what: &str) -> Result<Vec<f64
     Ok(v)
 }
 
+/// Parses a point `X,Y,Z` (mm).
+pub(crate) fn parse_point(s: &str) -> Result<[f64; 3], String> {
+    let v = parse_numbers(s, 3, "X,Y,Z")?;
+    Ok([v[0], v[1], v[2]])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -39,5 +45,7 @@ mod tests {
         assert!(parse_numbers("1,2", 3, "X,Y,Z").is_err_and(|e| e.contains("X,Y,Z") && e.contains("got 2")));
         assert!(parse_numbers("1,inf,2", 3, "X,Y,Z").is_err_and(|e| e.contains("finite")));
         assert!(parse_numbers("1,a,2", 3, "X,Y,Z").is_err_and(|e| e.contains("'a'")));
+        assert_eq!(parse_point("1,-2.5, 3"), Ok([1.0, -2.5, 3.0]));
+        assert!(parse_point("1,2").is_err_and(|e| e.contains("3 numbers in mm")));
     }
 }

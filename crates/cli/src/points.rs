@@ -2,7 +2,7 @@
 //! (`jawtrack_kinematics::anatomy`); with it and a registration the patient's own frame and
 //! points replace the standard harness mounting (`jawtrack_session::anatomy`).
 
-use crate::numbers::{fixed, parse_numbers};
+use crate::numbers::{fixed, parse_numbers, parse_point};
 use crate::output::ForceArgs;
 use anyhow::{Result, bail};
 use clap::Args;
@@ -14,11 +14,6 @@ use std::path::PathBuf;
 fn parse_occlusal(s: &str) -> Result<OcclusalPlane, String> {
     let v = parse_numbers(s, 9, "IX,IY,IZ,LX,LY,LZ,RX,RY,RZ: the incisal point, the left and the right molar")?;
     Ok(OcclusalPlane { incisal: [v[0], v[1], v[2]], left_molar: [v[3], v[4], v[5]], right_molar: [v[6], v[7], v[8]] })
-}
-
-fn parse_point(s: &str) -> Result<[f64; 3], String> {
-    let v = parse_numbers(s, 3, "X,Y,Z")?;
-    Ok([v[0], v[1], v[2]])
 }
 
 fn parse_condyles(s: &str) -> Result<Condyles, String> {

@@ -247,7 +247,7 @@ fn bad_input_is_refused_with_a_message_naming_the_problem() {
     let file = s.file.to_str().expect("utf-8");
     refused(&jawtrack(&["metrics", file, "--rest-frame", "0"]), "frame 0 has no jaw pose");
     refused(&jawtrack(&["metrics", file, "--rest-frame", "9999"]), "no such frame");
-    refused(&jawtrack(&["metrics", file, "--incisor", "1,2"]), "three numbers");
+    refused(&jawtrack(&["metrics", file, "--incisor", "1,2"]), "X,Y,Z (3 numbers in mm)");
     refused(&jawtrack(&["metrics", file, "--out", &path("a-file", "")]), "a-file");
 }
 

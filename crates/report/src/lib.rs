@@ -11,6 +11,7 @@ mod charts;
 mod html;
 mod pdf;
 mod sections;
+mod summary;
 
 pub use charts::{envelope_chart, incisor_chart_stems, incisor_charts};
 use jawtrack_kinematics::Anatomy;
@@ -18,6 +19,9 @@ pub use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
 pub use pdf::{ReportError, chromium, print_pdf};
+pub use summary::{
+    articulator_summary, co_mi_summary, contact_findings, hinge_summary, metrics_figures, metrics_summary,
+};
 
 /// The movements the caller located in the recording; what is not given is not measured, and
 /// the report says which flag would measure it.
