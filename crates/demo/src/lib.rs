@@ -3,7 +3,8 @@
 //! session's ground truth ([`check_detection`]), the jaw tracked with each marker file and
 //! compared with the truth ([`track_against_truth`]), the incisor's motion in plain numbers
 //! ([`Motion`]), its path plotted ([`plot_incisor`]) and the session's report
-//! ([`write_report`]). The command renders, calibrates and prints; the numbers are made here.
+//! ([`write_report`]), and the marker calibrated from a second recording
+//! ([`calibrate_marker`]). Each result prints itself as the demo says it. The command renders, calibrates and prints; the numbers are made here.
 //!
 //! # Examples
 //!
@@ -17,13 +18,16 @@
 //! # Ok(()) }
 //! ```
 
+mod calibrate;
 mod track;
 
+pub use calibrate::{MarkerCalibration, calibrate_marker};
 pub use track::{Motion, Sample, TrackingCheck, markers, plot_incisor, track_against_truth, write_report};
 
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_marker::Marker;
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind, SceneOptions, SynthConfig};
+use std::fmt;
 use std::path::Path;
 
 /// Why a step of the demo failed.
@@ -65,6 +69,12 @@ pub enum DemoError {
     /// The session could not be read as the report needs it.
     #[error(transparent)]
     Session(#[from] jawtrack_session::SessionError),
+    /// The marker could not be calibrated from the recording.
+    #[error(transparent)]
+    Calibrate(#[from] jawtrack_calibration::CalibrationError),
+    /// The calibrated marker file could not be written.
+    #[error(transparent)]
+    Marker(#[from] jawtrack_marker::MarkerError),
     /// The recording has no jaw pose to report.
     #[error("{0}: no frame has a jaw pose")]
     NoJawPose(String),
@@ -124,6 +134,16 @@ pub struct DetectionCheck {
     pub corner_error_p90_px: f64,
     /// Detection time per frame (ms, median, one thread).
     pub ms_median: f64,
+}
+
+impl fmt::Display for DetectionCheck {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "detection: {} of {} detectable tags found; corner error against ground truth median {:.3} px, 90th percentile {:.3} px; {:.0} ms per frame (median, one thread)",
+            self.found, self.want, self.corner_error_median_px, self.corner_error_p90_px, self.ms_median
+        )
+    }
 }
 
 /// Runs the detector on the rendered session in `dir` and compares with its `truth`.

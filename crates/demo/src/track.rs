@@ -11,6 +11,7 @@ use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_synth::GroundTruth;
 use jawtrack_tracker::{Tracker, TrackerConfig};
 use nalgebra::Point3;
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// The lower incisor's position (head frame, mm) at a time (s).
@@ -50,6 +51,24 @@ pub struct TrackingCheck {
     pub poses: PathBuf,
     /// The tracked lower incisor's path.
     pub path: Vec<Sample>,
+}
+
+impl fmt::Display for TrackingCheck {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "tracking, {}: jaw pose in {} of {} frames; mandible-in-maxilla error median {:.3} mm / {:.3}°, worst {:.3} mm / {:.3}°; {:.1} ms per frame; poses in {}",
+            self.label,
+            self.posed,
+            self.frames,
+            self.error_mm[0],
+            self.error_deg[0],
+            self.error_mm[1],
+            self.error_deg[1],
+            self.ms_median,
+            self.poses.display()
+        )
+    }
 }
 
 /// Tracks the rendered session in `dir` with `marker`, writes the poses to `file` in `dir`
@@ -136,6 +155,16 @@ impl Motion {
             truth_widest_mm: peak(&real),
             back_mm: tracked.iter().map(|(_, x)| x.z - closed.z).fold(0.0, f64::max),
         }
+    }
+}
+
+impl fmt::Display for Motion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "The jaw: the lower incisor opened {} times, widest {:.1} mm from its closed position (truth {:.1} mm), and moved back by up to {:.1} mm as it swung about the condyles.",
+            self.openings, self.widest_mm, self.truth_widest_mm, self.back_mm,
+        )
     }
 }
 
