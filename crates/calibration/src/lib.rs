@@ -27,11 +27,13 @@
 //! recordings with [`Calibration::name_recordings`]. A body no view showed keeps what it had.
 
 mod adjust;
+mod describe;
 mod focal;
 mod session;
 mod views;
 
 use adjust::{Adjustment, adjust};
+pub use describe::Account;
 pub use focal::{FOCUS_MOVED, FocalCheck, check_focal};
 use jawtrack_marker::{BodyKind, BodyProvenance, Marker, MarkerError, PrintError, Tag, TagProvenance};
 use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, median, solve_pnp};

@@ -141,6 +141,33 @@ pub struct CameraCalibration {
     pub coverage: f64,
 }
 
+impl std::fmt::Display for CameraCalibration {
+    /// What was used, then each value with its 1σ, one per line, as `jawtrack
+    /// calibrate-camera` prints them.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (k, s) = (&self.intrinsics, &self.sigma);
+        writeln!(
+            f,
+            "{} frames ({} marker views, {} corners; {} tag sightings left out as misfits); corners seen in {:.0} % of \
+             the image",
+            self.frames_used,
+            self.views_used,
+            self.corners_used,
+            self.sightings_dropped,
+            100.0 * self.coverage
+        )?;
+        writeln!(f, "  fx       {:10.2} ± {:.2} px ({:.3} %)", k.fx, s.fx, 100.0 * s.fx / k.fx)?;
+        writeln!(f, "  fy       {:10.2} ± {:.2} px ({:.3} %)", k.fy, s.fy, 100.0 * s.fy / k.fy)?;
+        writeln!(f, "  cx       {:10.2} ± {:.2} px", k.cx, s.cx)?;
+        writeln!(f, "  cy       {:10.2} ± {:.2} px", k.cy, s.cy)?;
+        writeln!(f, "  k1       {:10.5} ± {:.5}", k.k1, s.k1)?;
+        writeln!(f, "  k2       {:10.5} ± {:.5}", k.k2, s.k2)?;
+        writeln!(f, "  (distortion at the image corners known to ± {:.2} px)", s.corner_distortion_px)?;
+        writeln!(f, "  readout  {:10.3} ± {:.3} ms (first row to last)", self.readout_s * 1e3, s.readout_s * 1e3)?;
+        write!(f, "  RMS corner residual {:.3} px", self.rms_px)
+    }
+}
+
 /// Why no calibration was returned.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CameraCalibrationError {

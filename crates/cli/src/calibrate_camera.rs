@@ -5,9 +5,7 @@
 use crate::progress::detect_marker_tags;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_camera_calibration::{
-    CalibratedAt, CameraCalibration, CameraCalibrationOptions, CameraFile, CameraFrame, calibrate_camera,
-};
+use jawtrack_camera_calibration::{CalibratedAt, CameraCalibrationOptions, CameraFile, CameraFrame, calibrate_camera};
 use jawtrack_frames::open_frames;
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
@@ -105,7 +103,7 @@ pub(crate) fn run(a: &CalibrateCameraArgs) -> Result<()> {
     };
     let started = std::time::Instant::now();
     let c = calibrate_camera(&frames, width, height, &marker, &options)?;
-    print_result(&c, started.elapsed().as_secs_f64());
+    say!("calibrated in {:.1} s from {c}", started.elapsed().as_secs_f64());
     let file = CameraFile::new(c, calibrated_at);
     a.force.write_file(&a.out, (file.to_json() + "\n").as_bytes())?;
     say!("wrote {}", a.out.display());
@@ -134,26 +132,4 @@ fn detect(a: &CalibrateCameraArgs, marker: &Marker) -> Result<(Vec<CameraFrame>,
     let frames = detect_marker_tags(open_frames(a.video.as_deref(), &a.frames, a.fps)?, marker, a.linear_edges)?;
     let (w, h) = jawtrack_frames::one_size(&frames)?;
     Ok((frames.into_iter().map(|f| CameraFrame { t: f.t, tags: f.tags }).collect(), w, h))
-}
-
-fn print_result(c: &CameraCalibration, seconds: f64) {
-    let (k, s) = (&c.intrinsics, &c.sigma);
-    say!(
-        "calibrated from {} frames ({} marker views, {} corners; {} tag sightings left out as misfits) in {seconds:.1} s; \
-         corners seen in {:.0} % of the image",
-        c.frames_used,
-        c.views_used,
-        c.corners_used,
-        c.sightings_dropped,
-        100.0 * c.coverage
-    );
-    say!("  fx       {:10.2} ± {:.2} px ({:.3} %)", k.fx, s.fx, 100.0 * s.fx / k.fx);
-    say!("  fy       {:10.2} ± {:.2} px ({:.3} %)", k.fy, s.fy, 100.0 * s.fy / k.fy);
-    say!("  cx       {:10.2} ± {:.2} px", k.cx, s.cx);
-    say!("  cy       {:10.2} ± {:.2} px", k.cy, s.cy);
-    say!("  k1       {:10.5} ± {:.5}", k.k1, s.k1);
-    say!("  k2       {:10.5} ± {:.5}", k.k2, s.k2);
-    say!("  (distortion at the image corners known to ± {:.2} px)", s.corner_distortion_px);
-    say!("  readout  {:10.3} ± {:.3} ms (first row to last)", c.readout_s * 1e3, s.readout_s * 1e3);
-    say!("  RMS corner residual {:.3} px", c.rms_px);
 }

@@ -114,50 +114,6 @@ pub(crate) fn harness(a: &HarnessArgs) -> Result<()> {
 pub(crate) fn check_marker(file: &Path) -> Result<()> {
     let m = Marker::load(file)?;
     m.require_both_bodies().map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    say!("{}: valid marker file, {} on a {}, edge {} mm", file.display(), m.family.name, m.solid, m.edge);
-    let calibrated = m.is_calibrated();
-    if !calibrated {
-        say!("  calibration: none recorded (a nominal marker, or a file from before marker file version 2)");
-    }
-    for b in &m.bodies {
-        let ids: Vec<String> = b.tags.iter().map(|t| t.id.to_string()).collect();
-        say!("  {}: {} tags, ids {}", b.kind, b.tags.len(), ids.join(" "));
-        if calibrated {
-            print_provenance(b);
-        }
-    }
+    m.describe(&file.display().to_string()).iter().for_each(|l| say!("{l}"));
     Ok(())
-}
-
-/// A calibrated marker's body: how it was calibrated, each tag's residuals, and the tags left
-/// nominal that the tracker flags a pose on.
-fn print_provenance(b: &jawtrack_marker::Body) {
-    use jawtrack_marker::TagProvenance;
-    match &b.provenance {
-        Some(p) => {
-            let from = if p.recordings.is_empty() { String::new() } else { format!(" of {}", p.recordings.join(", ")) };
-            say!(
-                "    calibrated from {} views{from}: reprojection error {:.3} px nominal, {:.3} px calibrated",
-                p.views,
-                p.rms_before_px,
-                p.rms_after_px
-            );
-            say!("    tag  status      views  px before  px after");
-            for t in &b.tags {
-                match t.provenance {
-                    Some(TagProvenance::Calibrated { views, rms_before_px, rms_after_px }) => {
-                        say!("    {:3}  calibrated  {views:5}  {rms_before_px:9.3}  {rms_after_px:8.3}", t.id)
-                    }
-                    Some(TagProvenance::Nominal { views }) => say!("    {:3}  nominal     {views:5}", t.id),
-                    None => say!("    {:3}  unknown", t.id),
-                }
-            }
-        }
-        None => say!("    not calibrated: every tag at its nominal place"),
-    }
-    let nominal: Vec<String> =
-        b.tags.iter().filter(|t| !t.provenance.is_some_and(|p| p.is_calibrated())).map(|t| t.id.to_string()).collect();
-    if !nominal.is_empty() {
-        say!("    nominal tags {}: a pose that uses them is flagged {}:uncalibrated_tag", nominal.join(", "), b.kind);
-    }
 }

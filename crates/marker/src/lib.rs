@@ -4,6 +4,7 @@
 //!
 //! All lengths are millimetres, all points in a body's frame (see [`solid`]).
 
+mod describe;
 pub mod dodecahedron;
 pub mod file;
 pub mod model;

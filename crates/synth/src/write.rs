@@ -1,8 +1,8 @@
 //! Writes a rendered scene to a folder: a PNG per frame and `ground_truth.json`.
 
-use crate::SynthError;
 use crate::synthesizer::{Frame, SynthConfig, Synthesizer};
 use crate::truth::TagTruth;
+use crate::{SceneKind, SynthError};
 use jawtrack_pose::median;
 use std::path::Path;
 
@@ -34,6 +34,26 @@ pub struct SceneSummary {
     pub max_mandible_travel_mm: f64,
     /// Seconds spent rendering.
     pub seconds: f64,
+}
+
+impl SceneSummary {
+    /// What the rendered `scene` in `dir` holds, as `jawtrack synth` and the demo print it.
+    pub fn describe(&self, scene: SceneKind, dir: &Path) -> String {
+        let (min, mean, max) = self.detectable_tags;
+        format!(
+            "{} scene: {} frames in {} ({:.1} s, {:.2} s/frame)\n  tags a detector should find per frame: min {min}, \
+             mean {mean:.1}, max {max}; median tag side {:.0} px\n  mandible marker travel relative to the maxilla: up to \
+             {:.1} mm\n  ground truth: {}",
+            scene.name(),
+            self.frames,
+            dir.display(),
+            self.seconds,
+            self.seconds / self.frames.max(1) as f64,
+            self.median_tag_side_px,
+            self.max_mandible_travel_mm,
+            dir.join("ground_truth.json").display()
+        )
+    }
 }
 
 /// Renders every frame of a scene into `dir` (PNG per frame and `ground_truth.json`, written
