@@ -50,4 +50,7 @@ pub enum GeometryError {
     /// A rolling shutter that cannot be.
     #[error("rolling shutter: {0}")]
     BadShutter(String),
+    /// A pose written as text that does not read as one ([`Pose`]'s `FromStr`).
+    #[error("{0}")]
+    BadText(String),
 }

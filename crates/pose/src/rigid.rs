@@ -10,6 +10,42 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose(Isometry3<f64>);
 
+/// A pose typed by a user (a command-line flag): six numbers `rx,ry,rz,tx,ty,tz` (rotation
+/// vector in degrees, translation in mm) or 16, a row-major 4×4 matrix as in JawTrack's files.
+///
+/// # Examples
+///
+/// ```
+/// use jawtrack_pose::Pose;
+/// let p: Pose = "0,0,90,1,-2,3".parse().unwrap();
+/// assert!((p.rotation().angle().to_degrees() - 90.0).abs() < 1e-9);
+/// assert!("1,2,3".parse::<Pose>().is_err());
+/// ```
+impl std::str::FromStr for Pose {
+    type Err = GeometryError;
+
+    fn from_str(s: &str) -> Result<Self, GeometryError> {
+        let bad = GeometryError::BadText;
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|c| c.trim().parse::<f64>().map_err(|e| bad(format!("'{}': {e}", c.trim()))))
+            .collect::<Result<_, _>>()?;
+        if !v.iter().all(|c| c.is_finite()) {
+            return Err(bad("the numbers must be finite".into()));
+        }
+        match v.len() {
+            6 => Ok(Pose::from_axis_angle(
+                Vector3::new(v[0], v[1], v[2]).map(f64::to_radians),
+                Vector3::new(v[3], v[4], v[5]),
+            )),
+            16 => Pose::from_row_major(&std::array::from_fn(|i| v[i]), "the matrix"),
+            n => Err(bad(format!(
+                "expected 6 numbers (rx,ry,rz in degrees, tx,ty,tz in mm) or 16 (a 4×4 row-major matrix), got {n}"
+            ))),
+        }
+    }
+}
+
 /// Largest accepted deviation of a deserialised rotation from orthonormality. Files written
 /// with 17 significant digits are far inside it; a hand-typed 4-decimal matrix still passes.
 const ROTATION_TOLERANCE: f64 = 1e-4;
@@ -143,6 +179,20 @@ mod tests {
 
     fn sample() -> Pose {
         Pose::from_axis_angle(Vector3::new(0.3, -0.2, 0.9), Vector3::new(10.0, -4.0, 120.0))
+    }
+
+    #[test]
+    fn text_takes_six_or_sixteen_numbers() {
+        let p: Pose = "0,0,90,1,-2,3".parse().expect("six");
+        assert!((p.rotation().angle().to_degrees() - 90.0).abs() < 1e-9);
+        assert_eq!(p.translation(), Vector3::new(1.0, -2.0, 3.0));
+        let q: Pose = p.to_row_major().map(|v| v.to_string()).join(",").parse().expect("sixteen");
+        assert!(p.distance_to(&q).0 < 1e-12 && p.distance_to(&q).1 < 1e-12);
+        for (bad, word) in [("1,2,3", "got 3"), ("1,2,3,4,5,x", "'x'"), ("0,0,0,0,0,NaN", "finite")] {
+            let err = bad.parse::<Pose>().expect_err(bad).to_string();
+            assert!(err.contains(word), "{err}");
+        }
+        assert!("2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1".parse::<Pose>().is_err(), "not a rotation");
     }
 
     #[test]

@@ -166,6 +166,40 @@ impl IcpResult {
         }
         Ok(())
     }
+
+    /// What the fit found, as `jawtrack register` prints it: whether it converged, the
+    /// residual and overlap, and `scan_from_marker` as a rotation vector and translation and
+    /// as the matrix the registration file holds; `scan` names the scan file.
+    pub fn describe(&self, body: BodyKind, scan: &str) -> String {
+        let verdict = if self.converged { "registered" } else { "did not converge" };
+        let mut text = format!("{body}: {scan} {verdict} in {} iterations\n", self.iterations);
+        text += &format!(
+            "  residual {:.4} mm RMS over {} of {} model points ({:.0} % of the marker solid's surface found in the scan)\n",
+            self.rms_mm,
+            self.inliers,
+            self.samples,
+            100.0 * self.overlap()
+        );
+        if self.inside_out {
+            text += "  note: the scan's triangles wind inward (normals point into the solid); used flipped\n";
+        }
+        let (r, t) =
+            (self.scan_from_marker.rotation().scaled_axis().map(f64::to_degrees), self.scan_from_marker.translation());
+        text += &format!(
+            "  {body}_scan_from_{body}_marker: rotation vector ({:.4}, {:.4}, {:.4})° ({:.4}°), translation ({:.4}, {:.4}, {:.4}) mm",
+            r.x,
+            r.y,
+            r.z,
+            r.norm(),
+            t.x,
+            t.y,
+            t.z
+        );
+        for row in self.scan_from_marker.to_row_major().chunks(4) {
+            text += &format!("\n    [{:>10.6} {:>10.6} {:>10.6} {:>10.4}]", row[0], row[1], row[2], row[3]);
+        }
+        text
+    }
 }
 
 /// What [`IcpResult::check`] accepts.
@@ -188,6 +222,15 @@ impl Default for Acceptance {
     /// 90° turn would allow 45°; 36° is kept for both, the stricter).
     fn default() -> Self {
         Acceptance { max_rms_mm: 0.2, min_overlap: 0.3, max_shift_mm: 6.0, max_turn_deg: 36.0 }
+    }
+}
+
+impl Acceptance {
+    /// The limits for a fit whose first pairing reached `max_distance_mm`: a guess within that
+    /// distance leaves the centre that near the truth, so the centre may move twice it; the
+    /// turn keeps its default.
+    pub fn for_pairing(max_distance_mm: f64, max_rms_mm: f64, min_overlap: f64) -> Self {
+        Acceptance { max_rms_mm, min_overlap, max_shift_mm: 2.0 * max_distance_mm, ..Acceptance::default() }
     }
 }
 
