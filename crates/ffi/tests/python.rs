@@ -16,10 +16,7 @@ fn python_drives_the_tracker_recorder_and_link_encoder() {
     let lib_dir = support::build_library();
     let target_dir = lib_dir.parent().expect("target dir");
     let mut cargo = Command::new(env!("CARGO"));
-    cargo.args(["build", "-q", "-p", "uniffi-bindgen", "--target-dir"]).arg(target_dir);
-    if lib_dir.file_name().is_some_and(|n| n == "release") {
-        cargo.arg("--release");
-    }
+    cargo.args(["build", "--release", "-q", "-p", "uniffi-bindgen", "--target-dir"]).arg(target_dir);
     assert!(cargo.status().expect("cargo runs").success(), "building uniffi-bindgen failed");
 
     let dir = tempfile::tempdir().expect("temp dir");

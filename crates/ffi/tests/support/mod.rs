@@ -5,7 +5,7 @@ use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_tracker::{SearchConfig, Tracker, TrackerConfig};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 /// The fixture the binding tests track, and its camera.
@@ -46,20 +46,19 @@ pub fn rust_poses() -> Vec<Option<[f64; 16]>> {
         .collect()
 }
 
-/// Builds the library's `staticlib` and `cdylib` in this test's profile (cargo test builds
-/// only the `lib`) and returns the folder they are in.
+/// Builds the library's `staticlib` and `cdylib` in release (cargo test builds only the
+/// `lib`) and returns the folder they are in. Release, whatever this test's profile: it is the
+/// build the app links and the Swift step has already made (`ios/swift-on-linux.sh`, the same
+/// command, so CI builds it once), where a dev build with this package's features alone would
+/// rebuild the dependencies a second time.
 pub fn build_library() -> PathBuf {
     let exe = std::env::current_exe().expect("test path");
-    let profile_dir = exe.parent().and_then(Path::parent).expect("target/<profile>").to_path_buf();
-    let target_dir = profile_dir.parent().expect("target").to_path_buf();
+    let target_dir = exe.ancestors().nth(3).expect("target/<profile>/deps/<test>").to_path_buf();
     let mut cargo = Command::new(env!("CARGO"));
-    cargo.args(["build", "-q", "-p", "jawtrack-ffi", "--lib", "--target-dir"]).arg(&target_dir);
-    if profile_dir.file_name().is_some_and(|n| n == "release") {
-        cargo.arg("--release");
-    }
+    cargo.args(["build", "--release", "-q", "-p", "jawtrack-ffi", "--lib", "--target-dir"]).arg(&target_dir);
     let status = cargo.status().expect("cargo runs");
     assert!(status.success(), "building jawtrack-ffi failed");
-    profile_dir
+    target_dir.join("release")
 }
 
 /// Whether `program` can be run.
