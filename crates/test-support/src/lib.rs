@@ -4,9 +4,9 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use std::path::PathBuf;
 
-/// The repository's top folder (this crate is its `tests/`).
+/// The repository's top folder (this crate is its `crates/test-support`).
 fn repository() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// The repository's `fixtures/` folder.
