@@ -118,7 +118,7 @@ fn calibrated_at(a: &CalibrateCameraArgs) -> Result<CalibratedAt> {
         None => None,
     };
     if a.like.is_some() && like.is_none() && (a.lens_position.is_none() || a.zoom.is_none()) {
-        eprintln!("note: --like's recording has no capture plan: its lens position and zoom are not known");
+        tell!("note: --like's recording has no capture plan: its lens position and zoom are not known");
     }
     let recorded = CalibratedAt {
         lens_position: like.as_ref().and_then(|c| c.lens_position),

@@ -173,7 +173,7 @@ impl ContactEvents for Printed {
         );
     }
     fn warning(&mut self, w: &str) {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
 }
 
@@ -202,7 +202,7 @@ pub(crate) fn run(a: &ContactsArgs) -> Result<()> {
     let found = contact_run::run(&job, &rec, &source, &mut Printed { quiet: a.quiet, bar: None })?;
     let (lines, warning) = jawtrack_report::contact_findings(&found, settings.threshold_mm, source.describe());
     lines.iter().for_each(|l| say!("{l}"));
-    warning.iter().for_each(|w| eprintln!("warning: {w}"));
+    warning.iter().for_each(|w| tell!("warning: {w}"));
     let s = &found.summary;
     say!("median {:.1} ms per frame (index build {:.0} ms)", s.query_ms_median.unwrap_or(0.0), found.setup_ms);
     for p in &found.written {

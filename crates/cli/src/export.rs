@@ -114,15 +114,15 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
     let mut text = Vec::new();
     let done = jawtrack_session::export::export(format, &rec, inputs, &mut text)?;
     for w in &done.warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     if to_stdout {
         let mut out = std::io::stdout().lock();
         out.write_all(&text).and_then(|()| out.flush()).context("writing to standard output")?;
-        eprintln!("exported {}", done.summary);
+        tell!("exported {}", done.summary);
     } else {
         a.force.write_file(&a.out, &text)?;
-        eprintln!("exported {} to {}", done.summary, a.out.display());
+        tell!("exported {} to {}", done.summary, a.out.display());
     }
     Ok(())
 }
@@ -142,7 +142,7 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
         say!("{}\n{}", svg.display(), png.display());
     }
     let peak = |f: &dyn Fn(&Displacement) -> f64| path.iter().map(|(_, d)| f(d)).fold(f64::NEG_INFINITY, f64::max);
-    eprintln!(
+    tell!(
         "{} frames with a jaw pose of {}; widest opening {} mm, left {} mm, right {} mm, protrusion {} mm",
         path.len(),
         rec.frames.len(),

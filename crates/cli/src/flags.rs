@@ -36,11 +36,11 @@ pub(crate) struct PointsArg {
 pub(crate) fn load(path: &Path, only: SessionArg) -> Result<Recording> {
     let opened = jawtrack_session::open(path, only.session).inspect_err(|e| {
         if let SessionError::NoFrames { warnings, .. } = e {
-            warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+            warnings.iter().for_each(|w| tell!("warning: {w}"));
         }
     })?;
     for w in &opened.warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     Ok(opened.recording)
 }
@@ -49,7 +49,7 @@ pub(crate) fn load(path: &Path, only: SessionArg) -> Result<Recording> {
 pub(crate) fn anatomy(points: Option<&Path>, registration: Option<&Registration>, rest: &Pose) -> Result<Anatomy> {
     let a = jawtrack_session::anatomy(points, registration, rest)?;
     for w in &a.warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     Ok(a)
 }
@@ -111,7 +111,7 @@ impl MovementArgs {
 /// Prints a warning when `rec` was tracked with the nominal marker (`what`: what moved).
 pub(crate) fn warn_if_nominal(rec: &Recording, what: &str) {
     if let Some(w) = jawtrack_session::movements::nominal_marker_warning(rec, what) {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
 }
 
@@ -158,7 +158,7 @@ impl ViewerArgs {
         }
         let registration = registration(self.registration.as_deref())?;
         if self.maxilla.is_some() && registration.is_none() {
-            eprintln!(
+            tell!(
                 "warning: --maxilla and --mandible without --registration: the scans are drawn as if they were in \
                  their markers' frames, so unless they were exported so, the lower arch will not sit in its bite; \
                  give the registration file `jawtrack register` wrote"
@@ -179,7 +179,7 @@ impl ViewerArgs {
 /// can reach the address sees the patient's poses (and, live, can press Calibrate).
 pub(crate) fn warn_if_exposed(addr: std::net::SocketAddr) {
     if !addr.ip().is_loopback() {
-        eprintln!(
+        tell!(
             "warning: the viewer at {addr} is open to the network with no password: anyone who can reach it \
              sees the poses (and, live, can press Calibrate); serve on 127.0.0.1 unless the network is trusted"
         );

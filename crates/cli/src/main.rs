@@ -13,13 +13,23 @@ macro_rules! say {
     }};
 }
 
+/// `eprintln!` that never panics. With standard error closed (`jawtrack … 2>&1 | head -1`)
+/// `eprintln!` panics (exit 101, its message lost on the stream that is gone); this drops the
+/// message instead, and the command ends with its own status.
+macro_rules! tell {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 /// Ends the program after a failed write to standard output: quietly for a closed pipe, as an
 /// error otherwise.
 fn stdout_failed(e: &std::io::Error) -> ! {
     if e.kind() == std::io::ErrorKind::BrokenPipe {
         std::process::exit(0);
     }
-    eprintln!("error: writing to standard output: {e}");
+    tell!("error: writing to standard output: {e}");
     std::process::exit(1);
 }
 
@@ -169,7 +179,7 @@ fn main() {
         Command::Bench(a) => bench::run(&a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        tell!("error: {e:#}");
         std::process::exit(1);
     }
 }

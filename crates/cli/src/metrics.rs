@@ -65,7 +65,7 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     let metrics = Metrics::compute(&path).context("no frame has a jaw pose")?;
     let report = metrics_json(&metrics, &path, &rec, &a.recording, rest_at, &incisor, a.incisor.is_none());
     if skipped > 0 {
-        eprintln!("{name}: {skipped} of {} frames have no jaw pose, skipped", rec.frames.len());
+        tell!("{name}: {skipped} of {} frames have no jaw pose, skipped", rec.frames.len());
     }
     if let Some(out) = &a.out {
         write_outputs(out, &path, &metrics, &report)?;
@@ -87,7 +87,7 @@ fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Re
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     for (stem, doc) in jawtrack_report::metrics_figures(path, m) {
         for p in plot::save_svg_and_png(&doc, &out.join(stem))? {
-            eprintln!("wrote {}", p.display());
+            tell!("wrote {}", p.display());
         }
     }
     let json_path = out.join("metrics.json");
@@ -95,6 +95,6 @@ fn write_outputs(out: &Path, path: &[Sample], m: &Metrics, report: &Value) -> Re
     // The folder was checked for an earlier metrics.json (--force) before any work.
     let replace = jawtrack_recording::Overwrite::Replace;
     jawtrack_recording::write_file_atomic(&json_path, (text + "\n").as_bytes(), replace)?;
-    eprintln!("wrote {}", json_path.display());
+    tell!("wrote {}", json_path.display());
     Ok(())
 }

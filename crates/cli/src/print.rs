@@ -22,18 +22,18 @@ pub(crate) fn print_refinement(r: &Refinement, seconds: f64, to_stderr: bool) {
 fn print_account(a: &Account, to_stderr: bool) {
     for l in &a.lines {
         if to_stderr {
-            eprintln!("{l}");
+            tell!("{l}");
         } else {
             say!("{l}");
         }
     }
-    a.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+    a.warnings.iter().for_each(|w| tell!("warning: {w}"));
 }
 
 /// Warns when the views say the camera's focal length is not the one given.
 fn warn_focal(focal: Option<FocalCheck>, rms_px: impl Iterator<Item = f64>) {
     if let Some(focal) = focal.filter(FocalCheck::looks_wrong) {
-        eprintln!("warning: {}", intrinsics_warning(&focal, rms_px));
+        tell!("warning: {}", intrinsics_warning(&focal, rms_px));
     }
 }
 

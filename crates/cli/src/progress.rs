@@ -22,12 +22,12 @@ pub(crate) fn detect_marker_tags(
         Progress::Frame => bar.inc(1),
         Progress::Unreadable(name, why) => {
             unreadable += 1;
-            bar.suspend(|| eprintln!("warning: {name}: {why}; skipped"));
+            bar.suspend(|| tell!("warning: {name}: {why}; skipped"));
         }
     });
     bar.finish_and_clear();
     if unreadable > 0 {
-        eprintln!("warning: {unreadable} frames could not be read and were left out");
+        tell!("warning: {unreadable} frames could not be read and were left out");
     }
     Ok(frames?)
 }

@@ -119,7 +119,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
     let report = jawtrack_report::render(&inputs);
     a.force.write_file(&a.out, report.html.as_bytes())?;
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     say!("wrote {} ({} sections, {} kB)", a.out.display(), report.sections.len(), report.html.len() / 1024);
     if let Some(pdf) = &a.pdf {
@@ -136,7 +136,7 @@ fn survey_contacts(a: &ReportArgs, rec: &Recording, reg: Option<Registration>) -
     let upper = load_arch("maxilla", &a.maxilla)?.parts;
     let lower = load_arch("mandible", &a.mandible)?.parts;
     let upper_left = upper_scan_left(a.points.points.as_deref())?;
-    eprintln!("indexing both arches for the contacts (a few seconds per 100k triangles)…");
+    tell!("indexing both arches for the contacts (a few seconds per 100k triangles)…");
     let bar = crate::progress_bar("contacts", a.contact_frames.min(posed.len()));
     let found = survey(upper, lower, &posed, a.contact_frames, upper_left, &mut |done, total| {
         bar.set_length(total as u64);
@@ -144,7 +144,7 @@ fn survey_contacts(a: &ReportArgs, rec: &Recording, reg: Option<Registration>) -
     })?;
     bar.finish_and_clear();
     for w in &found.warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     Ok(ContactsResult { folder: found.checked, summary: found.summary, maps: found.maps })
 }

@@ -143,8 +143,8 @@ impl TrackEvents for Printed<'_> {
             Said::Wrote(w) => w,
         };
         match &self.bar {
-            Some(bar) => bar.suspend(|| eprintln!("{line}")),
-            None => eprintln!("{line}"),
+            Some(bar) => bar.suspend(|| tell!("{line}")),
+            None => tell!("{line}"),
         }
     }
     fn pass(&mut self, pass: Pass, frames: Option<u64>) {
@@ -188,9 +188,9 @@ impl TrackEvents for Printed<'_> {
 
 pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let mut tracked = track(&a.options(), &mut Printed { a, bar: None })?;
-    eprintln!("tracked {} frames: {}; poses in {}", tracked.frames, tracked.summary.describe(), a.out.display());
+    tell!("tracked {} frames: {}; poses in {}", tracked.frames, tracked.summary.describe(), a.out.display());
     for w in &tracked.warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     Ok(())
 }

@@ -54,7 +54,7 @@ pub(crate) fn view(a: &ViewArgs) -> Result<()> {
     let rest = jawtrack_session::rest_of(&rec, None)?.map(|r| r.pose());
     let state = Arc::new(LiveState::replay(&options, header, &rec.frames, rest)?);
     LiveServer::start(a.serve, state)?;
-    eprintln!("replaying {} frames at http://{}/ (Ctrl-C to stop)", rec.frames.len(), a.serve);
+    tell!("replaying {} frames at http://{}/ (Ctrl-C to stop)", rec.frames.len(), a.serve);
     let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
         let stop = stop.clone();

@@ -38,9 +38,6 @@ impl KeyArgs {
 /// Prints a new pairing key and its id.
 pub(crate) fn keygen() {
     let key = Key::generate();
-    eprintln!(
-        "key id {} (safe to share; the key itself is secret: give it to the phone and the receiver only)",
-        key.id()
-    );
+    tell!("key id {} (safe to share; the key itself is secret: give it to the phone and the receiver only)", key.id());
     say!("{}", key.to_hex());
 }

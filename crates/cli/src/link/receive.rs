@@ -14,6 +14,7 @@ use jawtrack_wire::receiver::{
     ReceiveOptions, ReceiveSink, process_cpu_seconds, reachable_address, receive, recording_header,
 };
 use jawtrack_wire::{Key, Security};
+use std::io::Write as _;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -63,10 +64,7 @@ fn show_pairing_qr(listen: SocketAddr, key: &Key) -> Result<()> {
         .light_color(qrcode::render::unicode::Dense1x2::Dark)
         .quiet_zone(true)
         .build();
-    eprintln!(
-        "{picture}\nscan with JawTrack on the phone (Settings → Pair): {}",
-        uri.split("&key=").next().unwrap_or("")
-    );
+    tell!("{picture}\nscan with JawTrack on the phone (Settings → Pair): {}", uri.split("&key=").next().unwrap_or(""));
     Ok(())
 }
 
@@ -90,9 +88,11 @@ impl ReceiveSink for Sink<'_> {
     fn poll(&mut self) -> Result<()> {
         for bite in self.live.take_bites() {
             self.out.append_bite(&bite)?;
-            eprintln!(
+            tell!(
                 "bite accepted at t = {:.3} s ({} frames, held within {:.2} mm)",
-                bite.t, bite.frames, bite.spread_mm
+                bite.t,
+                bite.frames,
+                bite.spread_mm
             );
         }
         Ok(())
@@ -104,9 +104,9 @@ impl ReceiveSink for Sink<'_> {
 
     fn report(&mut self, counters: &Counters) {
         if self.tty {
-            eprint!("\r\x1b[K{}", counters.describe());
+            let _ = write!(std::io::stderr(), "\r\x1b[K{}", counters.describe());
         } else {
-            eprintln!("{}", counters.describe());
+            tell!("{}", counters.describe());
         }
     }
 }
@@ -114,7 +114,7 @@ impl ReceiveSink for Sink<'_> {
 pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     let security = a.key.security()?;
     if security == Security::Plaintext {
-        eprintln!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
+        tell!("warning: --insecure-plaintext: datagrams are neither authenticated nor encrypted");
     }
     let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let &ReceiveArgs { max_clock_skew, duration, idle_exit, .. } = a;
@@ -141,7 +141,7 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     let stop = Arc::new(AtomicBool::new(false));
     let on_ctrl_c = stop.clone();
     ctrlc::set_handler(move || on_ctrl_c.store(true, Ordering::SeqCst)).context("installing the Ctrl-C handler")?;
-    eprintln!(
+    tell!(
         "listening on {} ({}); recording to {}{}",
         socket.local_addr()?,
         security.key_id().map_or_else(|| "PLAINTEXT".into(), |id| format!("key id {id}")),
@@ -150,12 +150,12 @@ pub(crate) fn run(a: &ReceiveArgs) -> Result<()> {
     );
     let got = receive(&socket, security, &options, &stop, &mut Sink { out, live: &live, tty })?;
     if tty {
-        eprintln!();
+        tell!();
     }
     let c = &got.counters;
-    eprintln!("stopped after {:.1} s: {}; recording in {}", got.elapsed_s, c.describe(), a.out.display());
+    tell!("stopped after {:.1} s: {}; recording in {}", got.elapsed_s, c.describe(), a.out.display());
     for (reason, n) in &c.rejected {
-        eprintln!("  rejected as {reason}: {n}");
+        tell!("  rejected as {reason}: {n}");
     }
     say!("{}", got.summary(process_cpu_seconds()));
     Ok(())

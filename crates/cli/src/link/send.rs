@@ -47,7 +47,7 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     options.check()?;
     let recording = jawtrack_recording::open(&a.replay)?;
     for (line, why) in &recording.skipped {
-        eprintln!("warning: {} line {line} skipped: {why}", a.replay.display());
+        tell!("warning: {} line {line} skipped: {why}", a.replay.display());
     }
     if recording.frames.is_empty() {
         bail!("{} holds no frames to replay", a.replay.display());
@@ -55,7 +55,7 @@ pub(crate) fn run(a: &SendArgs) -> Result<()> {
     let bar = crate::progress::bar("sending", Some(options.datagrams(recording.frames.len())), "datagrams");
     let sent = send_recording(&recording.frames, a.to, security, &options, |done| bar.set_position(done))?;
     bar.finish_and_clear();
-    eprintln!("{}", sent.describe());
+    tell!("{}", sent.describe());
     say!("{}", sent.summary());
     Ok(())
 }
