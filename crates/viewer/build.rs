@@ -1,7 +1,6 @@
-//! Embeds the viewer page into the library: our files from `viewer/` always, and the three.js
-//! modules the page imports from `viewer/node_modules/three` when `npm ci --prefix viewer` has
-//! installed them. Without them the crate still builds (a fresh machine has only Rust), and
-//! serving the page says what to run.
+//! Embeds the viewer page into the library: our files from `viewer/` and the three.js modules
+//! the page imports, vendored in `viewer/vendor/three` (three.js 0.187.0 under its MIT licence,
+//! `viewer/vendor/README.md`), so every build serves a working page with nothing installed.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -9,7 +8,7 @@ use std::path::{Path, PathBuf};
 /// The page's own files, served at `/NAME`.
 const PAGE: [&str; 5] = ["index.html", "viewer.js", "anatomy.js", "pick.js", "style.css"];
 /// The three.js files the page imports (its import map and their own imports), under
-/// `node_modules/three`, served at `/vendor/three/…`.
+/// `viewer/vendor/three`, served at `/vendor/three/…`.
 const THREE: [&str; 7] = [
     "build/three.module.js",
     "build/three.core.js",
@@ -23,12 +22,9 @@ const THREE: [&str; 7] = [
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let viewer = manifest.join("../../viewer");
-    let three = viewer.join("node_modules/three");
+    let three = viewer.join("vendor/three");
     let mut files: Vec<(String, PathBuf)> = PAGE.iter().map(|name| (format!("/{name}"), viewer.join(name))).collect();
-    let three_installed = THREE.iter().all(|f| three.join(f).is_file());
-    if three_installed {
-        files.extend(THREE.iter().map(|f| (format!("/vendor/three/{f}"), three.join(f))));
-    }
+    files.extend(THREE.iter().map(|f| (format!("/vendor/three/{f}"), three.join(f))));
     let mut code = String::from("/// The embedded page: (URL path, content type, bytes).\n");
     code.push_str("pub(crate) static FILES: &[(&str, &str, &[u8])] = &[\n");
     for (url, path) in &files {
@@ -37,13 +33,6 @@ fn main() {
         let _ = writeln!(code, "    ({url:?}, {:?}, include_bytes!({:?})),", content_type(path), absolute(path));
     }
     code.push_str("];\n");
-    let _ = writeln!(
-        code,
-        "/// Whether three.js was installed when this was built.\npub(crate) const THREE_EMBEDDED: bool = {three_installed};"
-    );
-    // Rebuild when `npm ci` installs or updates three.js.
-    println!("cargo:rerun-if-changed={}", three.join("package.json").display());
-    println!("cargo:rerun-if-changed={}", viewer.join("node_modules").display());
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("page.rs");
     std::fs::write(&out, code).expect("writing the embedded page's table");
 }

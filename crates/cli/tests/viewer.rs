@@ -2,7 +2,8 @@
 //! `jawtrack view` replaying the recording on meshes read from STL files, each checked by `viewer/tests/check.mjs` (the page
 //! loads, the mandible moves, no console error, the screenshot is not blank).
 //!
-//! Needs Chromium (`/usr/bin/chromium`, or `CHROMIUM`) and `npm ci --prefix viewer`; CI
+//! Needs Chromium (`/usr/bin/chromium`, or `CHROMIUM`) and `npm ci --prefix viewer` (playwright-core,
+//! which drives it; three.js is vendored in the page); CI
 //! installs both. Without them the test says SKIPPED and passes.
 
 use std::io::{BufRead, BufReader};
@@ -29,7 +30,7 @@ fn missing() -> Option<String> {
     if !Path::new(&chromium).is_file() {
         return Some(format!("no Chromium at {chromium}"));
     }
-    for p in ["node_modules/three/build/three.module.js", "node_modules/playwright-core/package.json"] {
+    for p in ["node_modules/playwright-core/package.json"] {
         if !viewer_dir().join(p).is_file() {
             return Some(format!("viewer/{p} missing (run `npm ci --prefix viewer`)"));
         }

@@ -48,14 +48,8 @@ pub enum ViewerError {
         /// What is wrong with it.
         reason: String,
     },
-    /// The page's three.js modules were not installed when this program was built.
-    #[error(
-        "this jawtrack was built without the viewer's three.js: run `npm ci --prefix viewer` in the repository \
-         and build again (or serve a page folder with --viewer-dir)"
-    )]
-    PageMissing,
     /// A page folder given instead of the embedded page lacks a file.
-    #[error("the viewer page is not ready in {dir}: {missing} is missing (run `npm ci --prefix viewer` there)")]
+    #[error("the viewer page is not ready in {dir}: {missing} is missing (give the repository's `viewer` folder)")]
     PageDirIncomplete {
         /// The folder.
         dir: String,
@@ -87,7 +81,7 @@ pub struct ViewerOptions {
     /// against the upper as `Registration::maxilla_scan_from_mandible_scan` places it (in its
     /// bite at rest). Without it, the scans are drawn as if given in their markers' frames.
     pub registration: Option<Registration>,
-    /// Serve the page from this folder (with three.js installed by `npm ci`) instead of the
+    /// Serve the page from this folder (the repository's `viewer`, three.js in `vendor/three`) instead of the
     /// copy built into the program: for working on the page.
     pub page_dir: Option<PathBuf>,
     /// The anatomical points (`jawtrack points`), with `registration`: the head frame, the
@@ -210,6 +204,12 @@ impl LiveState {
         let list: Vec<Value> = frames.iter().map(|f| state.frame_message(f, f.seq, rest.as_ref())).collect();
         state.recording = Some(json!({ "header": header, "frames": list }));
         Ok(state)
+    }
+
+    /// The replay as `/api/recording` serves it (`None` live): `{"header", "frames": [{"type":
+    /// "pose", "frame", "t", "opening_mm", "lateral_mm", "protrusive_mm", …}]}`.
+    pub fn replay_json(&self) -> Option<&Value> {
+        self.recording.as_ref()
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
@@ -392,7 +392,7 @@ impl LiveServer {
         match &state.page_dir {
             Some(dir) => {
                 for needed in
-                    ["index.html", "viewer.js", "anatomy.js", "style.css", "node_modules/three/build/three.module.js"]
+                    ["index.html", "viewer.js", "anatomy.js", "style.css", "vendor/three/build/three.module.js"]
                 {
                     if !dir.join(needed).is_file() {
                         return Err(ViewerError::PageDirIncomplete {
@@ -407,9 +407,8 @@ impl LiveServer {
                     .route_service("/anatomy.js", ServeFile::new(dir.join("anatomy.js")))
                     .route_service("/pick.js", ServeFile::new(dir.join("pick.js")))
                     .route_service("/style.css", ServeFile::new(dir.join("style.css")))
-                    .nest_service("/vendor/three", ServeDir::new(dir.join("node_modules/three")));
+                    .nest_service("/vendor/three", ServeDir::new(dir.join("vendor/three")));
             }
-            None if !page::THREE_EMBEDDED => return Err(ViewerError::PageMissing),
             None => {
                 for &(url, content_type, bytes) in page::FILES {
                     let serve = move || async move { ([(header::CONTENT_TYPE, content_type)], bytes) };
@@ -646,13 +645,6 @@ mod tests {
         let state = Arc::new(LiveState::new(&options(), "live").expect("state"));
         // A free port: bound, then released for the server.
         let addr = std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port");
-        if !page::THREE_EMBEDDED {
-            assert!(matches!(LiveServer::start(addr, state), Err(ViewerError::PageMissing)));
-            jawtrack_test_support::say_skipped(
-                "serving the embedded page: three.js was not installed when this was built (npm ci --prefix viewer)",
-            );
-            return;
-        }
         LiveServer::start(addr, state).expect("serving");
         let (status, content_type, len) = get(addr, "/");
         assert!(
