@@ -7,7 +7,6 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_marker::{BodyKind, Marker};
-use jawtrack_occlusion::Mesh;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Overwrite;
 use jawtrack_registration::Registration;
@@ -70,7 +69,7 @@ pub(crate) fn run(a: &RegisterArgs) -> Result<()> {
     } else {
         Registration::identity()
     };
-    let scan = Mesh::load(&a.scan).context("--scan")?;
+    let scan = jawtrack_occlusion::load_mesh(&a.scan).context("--scan")?;
     let init = match a.init {
         Some(p) => p,
         None => {

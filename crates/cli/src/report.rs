@@ -40,7 +40,7 @@ pub(crate) struct ReportArgs {
     points: PointsArg,
     /// The frame (its `frame` number) of the closed jaw; default: the bite accepted while
     /// recording, else the first frame with a jaw pose.
-    #[arg(long)]
+    #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
     /// A slow opening from the closed jaw: the hinge axis.
     #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
@@ -68,8 +68,13 @@ pub(crate) struct ReportArgs {
 }
 
 /// What `jawtrack contacts` wrote into `dir` (`jawtrack_session::contacts::read_folder`).
-fn read_contacts(dir: &Path) -> Result<ContactsResult> {
+/// The folder `jawtrack contacts` wrote, refused when it was made from another recording.
+fn read_contacts(dir: &Path, rec: &Recording, rec_name: &str) -> Result<ContactsResult> {
     let (summary, maps) = read_folder(dir)?;
+    let context = || format!("--contacts {}", dir.display());
+    if let Some(w) = jawtrack_session::contacts::check_matches(&summary, rec, rec_name).with_context(context)? {
+        tell!("warning: {}: {w}", context());
+    }
     Ok(ContactsResult { folder: dir.display().to_string(), summary, maps })
 }
 
@@ -90,7 +95,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
         _ => None,
     };
     let contacts = match &a.contacts {
-        Some(dir) => Some(read_contacts(dir)?),
+        Some(dir) => Some(read_contacts(dir, &rec, &name.to_string())?),
         None if !a.maxilla.is_empty() => Some(survey_contacts(a, &rec, reg)?),
         None => None,
     };

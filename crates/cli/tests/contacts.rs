@@ -297,7 +297,7 @@ fn per_tooth_meshes_tag_their_regions() {
         let x = tag.split("x=\"").nth(1).and_then(|v| v.split('"').next()).expect("an x");
         x.parse::<f64>().expect("a number")
     };
-    let (x36, x46, x_left) = (x_of(">36 (U19)<"), x_of(">46 (U30)<"), x_of(">patient's left<"));
+    let (x36, x46, x_left) = (x_of(">36 (Univ. 19)<"), x_of(">46 (Univ. 30)<"), x_of(">patient's left<"));
     assert!((x_left - x36).abs() < (x_left - x46).abs(), "left at {x_left}, 36 at {x36}, 46 at {x46}");
     assert!(map.contains("mm deep") && map.contains("10 mm"), "the scales");
     // The upper arch is one mesh: its side is unknown, and the map says so.

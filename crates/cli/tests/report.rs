@@ -139,12 +139,17 @@ fn a_contacts_folder_puts_its_maps_and_teeth_in_the_report() {
         "--quiet",
     ]));
     let out = dir.path().join("report.html");
-    ok(&jawtrack(&["report", s(&rec), "--out", s(&out), "--contacts", s(&found)]));
+    // A folder made from another recording is refused, naming both, and writes nothing.
+    let o = jawtrack(&["report", s(&rec), "--out", s(&out), "--contacts", s(&found)]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("was made from") && e.contains("run `jawtrack contacts` on this"), "{e}");
+    assert!(!out.exists(), "a refused report leaves no file");
+    ok(&jawtrack(&["report", s(&poses), "--out", s(&out), "--contacts", s(&found)]));
     let html = std::fs::read_to_string(&out).expect("the report");
     let section = &html[html.find("<section id=\"contacts\">").expect("the section")..];
     let section = &section[..section.find("</section>").expect("its end")];
     assert_eq!(section.matches("<figure>").count(), 4, "two maps per arch");
-    assert!(section.contains(">36 (U19)<") && section.contains(">46 (U30)<"), "tooth numbers on the maps");
+    assert!(section.contains(">36 (Univ. 19)<") && section.contains(">46 (Univ. 30)<"), "tooth numbers on the maps");
     assert!(section.contains("<td>36</td><td>19</td><td>1</td>"), "the per-tooth table");
     assert!(section.contains("0.200 mm penetration"), "the deepest contact");
     // The same contacts checked by the report itself, the scans placed through a registration

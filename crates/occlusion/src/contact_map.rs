@@ -286,8 +286,8 @@ mod tests {
         let s = svg(&RgbImage::new(200, 200), &view(), &a);
         assert!(s.contains("Upper arch &lt;occlusal&gt;") && s.contains("data:image/png;base64,iVBOR"));
         // 26 at x = (−20 + 50) · 2 = 60 px into the image, 16 at 140 px.
-        assert!(s.contains(&format!("x=\"{:.1}\"", MARGIN_SIDE + 60.0)) && s.contains(">26 (U14)<"), "{s}");
-        assert!(s.contains(&format!("x=\"{:.1}\"", MARGIN_SIDE + 140.0)) && s.contains(">16 (U3)<"));
+        assert!(s.contains(&format!("x=\"{:.1}\"", MARGIN_SIDE + 60.0)) && s.contains(">26 (Univ. 14)<"), "{s}");
+        assert!(s.contains(&format!("x=\"{:.1}\"", MARGIN_SIDE + 140.0)) && s.contains(">16 (Univ. 3)<"));
         // The left is −X, the image's left edge.
         let left = s.find("patient's left").expect("left named");
         assert!(

@@ -8,6 +8,7 @@
 //! [`ContactSession::summary`].
 
 use crate::contacts::{Arch, ContactMap, ContactSettings, Region, Side, contacts};
+use crate::depth_cap::MeshEdges;
 use jawtrack_pose::{Pose, median};
 use serde::Serialize;
 use std::time::Instant;
@@ -35,6 +36,11 @@ pub struct FrameContacts {
     pub area_mm2: PerArch<f64>,
     /// The regions in contact on both arches, largest first.
     pub regions: Vec<Region>,
+    /// Whether the arches pass deeper into each other than the depth measured
+    /// ([`ContactSettings::max_depth_mm`]): `max_depth_mm` and the areas are then too small.
+    /// Written only when true.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub beyond_max_depth: bool,
 }
 
 /// Statistics of one arch's total contact area per frame.
@@ -78,6 +84,9 @@ pub struct SessionSummary {
     pub contact_area: PerArch<AreaStats>,
     /// The deepest contact, if any.
     pub deepest: Option<Deepest>,
+    /// Frames whose arches pass deeper into each other than the depth measured
+    /// ([`FrameContacts::beyond_max_depth`]); [`SessionSummary::depth_warning`] says so.
+    pub beyond_max_depth: usize,
     /// The depth shown in full red by [`ContactSession::depth_colours`] (mm): the deepest
     /// penetration, at least the threshold.
     pub depth_colour_full_scale_mm: f64,
@@ -94,6 +103,7 @@ struct Checked {
     t: f64,
     area_mm2: [f64; 2],
     max_depth_mm: Option<f64>,
+    beyond_max_depth: bool,
 }
 
 /// The contacts of two arches over a motion; see the [module](self) documentation.
@@ -102,6 +112,8 @@ pub struct ContactSession<'a> {
     upper: &'a Arch,
     lower: &'a Arch,
     settings: ContactSettings,
+    /// Both arches' edges, to tell a contact cut off at the depth measured.
+    edges: [MeshEdges; 2],
     map: ContactMap,
     checked: Vec<Checked>,
     query_ms: Vec<f64>,
@@ -114,6 +126,7 @@ impl<'a> ContactSession<'a> {
             upper,
             lower,
             settings,
+            edges: [MeshEdges::of(&upper.mesh), MeshEdges::of(&lower.mesh)],
             map: ContactMap::new(upper, lower),
             checked: Vec::new(),
             query_ms: Vec::new(),
@@ -130,13 +143,17 @@ impl<'a> ContactSession<'a> {
         let area = |side: Side| c.regions.iter().filter(|r| r.arch == side).map(|r| r.area_mm2).sum::<f64>();
         let area_mm2 = [area(Side::Maxilla), area(Side::Mandible)];
         let max_depth_mm = c.max_depth_mm();
-        self.checked.push(Checked { frame, t, area_mm2, max_depth_mm });
+        let arches = [(&self.edges[0], self.upper), (&self.edges[1], self.lower)];
+        let beyond_max_depth =
+            arches.iter().zip(&c.distances).any(|((e, a), found)| e.passes_cap(&a.mesh, found, &self.settings));
+        self.checked.push(Checked { frame, t, area_mm2, max_depth_mm, beyond_max_depth });
         FrameContacts {
             frame,
             t,
             max_depth_mm,
             area_mm2: PerArch { maxilla: area_mm2[0], mandible: area_mm2[1] },
             regions: c.regions,
+            beyond_max_depth,
         }
     }
 
@@ -198,6 +215,7 @@ impl<'a> ContactSession<'a> {
             penetrating: self.checked.iter().filter(|c| c.max_depth_mm.is_some_and(|d| d > 0.0)).count(),
             contact_area: PerArch { maxilla: self.area_stats(0), mandible: self.area_stats(1) },
             deepest: self.deepest(),
+            beyond_max_depth: self.checked.iter().filter(|c| c.beyond_max_depth).count(),
             depth_colour_full_scale_mm: self.full_depth_mm(),
             query_ms_median: median(self.query_ms.iter().copied()),
             query_ms_max: self.query_ms.iter().copied().reduce(f64::max),

@@ -49,9 +49,10 @@ impl Tooth {
         matches!(self.0 / 10, 2 | 3)
     }
 
-    /// "36 (U19)": FDI, then Universal.
+    /// "36 (Univ. 19)": FDI, then Universal spelt out, since "U19" reads as "upper 19" and
+    /// a lower tooth's "41 (U25)" as an upper one.
     pub fn label(self) -> String {
-        format!("{} (U{})", self.0, self.universal())
+        format!("{} (Univ. {})", self.0, self.universal())
     }
 }
 
@@ -162,7 +163,8 @@ mod tests {
         assert!(Tooth::fdi(19).is_none() && Tooth::fdi(51).is_none() && Tooth::fdi(10).is_none());
         assert!(Tooth::fdi(26).is_some_and(|t| t.upper() && t.on_patients_left()));
         assert!(Tooth::fdi(46).is_some_and(|t| !t.upper() && !t.on_patients_left()));
-        assert_eq!(Tooth::from_name("36").map(Tooth::label).as_deref(), Some("36 (U19)"));
+        assert_eq!(Tooth::from_name("36").map(Tooth::label).as_deref(), Some("36 (Univ. 19)"));
+        assert_eq!(Tooth::from_name("41").map(Tooth::label).as_deref(), Some("41 (Univ. 25)"));
         assert_eq!(Tooth::from_name("molar"), None);
     }
 

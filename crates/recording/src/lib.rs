@@ -44,27 +44,40 @@ pub use schema::{
 };
 pub use write::{Overwrite, RecordingWriter, create_file, write_file_atomic};
 
-/// Why a recording could not be read or written.
-#[derive(Debug, thiserror::Error)]
+/// Why a recording could not be read or written. Each message holds its cause's words and no
+/// error is given as its source, so a caller that prints the chain of causes (`{:#}`) says
+/// each thing once.
+#[derive(Debug)]
 pub enum RecordingError {
-    /// Reading or writing the file failed.
-    #[error("{path}: {source}")]
+    /// Reading or writing the file failed, or the file is not text.
     Io {
         /// The file, as given.
         path: String,
-        /// What the system said.
+        /// What the system said, or what the file looks like.
         source: std::io::Error,
     },
     /// The output exists and the writer was told not to replace it.
-    #[error("{path} already exists: give another name, or say that it may be replaced")]
     Exists {
         /// The file, as given.
         path: String,
     },
     /// The header names another format or a version this build does not read.
-    #[error("line 1: {0}")]
     Header(String),
 }
+
+impl std::fmt::Display for RecordingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RecordingError::Io { path, source } => write!(f, "{path}: {source}"),
+            RecordingError::Exists { path } => {
+                write!(f, "{path} already exists: give another name, or say that it may be replaced")
+            }
+            RecordingError::Header(why) => write!(f, "line 1: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for RecordingError {}
 
 impl RecordingError {
     pub(crate) fn io(path: &str) -> impl FnOnce(std::io::Error) -> RecordingError + '_ {

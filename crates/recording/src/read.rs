@@ -47,7 +47,8 @@ impl Recording {
 
 /// Reads a recording. Lines that are not frames are collected in [`Recording::skipped`] (so a
 /// file cut off mid-line by a killed writer reads up to its last whole line); only a header
-/// this build cannot read is an error.
+/// this build cannot read, or a file that is not text (an image or a video given by mistake),
+/// is an error.
 pub fn read_recording(reader: impl BufRead) -> Result<Recording, RecordingError> {
     read_named(reader, "the recording")
 }
@@ -59,51 +60,94 @@ pub fn open(path: &Path) -> Result<Recording, RecordingError> {
     read_named(std::io::BufReader::new(file), &name)
 }
 
-fn read_named(reader: impl BufRead, name: &str) -> Result<Recording, RecordingError> {
+fn read_named(mut reader: impl BufRead, name: &str) -> Result<Recording, RecordingError> {
+    let head = reader.fill_buf().map_err(RecordingError::io(name))?;
+    if let Some(what) = binary_kind(head) {
+        let why = format!("not a recording (JSON lines): it looks like a binary file{what}");
+        return Err(RecordingError::Io { path: name.to_owned(), source: std::io::Error::other(why) });
+    }
     let mut rec = Recording::default();
-    for (i, line) in reader.lines().enumerate() {
-        let line = line.map_err(RecordingError::io(name))?;
-        if line.trim().is_empty() {
-            continue;
+    let mut bytes = Vec::new();
+    for number in 1.. {
+        bytes.clear();
+        if reader.read_until(b'\n', &mut bytes).map_err(RecordingError::io(name))? == 0 {
+            break;
         }
-        let value: Value = match serde_json::from_str(&line) {
-            Ok(v) => v,
-            Err(e) => {
-                rec.skipped.push((i + 1, format!("not JSON ({e})")));
-                continue;
-            }
-        };
-        if let Some(h) = value.get("recording") {
-            let h: RecordingHeader = serde_json::from_value(h.clone())
-                .map_err(|e| RecordingError::Header(format!("not a recording header: {e}")))?;
-            if h.format != RECORDING_FORMAT || h.version != RECORDING_VERSION {
-                return Err(RecordingError::Header(format!(
-                    "format {} version {} (this build reads {RECORDING_FORMAT} version {RECORDING_VERSION})",
-                    h.format, h.version
-                )));
-            }
-            rec.header = Some(h);
-            continue;
-        }
-        if let Some(b) = value.get("bite") {
-            match serde_path_to_error::deserialize::<_, BiteRecord>(b.clone()) {
-                Ok(b) if b.maxilla_from_mandible.translation().norm() <= MAX_TRANSLATION_MM && b.t.is_finite() => {
-                    rec.bites.push(b)
-                }
-                Ok(_) => rec.skipped.push((i + 1, "implausible bite: its rest position or time is absurd".into())),
-                Err(e) => rec.skipped.push((i + 1, format!("not a bite: field `{}`: {}", e.path(), e.inner()))),
-            }
-            continue;
-        }
-        match serde_path_to_error::deserialize::<_, FrameRecord>(value) {
-            Ok(f) => match implausible(&f) {
-                None => rec.frames.push(f),
-                Some(why) => rec.skipped.push((i + 1, why)),
-            },
-            Err(e) => rec.skipped.push((i + 1, format!("not a frame: field `{}`: {}", e.path(), e.inner()))),
+        match std::str::from_utf8(&bytes) {
+            Ok(line) => read_line(&mut rec, number, line.trim_end_matches(['\n', '\r']))?,
+            // A line garbled on disk costs that line, as any other unreadable line does.
+            Err(_) => rec.skipped.push((number, "not text (invalid UTF-8)".into())),
         }
     }
     Ok(rec)
+}
+
+/// Whether the start of a file (`head`) is not text, and, when its magic number says, what it
+/// is (" (PNG image?)"): what users give by mistake for a recording, such as a frame or the
+/// video. Text has no NUL byte, and its first line is UTF-8.
+fn binary_kind(head: &[u8]) -> Option<&'static str> {
+    let magic: [(&[u8], usize, &str); 6] = [
+        (b"\x89PNG\r\n\x1a\n", 0, " (PNG image?)"),
+        (b"\xff\xd8\xff", 0, " (JPEG image?)"),
+        (b"ftypqt", 4, " (MOV video?)"),
+        (b"ftypheic", 4, " (HEIC image?)"),
+        (b"ftyp", 4, " (MP4 video?)"),
+        (b"moov", 4, " (MOV video?)"),
+    ];
+    if let Some(&(_, _, what)) = magic.iter().find(|(m, at, _)| head.get(*at..*at + m.len()) == Some(*m)) {
+        return Some(what);
+    }
+    let first_line = head.split(|&b| b == b'\n').next().unwrap_or_default();
+    let utf8 = match std::str::from_utf8(first_line) {
+        Ok(_) => true,
+        // A first line longer than the buffer may end in a character cut in two: that is text.
+        Err(e) => e.error_len().is_none() && first_line.len() == head.len(),
+    };
+    (head.contains(&0) || !utf8).then_some("")
+}
+
+/// Reads line `number` of a recording into `rec`.
+fn read_line(rec: &mut Recording, number: usize, line: &str) -> Result<(), RecordingError> {
+    if line.trim().is_empty() {
+        return Ok(());
+    }
+    let value: Value = match serde_json::from_str(line) {
+        Ok(v) => v,
+        Err(e) => {
+            rec.skipped.push((number, format!("not JSON ({e})")));
+            return Ok(());
+        }
+    };
+    if let Some(h) = value.get("recording") {
+        let h: RecordingHeader = serde_json::from_value(h.clone())
+            .map_err(|e| RecordingError::Header(format!("not a recording header: {e}")))?;
+        if h.format != RECORDING_FORMAT || h.version != RECORDING_VERSION {
+            return Err(RecordingError::Header(format!(
+                "format {} version {} (this build reads {RECORDING_FORMAT} version {RECORDING_VERSION})",
+                h.format, h.version
+            )));
+        }
+        rec.header = Some(h);
+        return Ok(());
+    }
+    if let Some(b) = value.get("bite") {
+        match serde_path_to_error::deserialize::<_, BiteRecord>(b.clone()) {
+            Ok(b) if b.maxilla_from_mandible.translation().norm() <= MAX_TRANSLATION_MM && b.t.is_finite() => {
+                rec.bites.push(b)
+            }
+            Ok(_) => rec.skipped.push((number, "implausible bite: its rest position or time is absurd".into())),
+            Err(e) => rec.skipped.push((number, format!("not a bite: field `{}`: {}", e.path(), e.inner()))),
+        }
+        return Ok(());
+    }
+    match serde_path_to_error::deserialize::<_, FrameRecord>(value) {
+        Ok(f) => match implausible(&f) {
+            None => rec.frames.push(f),
+            Some(why) => rec.skipped.push((number, why)),
+        },
+        Err(e) => rec.skipped.push((number, format!("not a frame: field `{}`: {}", e.path(), e.inner()))),
+    }
+    Ok(())
 }
 
 /// Farther than any camera films a jaw from, or any jaw moves (mm): a pose beyond it comes from a
@@ -225,5 +269,47 @@ mod tests {
         assert_eq!(rec.skipped.len(), 1);
         assert_eq!(rec.skipped[0].0, 2);
         assert!(rec.skipped[0].1.contains("implausible pose: field `maxilla_from_mandible`"), "{}", rec.skipped[0].1);
+    }
+
+    #[test]
+    fn an_image_or_a_video_given_as_a_recording_is_named_once() {
+        let dir = std::env::temp_dir().join(format!("jawtrack-recording-binary-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a folder");
+        let cases: [(&str, &[u8], &str); 4] = [
+            ("frame.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR", " (PNG image?)"),
+            ("frame.jpg", b"\xff\xd8\xff\xe0\0\x10JFIF\0", " (JPEG image?)"),
+            ("clip.mov", b"\0\0\0\x14ftypqt  \0\0\0\0", " (MOV video?)"),
+            ("data.bin", b"{\"frame\":0}\0\0\0", ""),
+        ];
+        for (file, bytes, what) in cases {
+            let path = dir.join(file);
+            std::fs::write(&path, bytes).expect("written");
+            let err = open(&path).expect_err("not a recording");
+            let name = path.display();
+            assert_eq!(
+                err.to_string(),
+                format!("{name}: not a recording (JSON lines): it looks like a binary file{what}")
+            );
+            // Nothing further down the chain repeats it (the CLI prints the chain).
+            assert!(std::error::Error::source(&err).is_none(), "{file}");
+        }
+        let mp4 = read_recording(&b"\0\0\0\x18ftypmp42\0\0\0\0"[..]).expect_err("a video");
+        assert!(mp4.to_string().ends_with("(MP4 video?)"), "{mp4}");
+        std::fs::remove_dir_all(&dir).expect("removed");
+    }
+
+    #[test]
+    fn a_garbled_line_after_the_first_is_skipped_like_any_unreadable_line() {
+        let good = frame(0, None).to_line();
+        let text = [good.as_bytes(), b"\n\xff\xfe garbled\n", good.as_bytes(), b"\r\n"].concat();
+        let rec = read_recording(&text[..]).expect("reads");
+        assert_eq!(rec.frames.len(), 2);
+        assert_eq!(rec.skipped, [(2, "not text (invalid UTF-8)".to_string())]);
+    }
+
+    #[test]
+    fn a_missing_file_is_named_once() {
+        let err = open(Path::new("/nonexistent/session.jsonl")).expect_err("no such file");
+        assert!(std::error::Error::source(&err).is_none(), "the reason is in the message: {err}");
     }
 }

@@ -7,7 +7,7 @@
 use crate::SessionError;
 use crate::anatomy::upper_scan_left;
 use crate::arches::{ArchInput, load_arch, tooth_places};
-use crate::contacts::write_outputs;
+use crate::contacts::{fingerprint, write_outputs};
 use crate::json::clean_json;
 use crate::scan_pose::{PoseSource, PosedFrame};
 use jawtrack_occlusion::Mesh;
@@ -184,6 +184,7 @@ pub fn run(
         check_frames(job, &run_settings, ContactSession::new(&upper, &lower, job.settings), &frames, &extras, events)?;
 
     let s = session.summary();
+    let warnings = run_warnings(&s, &job.settings, events);
     let more = write_outputs(job.out, &session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left)?;
     more.warnings.iter().for_each(|w| events.warning(w));
     let mut written = vec![path];
@@ -200,6 +201,8 @@ pub fn run(
             "penetrating": s.penetrating,
         },
         "settings": run_settings,
+        "recording": fingerprint(rec, &file_name(job.poses)),
+        "warnings": warnings,
         "meshes": { "maxilla": upper_reports, "mandible": lower_reports },
         "contact_area": s.contact_area,
         "teeth": teeth_totals,
@@ -219,6 +222,21 @@ pub fn run(
     std::fs::write(&p, text + "\n").map_err(|e| write_error(&p, &e))?;
     written.push(p);
     Ok(ContactReport { summary: s, teeth: teeth_totals, read: rec.frames.len(), skipped_no_pose, setup_ms, written })
+}
+
+/// What the session's numbers cannot say, for `summary.json`; those the command does not
+/// already print (the depth cut off at `--max-depth`) are told to `events` too.
+fn run_warnings(s: &SessionSummary, settings: &ContactSettings, events: &mut dyn ContactEvents) -> Vec<String> {
+    let depth = s.depth_warning(settings);
+    depth.iter().for_each(|w| events.warning(w));
+    // The command prints its own warning when nothing came within the threshold
+    // (`jawtrack_report::contact_findings`); the report reads this one from the folder.
+    depth.into_iter().chain(s.no_contact_warning(settings)).collect()
+}
+
+/// A path's file name, else the path as given.
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(|| path.display().to_string(), |f| f.to_string_lossy().into_owned())
 }
 
 /// The settings that the header and `summary.json` both hold, and the inputs.
@@ -340,5 +358,63 @@ mod tests {
         let rec = Recording::default();
         let err = select(&rec, &PoseSource::Recorded, 1, Path::new("p.jsonl")).expect_err("no frames");
         assert!(err.to_string().starts_with("p.jsonl: none of its 0 frames has a pose"), "{err}");
+    }
+
+    /// Warnings told as a run goes.
+    #[derive(Default)]
+    struct Told(Vec<String>);
+
+    impl ContactEvents for Told {
+        fn warning(&mut self, warning: &str) {
+            self.0.push(warning.to_string());
+        }
+    }
+
+    #[test]
+    fn a_run_past_the_depth_measured_warns_and_its_summary_names_the_recording() {
+        use jawtrack_occlusion::scenes;
+        use nalgebra::Point3;
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let (upper, lower) = ([dir.path().join("patch.stl")], [dir.path().join("ball.stl")]);
+        scenes::patch(10.0, 40, 0.0, true).write_stl_file(&upper[0]).expect("written");
+        scenes::sphere(Point3::new(0.0, 0.0, -3.0), 3.0, 40).write_stl_file(&lower[0]).expect("written");
+        // The ball's top 0.2 mm, then 1 mm, through the patch: past the 0.5 mm measured.
+        let lines: Vec<String> = [(0, 0.2), (1, 1.0)]
+            .iter()
+            .map(|(i, z)| {
+                format!(r#"{{"frame":{i},"t":{i},"maxilla":null,"mandible":null,"maxilla_from_mandible":[1,0,0,0,0,1,0,0,0,0,1,{z},0,0,0,1]}}"#)
+            })
+            .collect();
+        let rec = jawtrack_recording::read_recording(lines.join("\n").as_bytes()).expect("a recording");
+        let out = dir.path().join("contacts");
+        let job = ContactJob {
+            maxilla: &upper,
+            mandible: &lower,
+            poses: Path::new("pushed.jsonl"),
+            registration: None,
+            points: None,
+            settings: ContactSettings::default(),
+            dynamics: None,
+            every: 1,
+            out: &out,
+        };
+        let mut told = Told::default();
+        let found = run(&job, &rec, &PoseSource::Direct, &mut told).expect("a run");
+        assert_eq!((found.summary.frames, found.summary.beyond_max_depth), (2, 1));
+        let depth =
+            told.0.iter().find(|w| w.starts_with("deepest contact reached --max-depth 0.5 mm in 1 of 2 frames"));
+        assert!(depth.is_some_and(|w| w.ends_with("raise --max-depth or check the registration")), "{:?}", told.0);
+        let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+        let summary: Value = serde_json::from_str(&text).expect("JSON");
+        assert_eq!(summary["warnings"][0].as_str(), depth.map(String::as_str));
+        assert_eq!(summary["recording"]["name"], "pushed.jsonl");
+        assert_eq!(crate::contacts::check_matches(&summary, &rec, "pushed.jsonl").expect("the same recording"), None);
+        let lines = std::fs::read_to_string(out.join("contacts.jsonl")).expect("contacts.jsonl");
+        let flags: Vec<Option<bool>> = lines
+            .lines()
+            .skip(1)
+            .map(|l| serde_json::from_str::<Value>(l).expect("JSON")["beyond_max_depth"].as_bool())
+            .collect();
+        assert_eq!(flags, [None, Some(true)]);
     }
 }

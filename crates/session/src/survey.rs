@@ -59,8 +59,12 @@ pub fn survey(
         progress(k + 1, checked.len());
     }
     let maps = contact_map::session_maps(&session, [&upper, &lower], &first_pose, [&teeth[0], &teeth[1]], upper_left);
-    let warnings = if maps.iter().any(|m| !m.sided) { vec![UNSIDED.to_string()] } else { Vec::new() };
     let s = session.summary();
+    let mut warnings: Vec<String> =
+        s.depth_warning(&settings).into_iter().chain(s.no_contact_warning(&settings)).collect();
+    if maps.iter().any(|m| !m.sided) {
+        warnings.push(UNSIDED.to_string());
+    }
     let summary = json!({
         "settings": {"mode": "kinematic", "threshold_mm": settings.threshold_mm},
         "frames": {"checked": s.frames, "with_contact": s.with_contact, "penetrating": s.penetrating},
