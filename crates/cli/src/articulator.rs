@@ -24,7 +24,7 @@ pub(crate) struct ArticulatorArgs {
     moves: MovementArgs,
     /// The frame (its `frame` number) of the closed jaw every movement is measured from;
     /// default: the bite accepted while recording, else the first frame with a jaw pose.
-    #[arg(long)]
+    #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
     /// Read each value over this much of its path's travel (mm).
     #[arg(long, default_value_t = ArticulatorOptions::default().over_mm, value_name = "MM")]

@@ -47,7 +47,8 @@ pub(crate) fn run(a: &DemoArgs) -> Result<()> {
         tracked.push(jawtrack_demo::track_against_truth(&a.out, &truth, label, marker, file)?);
         say!("{}", tracked[tracked.len() - 1]);
     }
-    say!("{}", Motion::of(&truth, &tracked[0].path));
+    // The calibrated file: the one the report below is made from.
+    say!("{}", Motion::of(&truth, &tracked[1].poses)?);
     let written = jawtrack_demo::plot_incisor(&a.out, &truth, &tracked)?;
     let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
     say!("Plots of the incisor's path: {}", names.join(", "));

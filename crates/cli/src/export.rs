@@ -11,16 +11,16 @@ use crate::flags::{SessionArg, load, registration};
 use crate::numbers::fixed;
 use anyhow::{Context, Result};
 use clap::{ArgGroup, Args};
-use jawtrack_kinematics::Displacement;
+use jawtrack_kinematics::Metrics;
 use jawtrack_plot as plot;
-use jawtrack_session::export::{Format, Inputs, displacements};
+use jawtrack_session::export::{Format, Inputs};
 use jawtrack_session::{rest::require_rest, rest_of};
 use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack export`.
 #[derive(Args)]
-#[command(group(ArgGroup::new("format").required(true).args(["csv", "jsonl", "transforms_csv", "transforms_json", "trc", "mot"])))]
+#[command(group(ArgGroup::new("format").required(true).args(["csv", "jsonl", "transforms_csv", "transforms_json", "trc", "mot", "c3d"])))]
 pub(crate) struct ExportArgs {
     /// The recording (JSON lines).
     recording: PathBuf,
@@ -50,12 +50,21 @@ pub(crate) struct ExportArgs {
     /// angles (°) and the condylar midpoint's shift (m), in OpenSim's axes.
     #[arg(long)]
     mot: bool,
+    /// For biomechanics tools (Visual3D, Mokka, ezc3d): the same three points as --trc, in the
+    /// same axes (mm), as a C3D file at the recording's frame rate; a frame lost or without a
+    /// jaw pose holds them as missing. Needs --out FILE.
+    #[arg(long)]
+    c3d: bool,
     /// The registration file (`jawtrack register`) the transforms are taken through; without
     /// it, the recording's own `maxilla_scan_from_mandible_scan` (tracked with a registration).
     #[arg(long)]
     registration: Option<PathBuf>,
     #[command(flatten)]
     points: crate::flags::PointsArg,
+    /// The incisal point X,Y,Z in the mandible marker's frame (mm) for the CSV's incisor
+    /// columns, in place of the points file's (--points) or the standard mounting's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = crate::numbers::parse_point, allow_hyphen_values = true)]
+    incisor: Option<[f64; 3]>,
     /// Output file; `-` for standard output.
     #[arg(long, default_value = "-")]
     out: PathBuf,
@@ -65,7 +74,7 @@ pub(crate) struct ExportArgs {
     session: SessionArg,
     /// The frame (its `frame` number) whose jaw pose is the rest position; default: the bite
     /// accepted while recording (a `bite` line), else the first frame with a jaw pose.
-    #[arg(long)]
+    #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
 }
 
@@ -81,8 +90,10 @@ pub(crate) struct PlotArgs {
     force: crate::output::ForceArgs,
     /// The frame whose jaw pose is the rest position; default: the bite accepted while
     /// recording, else the first frame with a jaw pose.
-    #[arg(long)]
+    #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
+    #[command(flatten)]
+    incisor: crate::flags::IncisorArgs,
     #[command(flatten)]
     session: SessionArg,
 }
@@ -97,16 +108,21 @@ pub(crate) fn export(a: &ExportArgs) -> Result<()> {
         (a.transforms_json, Format::TransformsJson),
         (a.trc, Format::Trc),
         (a.mot, Format::Mot),
+        (a.c3d, Format::C3d),
     ]
     .into_iter()
     .find_map(|(given, f)| given.then_some(f))
-    .context("give one of --csv, --jsonl, --transforms-csv, --transforms-json, --trc, --mot")?;
+    .context("give one of --csv, --jsonl, --transforms-csv, --transforms-json, --trc, --mot, --c3d")?;
     let to_stdout = a.out.as_os_str() == "-";
+    if to_stdout && format == Format::C3d && std::io::IsTerminal::is_terminal(&std::io::stdout()) {
+        anyhow::bail!("--c3d writes a binary file: give --out FILE.c3d");
+    }
     let named = if to_stdout { &a.recording } else { &a.out };
     let inputs = Inputs {
         rest: rest_of(&rec, a.rest_frame)?,
         registration: registration(a.registration.as_deref())?,
         points: a.points.points.as_deref(),
+        incisor: a.incisor,
         recording: a.recording.display().to_string(),
         name: named.file_name().map_or_else(|| "jawtrack".into(), |n| n.to_string_lossy().into_owned()),
     };
@@ -134,22 +150,24 @@ pub(crate) fn plot(a: &PlotArgs) -> Result<()> {
     a.force.check_folder(&a.out, &files.iter().map(String::as_str).collect::<Vec<_>>())?;
     let rec = load(&a.recording, a.session)?;
     let rest = require_rest(&rec, a.rest_frame, &a.recording, "plot")?.pose();
-    let path = displacements(&rec.frames, &rest);
+    let incisor = a.incisor.choose(&rest)?.incisor;
+    let path = jawtrack_session::incisor::path(&rec.frames, &incisor, &rest);
+    let metrics = Metrics::compute(&path).context("no frame has a jaw pose")?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let charts = jawtrack_report::incisor_charts(&path);
+    let timed: Vec<_> = path.iter().map(|(t, _, d)| (*t, *d)).collect();
+    let charts = jawtrack_report::incisor_charts(&timed);
     for (stem, doc) in &charts {
         let [svg, png] = plot::save_svg_and_png(doc, &a.out.join(stem))?;
         say!("{}\n{}", svg.display(), png.display());
     }
-    let peak = |f: &dyn Fn(&Displacement) -> f64| path.iter().map(|(_, d)| f(d)).fold(f64::NEG_INFINITY, f64::max);
     tell!(
         "{} frames with a jaw pose of {}; widest opening {} mm, left {} mm, right {} mm, protrusion {} mm",
         path.len(),
         rec.frames.len(),
-        fixed(peak(&|d| d.opening), 1),
-        fixed(peak(&|d| d.lateral), 1),
-        fixed(peak(&|d| -d.lateral), 1),
-        fixed(peak(&|d| d.protrusive), 1)
+        fixed(metrics.max_opening.mm, 1),
+        fixed(metrics.max_left.mm, 1),
+        fixed(metrics.max_right.mm, 1),
+        fixed(metrics.max_protrusion.mm, 1)
     );
     Ok(())
 }

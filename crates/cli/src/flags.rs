@@ -8,6 +8,7 @@ use jawtrack_pose::Pose;
 use jawtrack_recording::{Recording, SessionId};
 use jawtrack_registration::Registration;
 use jawtrack_session::SessionError;
+use jawtrack_session::incisor::ChosenIncisor;
 use jawtrack_session::movements::MovementWindows;
 use std::path::{Path, PathBuf};
 
@@ -30,6 +31,34 @@ pub(crate) struct PointsArg {
     /// Default: the standard harness mounting.
     #[arg(long, value_name = "FILE")]
     pub(crate) points: Option<PathBuf>,
+}
+
+/// Which lower incisal point the displacements are of, for `metrics` and `plot` (the report
+/// and `view` take `--points` and `--registration` too; `export` has its own).
+#[derive(clap::Args, Clone, Debug)]
+pub(crate) struct IncisorArgs {
+    /// The anatomical points file (`jawtrack points`): its lower incisal point and its head
+    /// frame (occlusal plane, midline); needs --registration. Default: the standard mounting.
+    #[arg(long, value_name = "FILE", requires = "registration")]
+    pub(crate) points: Option<PathBuf>,
+    /// The registration file (`jawtrack register`) that places the points file's upper scan on
+    /// the maxilla marker.
+    #[arg(long, value_name = "FILE", requires = "points")]
+    pub(crate) registration: Option<PathBuf>,
+    /// The incisal point X,Y,Z in the mandible marker's frame (mm), in place of the points
+    /// file's or the standard harness mounting's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = crate::numbers::parse_point, allow_hyphen_values = true)]
+    pub(crate) incisor: Option<[f64; 3]>,
+}
+
+impl IncisorArgs {
+    /// The point chosen (`jawtrack_session::incisor::ChosenIncisor`), its head frame placed
+    /// with the jaw at `rest`; prints the anatomy's warnings.
+    pub(crate) fn choose(&self, rest: &Pose) -> Result<ChosenIncisor> {
+        let reg = registration(self.registration.as_deref())?;
+        let a = anatomy(self.points.as_deref(), reg.as_ref(), rest)?;
+        Ok(ChosenIncisor::of(&a, self.incisor))
+    }
 }
 
 /// Opens `path`'s session (`jawtrack_session::open`), printing the skipped lines.
@@ -62,9 +91,12 @@ pub(crate) fn registration(path: Option<&Path>) -> Result<Option<Registration>> 
 /// Parses a window, `FROM:TO` in seconds of the frames' `t`.
 pub(crate) fn parse_window(s: &str) -> Result<Window, String> {
     let (a, b) = s.split_once(':').ok_or_else(|| format!("expected FROM:TO in seconds, got '{s}'"))?;
-    let num = |v: &str| v.trim().parse::<f64>().map_err(|e| format!("'{v}' in '{s}': {e}"));
+    let num = |v: &str| match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("'{v}' in '{s}' is not a number of seconds")),
+    };
     let (from, to) = (num(a)?, num(b)?);
-    if !(from.is_finite() && to.is_finite() && from < to) {
+    if from >= to {
         return Err(format!("'{s}': FROM must be before TO"));
     }
     Ok(Window { from, to })
@@ -133,7 +165,7 @@ pub(crate) struct ViewerArgs {
     /// if they were in their markers' frames.
     #[arg(long)]
     registration: Option<PathBuf>,
-    /// Serve the page from this folder (with three.js installed by `npm ci --prefix viewer`)
+    /// Serve the page from this folder (the repository's `viewer`, with three.js vendored)
     /// instead of the copy built into jawtrack: for working on the page.
     #[arg(long)]
     viewer_dir: Option<PathBuf>,
@@ -153,7 +185,7 @@ impl ViewerArgs {
         }
         for (option, path) in [("--maxilla", &maxilla), ("--mandible", &mandible)] {
             if let Some(p) = path {
-                jawtrack_occlusion::Mesh::load(p).with_context(|| option)?;
+                jawtrack_occlusion::load_mesh(p).with_context(|| option)?;
             }
         }
         let registration = registration(self.registration.as_deref())?;
@@ -183,5 +215,23 @@ pub(crate) fn warn_if_exposed(addr: std::net::SocketAddr) {
             "warning: the viewer at {addr} is open to the network with no password: anyone who can reach it \
              sees the poses (and, live, can press Calibrate); serve on 127.0.0.1 unless the network is trusted"
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_window_names_what_is_wrong_with_it() {
+        assert_eq!(parse_window("1.5:3"), Ok(Window { from: 1.5, to: 3.0 }));
+        for (bad, says) in [
+            ("NaN:1", "'NaN' in 'NaN:1' is not a number of seconds"),
+            ("1:inf", "'inf' in '1:inf' is not a number of seconds"),
+            ("2:1", "FROM must be before TO"),
+            ("2", "expected FROM:TO"),
+        ] {
+            assert!(parse_window(bad).is_err_and(|e| e.contains(says)), "{bad}: {:?}", parse_window(bad));
+        }
     }
 }

@@ -29,11 +29,11 @@ pub(crate) struct HingeAxisArgs {
     to: Option<f64>,
     /// The frame (its `frame` number) of the closed jaw the opening starts from; default: the
     /// bite accepted while recording, else the first frame of the window with a jaw pose.
-    #[arg(long)]
+    #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
     /// Leave out frames turned further than this from the closed jaw (°): past early opening
     /// the condyles slide forward and no axis is fixed.
-    #[arg(long, default_value_t = HingeOptions::default().max_rotation_deg, value_name = "DEG")]
+    #[arg(long, default_value_t = HingeOptions::default().max_rotation_deg, value_name = "DEG", value_parser = crate::numbers::parse_positive_deg, allow_hyphen_values = true)]
     max_rotation_deg: f64,
     /// The registration file (`jawtrack register`): also give the axis in the upper scan's frame.
     #[arg(long)]

@@ -8,14 +8,12 @@
 //! rest position); frames without a jaw pose are skipped and counted.
 
 use crate::flags::{SessionArg, load};
-use crate::numbers::parse_point;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_kinematics::{Incisor, Metrics, Sample};
+use jawtrack_kinematics::{Metrics, Sample};
 use jawtrack_plot as plot;
 use jawtrack_session::measures::metrics_json;
 use jawtrack_session::rest_of;
-use nalgebra::Point3;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -26,13 +24,11 @@ pub(crate) struct MetricsArgs {
     recording: PathBuf,
     #[command(flatten)]
     session: SessionArg,
-    /// The incisal point X,Y,Z in the mandible marker's frame (mm); default: the standard
-    /// harness mounting's.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
-    incisor: Option<[f64; 3]>,
+    #[command(flatten)]
+    incisor: crate::flags::IncisorArgs,
     /// The frame (its `frame` number) whose jaw pose is the rest position; default: the bite
     /// accepted while recording (a `bite` line), else the first frame with a jaw pose.
-    #[arg(long)]
+    #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
     /// Output folder for the envelope plots (SVG and PNG) and metrics.json.
     #[arg(long)]
@@ -55,15 +51,12 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
         bail!("{name}: no frame has a jaw pose (both markers tracked), nothing to measure");
     };
     let rest = rest_at.pose();
-    let incisor = a.incisor.map_or_else(Incisor::standard, |p| Incisor::at(Point3::from(p)));
-    let path: Vec<Sample> = rec
-        .frames
-        .iter()
-        .filter_map(|f| f.maxilla_from_mandible.map(|m| (f.t, f.frame, incisor.displacement(&m, &rest))))
-        .collect();
+    let chosen = a.incisor.choose(&rest)?;
+    let (incisor, standard) = (chosen.incisor, chosen.standard);
+    let path = jawtrack_session::incisor::path(&rec.frames, &incisor, &rest);
     let skipped = rec.frames.len() - path.len();
     let metrics = Metrics::compute(&path).context("no frame has a jaw pose")?;
-    let report = metrics_json(&metrics, &path, &rec, &a.recording, rest_at, &incisor, a.incisor.is_none());
+    let report = metrics_json(&metrics, &path, &rec, &a.recording, rest_at, &incisor, standard);
     if skipped > 0 {
         tell!("{name}: {skipped} of {} frames have no jaw pose, skipped", rec.frames.len());
     }
@@ -73,7 +66,6 @@ pub(crate) fn run(a: &MetricsArgs) -> Result<()> {
     if a.json {
         say!("{report}");
     } else {
-        let standard = a.incisor.is_none();
         for line in jawtrack_report::metrics_summary(&metrics, &path, skipped, &rest_at.describe(), &incisor, standard)
         {
             say!("{line}");

@@ -26,6 +26,20 @@ pub(crate) fn parse_point(s: &str) -> Result<[f64; 3], String> {
     Ok([v[0], v[1], v[2]])
 }
 
+/// Parses a frame number (its `frame` in the recording), for `--rest-frame`: a negative or
+/// fractional one is named as such rather than as "invalid digit".
+pub(crate) fn parse_frame(s: &str) -> Result<u64, String> {
+    s.trim().parse::<u64>().map_err(|_| format!("expected a frame number (a whole number, 0 or more), got '{s}'"))
+}
+
+/// Parses a positive, finite angle in degrees.
+pub(crate) fn parse_positive_deg(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a positive angle in degrees, got '{s}'")),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -37,6 +51,21 @@ mod tests {
             ["0.00", "0.00", "-0.005", "1.5"]
         );
         assert_eq!([full(-0.0), full(-0.001), full(2.5)], ["0", "-0.001", "2.5"]);
+    }
+
+    #[test]
+    fn frame_numbers_and_angles_say_what_they_expect() {
+        assert_eq!(parse_frame("12"), Ok(12));
+        for bad in ["-1", "1.5", "x", ""] {
+            assert!(
+                parse_frame(bad).is_err_and(|e| e.contains("a whole number, 0 or more") && e.contains(bad)),
+                "{bad}"
+            );
+        }
+        assert_eq!(parse_positive_deg("12.5"), Ok(12.5));
+        for bad in ["-5", "0", "NaN", "inf", "x"] {
+            assert!(parse_positive_deg(bad).is_err_and(|e| e.contains("positive angle") && e.contains(bad)), "{bad}");
+        }
     }
 
     #[test]

@@ -150,6 +150,22 @@ fn export_and_plot_refuse_what_they_cannot_use() {
     }
     let o = jawtrack(&["metrics", absurd.to_str().expect("utf-8")]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("implausible pose"), "says why the line was skipped");
+
+    // A refused export leaves no file, so the rerun is not blocked by "already exists".
+    for (flag, needle) in [
+        ("--transforms-csv", "registration"),
+        ("--transforms-json", "registration"),
+        ("--trc", "no frame has a jaw pose"),
+        ("--mot", "no frame has a jaw pose"),
+        ("--c3d", "no frame has a jaw pose"),
+    ] {
+        let out = dir.path().join(format!("failed{flag}"));
+        check(
+            jawtrack(&["export", empty.to_str().expect("utf-8"), flag, "--out", out.to_str().expect("utf-8")]),
+            needle,
+        );
+        assert!(!out.exists(), "{flag}: a failed export left {}", out.display());
+    }
 }
 
 #[test]
@@ -263,4 +279,24 @@ fn opensim_files_carry_every_frame_in_opensim_s_axes() {
     // The patient's points need the registration that places them.
     let o = jawtrack(&["export", &poses, "--trc", "--points", "points.json"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--registration"));
+
+    // C3D: the .trc's points, frames and rate (crates/c3d/tests checks the format against
+    // ezc3d and py-c3d; here, that export fills it with the .trc's numbers).
+    let file = dir.path().join("hinge.c3d");
+    ok(&jawtrack(&["export", &poses, "--c3d", "--out", file.to_str().expect("utf-8")]));
+    let c3d = std::fs::read(&file).expect("the C3D file");
+    let word = |at: usize| u16::from_le_bytes([c3d[at], c3d[at + 1]]);
+    let float = |at: usize| f32::from_le_bytes([c3d[at], c3d[at + 1], c3d[at + 2], c3d[at + 3]]);
+    assert_eq!((c3d[1], word(2), word(6), word(8)), (0x50, 3, 1, 5), "key, points, first and last frame");
+    let rate: f64 = rate_row[0].parse().expect("the .trc's rate");
+    assert!(float(12) < 0.0 && (f64::from(float(20)) - rate).abs() < 1e-3, "float storage at {rate} frames/s");
+    let data = (usize::from(word(16)) - 1) * 512;
+    for (frame, line) in lines[5..].iter().enumerate() {
+        let want: Vec<f64> = line.split('\t').skip(2).map(|v| v.parse().expect("a number")).collect();
+        assert_eq!(want.len(), 9, "{line}");
+        for (k, w) in want.iter().enumerate() {
+            let got = float(data + frame * 3 * 16 + (k / 3) * 16 + (k % 3) * 4);
+            assert!((f64::from(got) - w).abs() < 1e-3, "frame {frame}, value {k}: C3D {got}, .trc {w}");
+        }
+    }
 }

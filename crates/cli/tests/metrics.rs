@@ -162,11 +162,12 @@ fn metrics_equal_the_known_motion() {
     let (left, right) = (num(&report["max_left_lateral"]["mm"]), num(&report["max_right_lateral"]["mm"]));
     assert!((4.5..6.0).contains(&left) && (3.5..5.0).contains(&right), "left {left}, right {right}");
 
-    let sagittal: Vec<[f64; 2]> = s.truth.iter().map(|x| [x.d[2], x.d[0]]).collect();
-    let frontal: Vec<[f64; 2]> = s.truth.iter().map(|x| [x.d[1], x.d[0]]).collect();
+    // The hulls are in the axes the plots and the borders use: anterior or left, and up.
+    let sagittal: Vec<[f64; 2]> = s.truth.iter().map(|x| [x.d[2], -x.d[0]]).collect();
+    let frontal: Vec<[f64; 2]> = s.truth.iter().map(|x| [x.d[1], -x.d[0]]).collect();
     let area = check_envelope(&report["envelope_sagittal"], &sagittal);
     // It holds rest, the widest opening and the farthest protrusion: at least their triangle.
-    let at = |frame: u64| s.truth.iter().find(|x| x.frame == frame).map(|x| [x.d[2], x.d[0]]).expect("a frame");
+    let at = |frame: u64| s.truth.iter().find(|x| x.frame == frame).map(|x| [x.d[2], -x.d[0]]).expect("a frame");
     let triangle = cross([0.0, 0.0], at(opening.1), at(protrusion.1)).abs() / 2.0;
     assert!(triangle > 50.0 && area >= triangle - 1e-6, "sagittal area {area}, triangle {triangle}");
     check_envelope(&report["envelope_frontal"], &frontal);

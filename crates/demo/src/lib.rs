@@ -22,7 +22,7 @@ mod calibrate;
 mod track;
 
 pub use calibrate::{MarkerCalibration, calibrate_marker};
-pub use track::{Motion, Sample, TrackingCheck, markers, plot_incisor, track_against_truth, write_report};
+pub use track::{Motion, TrackingCheck, markers, plot_incisor, recorded_path, track_against_truth, write_report};
 
 use jawtrack_apriltag::{Detector, DetectorConfig, ImageView};
 use jawtrack_marker::Marker;

@@ -3,19 +3,16 @@
 
 use crate::{DemoError, pick};
 use jawtrack_apriltag::{DetectorConfig, ImageView};
-use jawtrack_kinematics::Mounting;
+use jawtrack_kinematics::metrics::count_openings;
+use jawtrack_kinematics::{Incisor, Metrics, Sample};
 use jawtrack_marker::Marker;
 use jawtrack_plot::{self as plot, Series, Style};
 use jawtrack_pose::Pose;
 use jawtrack_recording::{Overwrite, RecordingHeader, RecordingWriter};
 use jawtrack_synth::GroundTruth;
 use jawtrack_tracker::{Tracker, TrackerConfig};
-use nalgebra::Point3;
 use std::fmt;
 use std::path::{Path, PathBuf};
-
-/// The lower incisor's position (head frame, mm) at a time (s).
-pub type Sample = (f64, Point3<f64>);
 
 /// The marker files the demo tracks with, each with its label and the recording it writes:
 /// the nominal one (what a user has before calibration), the `calibrated` one, and the marker
@@ -49,8 +46,6 @@ pub struct TrackingCheck {
     pub ms_median: f64,
     /// The recording written.
     pub poses: PathBuf,
-    /// The tracked lower incisor's path.
-    pub path: Vec<Sample>,
 }
 
 impl fmt::Display for TrackingCheck {
@@ -84,7 +79,6 @@ pub fn track_against_truth(
         detector: DetectorConfig { linear_edges: truth.realism.gamma, ..DetectorConfig::default() },
         ..TrackerConfig::default()
     };
-    let mounting = Mounting::default();
     let mut tracker = Tracker::new(marker, config)?;
     let poses = dir.join(file);
     let mut header = RecordingHeader::new("jawtrack demo");
@@ -92,7 +86,7 @@ pub fn track_against_truth(
     header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
     // The demo's own output folder: a second run replaces the first's files.
     let mut out = RecordingWriter::create(&poses, header, Overwrite::Replace)?;
-    let (mut dt, mut dr, mut ms, mut path) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut dt, mut dr, mut ms) = (Vec::new(), Vec::new(), Vec::new());
     for (i, f) in truth.frames.iter().enumerate() {
         let img = image::open(dir.join(&f.file))?.to_luma8();
         let (w, h) = (img.width() as usize, img.height() as usize);
@@ -103,7 +97,6 @@ pub fn track_against_truth(
             let (angle, dist) = m.distance_to(&f.maxilla_from_mandible);
             dt.push(dist);
             dr.push(angle.to_degrees());
-            path.push((f.t, mounting.lower_incisor(&m)));
         }
     }
     for v in [&mut dt, &mut dr, &mut ms] {
@@ -117,44 +110,64 @@ pub fn track_against_truth(
         error_deg: [pick(&dr, 0.5), pick(&dr, 1.0)],
         ms_median: pick(&ms, 0.5),
         poses,
-        path,
     })
 }
 
-/// The lower incisor in the truth, sampled at each frame.
+/// The lower incisor's path in the truth: the standard incisal point's displacement from the
+/// first frame's jaw (closed), as [`jawtrack_session::incisor::path`] measures a recording.
 fn truth_path(truth: &GroundTruth) -> Vec<Sample> {
-    let mounting = Mounting::default();
-    truth.frames.iter().map(|f| (f.t, mounting.lower_incisor(&f.maxilla_from_mandible))).collect()
+    let incisor = Incisor::standard();
+    let Some(rest) = truth.frames.first().map(|f| f.maxilla_from_mandible) else {
+        return Vec::new();
+    };
+    truth
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (f.t, i as u64, incisor.displacement(&f.maxilla_from_mandible, &rest)))
+        .collect()
 }
 
-/// The lower incisor's motion in plain numbers, tracked against the truth.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The lower incisor's path in a recording, measured as `jawtrack metrics FILE` measures it
+/// with its defaults (the standard incisal point, from the rest position).
+pub fn recorded_path(poses: &Path) -> Result<Vec<Sample>, DemoError> {
+    let rec = jawtrack_session::open(poses, None)?.recording;
+    let Some(rest) = jawtrack_session::rest_of(&rec, None)? else {
+        return Err(DemoError::NoJawPose(poses.display().to_string()));
+    };
+    Ok(jawtrack_session::incisor::path(&rec.frames, &Incisor::standard(), &rest.pose()))
+}
+
+/// The lower incisor's motion in plain numbers, tracked against the truth, each measure as
+/// `docs/kinematics.md` defines it (the numbers `jawtrack metrics` and the report give).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Motion {
+    /// The recording measured.
+    pub recording: PathBuf,
     /// How many times it opened.
     pub openings: usize,
-    /// Widest opening from its closed position (mm), tracked.
-    pub widest_mm: f64,
+    /// Maximum opening (mm): the incisal point's largest downward displacement from rest.
+    pub max_opening_mm: f64,
     /// The same in the truth (mm).
-    pub truth_widest_mm: f64,
-    /// How far back it moved (mm) as it swung about the condyles.
+    pub truth_max_opening_mm: f64,
+    /// How far back it swung (mm) about the condyles: the largest backward displacement.
     pub back_mm: f64,
 }
 
 impl Motion {
-    /// The motion of the `tracked` path, and the truth's widest opening.
-    pub fn of(truth: &GroundTruth, tracked: &[Sample]) -> Motion {
-        let closed = Point3::from(Mounting::default().lower_incisal_point);
-        let openings = |p: &[Sample]| -> Vec<(f64, f64)> { p.iter().map(|(t, x)| (*t, (x - closed).norm())).collect() };
-        let (tracked_openings, real) = (openings(tracked), openings(&truth_path(truth)));
-        let peak = |v: &[(f64, f64)]| v.iter().map(|p| p.1).fold(0.0, f64::max);
-        Motion {
-            openings: jawtrack_kinematics::metrics::count_openings(
-                &tracked_openings.iter().map(|p| p.1).collect::<Vec<_>>(),
-            ),
-            widest_mm: peak(&tracked_openings),
-            truth_widest_mm: peak(&real),
-            back_mm: tracked.iter().map(|(_, x)| x.z - closed.z).fold(0.0, f64::max),
-        }
+    /// The motion of the lower incisor in `tracked` (a recording file), and the truth's
+    /// maximum opening.
+    pub fn of(truth: &GroundTruth, tracked: &Path) -> Result<Motion, DemoError> {
+        let path = recorded_path(tracked)?;
+        let measured = Metrics::compute(&path).ok_or_else(|| DemoError::NoJawPose(tracked.display().to_string()))?;
+        let real = Metrics::compute(&truth_path(truth)).map_or(0.0, |m| m.max_opening.mm);
+        Ok(Motion {
+            recording: tracked.to_path_buf(),
+            openings: count_openings(&path.iter().map(|(_, _, d)| *d).collect::<Vec<_>>()),
+            max_opening_mm: measured.max_opening.mm,
+            truth_max_opening_mm: real,
+            back_mm: path.iter().map(|(_, _, d)| -d.protrusive).fold(0.0, f64::max),
+        })
     }
 }
 
@@ -162,39 +175,42 @@ impl fmt::Display for Motion {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "The jaw: the lower incisor opened {} times, widest {:.1} mm from its closed position (truth {:.1} mm), and moved back by up to {:.1} mm as it swung about the condyles.",
-            self.openings, self.widest_mm, self.truth_widest_mm, self.back_mm,
+            "The jaw, measured from {} as `jawtrack metrics` and the report measure it: the lower incisor opened {} times, maximum opening {:.1} mm (downward from the closed jaw; truth {:.1} mm), and it swung back by up to {:.1} mm about the condyles.",
+            self.recording.display(),
+            self.openings,
+            self.max_opening_mm,
+            self.truth_max_opening_mm,
+            self.back_mm,
         )
     }
 }
 
 /// Writes the incisor's opening over time and its sagittal path (SVG), the truth and each
-/// tracking; returns the files.
+/// tracking, each measured from its own closed jaw as [`Motion`] measures it; returns the files.
 pub fn plot_incisor(dir: &Path, truth: &GroundTruth, tracked: &[TrackingCheck]) -> Result<Vec<PathBuf>, DemoError> {
-    let closed = Point3::from(Mounting::default().lower_incisal_point);
     let truth = truth_path(truth);
+    let paths = tracked.iter().map(|c| recorded_path(&c.poses)).collect::<Result<Vec<_>, _>>()?;
     let colors = ["#d62728", "#2ca02c", "#1f77b4"];
     let series = |f: &dyn Fn(&Sample) -> (f64, f64)| {
         let mut v =
             vec![Series { name: "truth", color: "#222", style: Style::Line, points: truth.iter().map(f).collect() }];
-        for (c, color) in tracked.iter().zip(colors) {
-            v.push(Series { name: c.label, color, style: Style::Dots, points: c.path.iter().map(f).collect() });
+        for ((c, path), color) in tracked.iter().zip(&paths).zip(colors) {
+            v.push(Series { name: c.label, color, style: Style::Dots, points: path.iter().map(f).collect() });
         }
         v
     };
-    // Head frame: y down, z posterior; plots show up and anterior as positive.
     let opening = plot::chart(
-        "Lower incisor: distance from its closed position",
+        "Lower incisor: opening (downward from the closed jaw)",
         "time (s)",
         "opening (mm)",
-        &series(&|(t, x)| (*t, (x - closed).norm())),
+        &series(&|(t, _, d)| (*t, d.opening)),
         false,
     );
     let sagittal = plot::chart(
         "Lower incisor path, sagittal plane (seen from the patient's right: facing right)",
-        "anterior (mm)",
+        "protrusive (mm)",
         "up (mm)",
-        &series(&|(_, x)| (closed.z - x.z, closed.y - x.y)),
+        &series(&|(_, _, d)| (d.protrusive, -d.opening)),
         true,
     );
     let mut written = Vec::new();

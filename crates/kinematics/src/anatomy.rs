@@ -41,6 +41,11 @@ impl Anatomy {
             warnings: Vec::new(),
         }
     }
+
+    /// Whether this is the standard harness mounting (no patient's points).
+    pub fn is_standard(&self) -> bool {
+        self.mounting == Mounting::default()
+    }
 }
 use serde::{Deserialize, Serialize};
 

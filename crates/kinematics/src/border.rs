@@ -142,9 +142,10 @@ impl Border {
             let (t, frame, d) = path.iter().find(|(_, f, _)| *f == e.frame).copied().unwrap_or((e.t, e.frame, ZERO));
             (view.project(&d), frame, t)
         };
+        let displacement = |e: &crate::Extreme| path.iter().find(|(_, f, _)| *f == e.frame).map_or(ZERO, |s| s.2);
         let mut landmarks = Vec::new();
         let mut add = |name: &'static str, e: Option<crate::Extreme>| {
-            if let Some(e) = e.filter(|e| e.mm >= LANDMARK_MIN_MM) {
+            if let Some(e) = e.filter(|e| e.mm >= LANDMARK_MIN_MM && recorded(name, &displacement(e))) {
                 let (p, frame, t) = at(e);
                 landmarks.push(Landmark { name, at: p, frame, t });
             }
@@ -236,6 +237,21 @@ pub const MAX_LEFT: &str = "maximum left laterotrusion";
 pub const MAX_RIGHT: &str = "maximum right laterotrusion";
 /// The farthest back with the teeth near contact.
 pub const RETRUDED: &str = "retruded contact position";
+
+/// Whether the movement a landmark names was made where the extreme is: the widest opening is
+/// an opening ([`crate::metrics::opens`]); the farthest left, right or forward is a glide, down
+/// no more than [`GUIDANCE_RATIO`](crate::metrics::GUIDANCE_RATIO) times as far as it went that
+/// way. A hinge opening's 1 mm sway at 35 mm open is not a laterotrusion, nor a protrusion's
+/// 4 mm along the guidance an opening.
+fn recorded(name: &str, d: &crate::Displacement) -> bool {
+    let steepest = crate::metrics::GUIDANCE_RATIO;
+    match name {
+        MAX_OPENING => crate::metrics::opens(d),
+        MAX_LEFT | MAX_RIGHT => steepest * d.lateral.abs() >= d.opening,
+        MAX_PROTRUSION => steepest * d.protrusive >= d.opening,
+        _ => true,
+    }
+}
 
 /// A landmark's short tag for plots: IP, RCP, MO, MP, ML, MR.
 pub fn tag(name: &str) -> &'static str {
@@ -383,6 +399,30 @@ mod tests {
         let m = Metrics::compute(&path).expect("a path");
         let names: Vec<&str> = Border::of(PlaneView::Frontal, &path, &m).landmarks.iter().map(|l| l.name).collect();
         assert_eq!(names, [MAX_OPENING, INTERCUSPAL]);
+    }
+
+    #[test]
+    fn a_wide_hinge_opening_s_sway_is_not_named_a_laterotrusion_nor_a_glide_an_opening() {
+        // Straight down 36 mm and back, 1.2 mm to the left at the bottom (over the 0.5 mm floor).
+        let hinge: Vec<Sample> = (0..=40u32)
+            .map(|k| {
+                let o = 36.0 - (f64::from(k) - 20.0).abs() * 1.8;
+                sample(0.05 * f64::from(k), u64::from(k), -0.1 * o, o, 1.2 * o / 36.0)
+            })
+            .collect();
+        let m = Metrics::compute(&hinge).expect("a path");
+        let names: Vec<&str> = Border::of(PlaneView::Frontal, &hinge, &m).landmarks.iter().map(|l| l.name).collect();
+        assert_eq!(names, [MAX_OPENING, INTERCUSPAL]);
+        // A protrusion along the guidance: 8 mm forward and 4.6 mm down is no opening.
+        let glide: Vec<Sample> = (0..=20u32)
+            .map(|k| {
+                let s = 1.0 - (f64::from(k) - 10.0).abs() / 10.0;
+                sample(0.05 * f64::from(k), u64::from(k), 8.0 * s, 4.6 * s, 0.0)
+            })
+            .collect();
+        let m = Metrics::compute(&glide).expect("a path");
+        let names: Vec<&str> = Border::of(PlaneView::Sagittal, &glide, &m).landmarks.iter().map(|l| l.name).collect();
+        assert_eq!(names, [MAX_PROTRUSION, INTERCUSPAL]);
     }
 
     #[test]

@@ -20,8 +20,9 @@ impl Envelope {
         Envelope { hull, area_mm2 }
     }
 
-    /// As `metrics.json` holds it, with the axes named `x` and `y`.
-    pub fn to_json(&self, x: &str, y: &str) -> Value {
+    /// As `metrics.json` holds it, in `view`'s axes (as its border is).
+    pub fn to_json(&self, view: crate::PlaneView) -> Value {
+        let (x, y) = view.axes();
         json!({
             "axes": [x, y],
             "area_mm2": self.area_mm2,

@@ -1,9 +1,10 @@
 //! The lower incisor's clinical numbers over a session: widest opening, left and right
 //! lateral excursion, protrusion and retrusion (with the teeth near contact: the backward swing
 //! of an opening arc is not a retrusion), each with the frame where it happens, and the
-//! envelopes of motion in the sagittal plane (protrusive vs opening) and the frontal plane
-//! (lateral vs opening).
+//! envelopes of motion in the sagittal plane (anterior vs up) and the frontal plane (the
+//! patient's left vs up), in each plane's axes as it is drawn ([`PlaneView`]), as the border is.
 
+use crate::PlaneView;
 use crate::envelope::Envelope;
 use crate::point::Displacement;
 use serde_json::{Value, json};
@@ -63,16 +64,16 @@ pub struct Metrics {
     /// Farthest back (−protrusive), as a positive number, among the frames opened no more
     /// than [`RETRUSION_OPENING_MM`]; `None` when the jaw never came that near closed.
     pub max_retrusion: Option<Extreme>,
-    /// Sagittal envelope: x protrusive, y opening.
+    /// Sagittal envelope: x anterior, y up ([`PlaneView::Sagittal`]).
     pub sagittal: Envelope,
-    /// Frontal envelope: x lateral (patient's left), y opening.
+    /// Frontal envelope: x toward the patient's left, y up ([`PlaneView::Frontal`]).
     pub frontal: Envelope,
 }
 
 impl Metrics {
     /// The metrics of `path`; `None` when it is empty.
     pub fn compute(path: &[Sample]) -> Option<Self> {
-        let plane = |f: fn(&Displacement) -> (f64, f64)| path.iter().map(|(_, _, d)| f(d)).collect::<Vec<_>>();
+        let plane = |view: PlaneView| path.iter().map(|(_, _, d)| view.project(d)).collect::<Vec<_>>();
         Some(Metrics {
             frames: path.len(),
             max_opening: Extreme::of(path, |d| d.opening)?,
@@ -84,8 +85,8 @@ impl Metrics {
                     path.iter().copied().filter(|(_, _, d)| d.opening <= RETRUSION_OPENING_MM).collect();
                 Extreme::of(&near_closed, |d| -d.protrusive)
             },
-            sagittal: Envelope::of(&plane(sagittal)),
-            frontal: Envelope::of(&plane(frontal)),
+            sagittal: Envelope::of(&plane(PlaneView::Sagittal)),
+            frontal: Envelope::of(&plane(PlaneView::Frontal)),
         })
     }
 
@@ -99,42 +100,49 @@ impl Metrics {
             "max_protrusion": self.max_protrusion.to_json(),
             "max_retrusion": self.max_retrusion.map(Extreme::to_json),
             "retrusion_max_opening_mm": RETRUSION_OPENING_MM,
-            "envelope_sagittal": self.sagittal.to_json("protrusive_mm", "opening_mm"),
-            "envelope_frontal": self.frontal.to_json("lateral_mm", "opening_mm"),
+            "envelope_sagittal": self.sagittal.to_json(PlaneView::Sagittal),
+            "envelope_frontal": self.frontal.to_json(PlaneView::Frontal),
         })
     }
 }
 
-/// A displacement in the sagittal plane: (protrusive, opening).
-pub fn sagittal(d: &Displacement) -> (f64, f64) {
-    (d.protrusive, d.opening)
-}
-
-/// A displacement in the frontal plane: (lateral, opening).
-pub fn frontal(d: &Displacement) -> (f64, f64) {
-    (d.lateral, d.opening)
-}
-
-/// Openings in a sequence of incisor openings (mm): rises of at least 3 mm from the lowest
-/// point since the last opening, each counted once it falls back by 3 mm or the data ends.
-pub fn count_openings(opening: &[f64]) -> usize {
+/// Openings in a sequence of incisor displacements: rises of the opening by at least 3 mm
+/// from the lowest point since the last opening, each counted once it falls back by 3 mm or the
+/// data ends — when at its widest the incisor went down more steeply than the teeth can guide
+/// it ([`opens`]): a protrusion or a laterotrusion lowers it a few millimetres along the
+/// teeth's guidance, and that is not an opening.
+pub fn count_openings(path: &[Displacement]) -> usize {
     const STEP_MM: f64 = 3.0;
-    let (mut n, mut low, mut high, mut open) = (0, f64::INFINITY, f64::NEG_INFINITY, false);
-    for &v in opening {
+    let (mut n, mut low, mut open) = (0, f64::INFINITY, false);
+    let mut high = Displacement { opening: f64::NEG_INFINITY, lateral: 0.0, protrusive: 0.0 };
+    for d in path {
         if open {
-            high = high.max(v);
-            if v < high - STEP_MM {
-                (open, low) = (false, v);
-                n += 1;
+            if d.opening > high.opening {
+                high = *d;
+            }
+            if d.opening < high.opening - STEP_MM {
+                (open, low) = (false, d.opening);
+                n += usize::from(opens(&high));
             }
         } else {
-            low = low.min(v);
-            if v > low + STEP_MM {
-                (open, high) = (true, v);
+            low = low.min(d.opening);
+            if d.opening > low + STEP_MM {
+                (open, high) = (true, *d);
             }
         }
     }
-    n + usize::from(open)
+    n + usize::from(open && opens(&high))
+}
+
+/// How much further down than sideways or forward a glide along the teeth can take the
+/// incisor: 2, a descent of 63° from the horizontal, beyond the steepest anterior and canine
+/// guidance (commonly 40–60°). An opening swings the incisor back, not forward.
+pub const GUIDANCE_RATIO: f64 = 2.0;
+
+/// Whether a displacement is an opening rather than a glide along the teeth: down more than
+/// [`GUIDANCE_RATIO`] times as far as sideways or forward.
+pub fn opens(d: &Displacement) -> bool {
+    d.opening > GUIDANCE_RATIO * d.lateral.abs().max(d.protrusive.max(0.0))
 }
 
 #[cfg(test)]
@@ -170,12 +178,13 @@ mod tests {
         assert_eq!(m.max_protrusion, Extreme { mm: 8.0, frame: 15, t: 0.4 });
         // Frame 11 swings 4 mm back while 30 mm open: an opening arc, not a retrusion.
         assert_eq!(m.max_retrusion, Some(Extreme { mm: 1.1, frame: 17, t: 0.6 }));
-        // Sagittal (protrusive, opening): corners (-4,30) (-1.1,0.8) (0,0) (8,3.2) (0,30).
+        // Sagittal (anterior, up): corners (-4,-30) (0,-30) (8,-3.2) (0,0) (-1.1,-0.8).
         assert_eq!(m.sagittal.hull.len(), 5);
-        let corners = [(-1.1, 0.8), (0.0, 0.0), (8.0, 3.2), (0.0, 30.0), (-4.0, 30.0)];
+        let corners = [(-4.0, -30.0), (0.0, -30.0), (8.0, -3.2), (0.0, 0.0), (-1.1, -0.8)];
         assert!((m.sagittal.area_mm2 - polygon_area(&corners)).abs() < 1e-12);
-        assert!(path.iter().all(|(_, _, x)| inside(&m.frontal.hull, frontal(x))));
-        assert!(path.iter().all(|(_, _, x)| inside(&m.sagittal.hull, sagittal(x))));
+        assert!(path.iter().all(|(_, _, x)| inside(&m.frontal.hull, PlaneView::Frontal.project(x))));
+        assert!(path.iter().all(|(_, _, x)| inside(&m.sagittal.hull, PlaneView::Sagittal.project(x))));
+        assert_eq!(j_axes(&m), ["anterior (mm)", "up (mm)"], "the border's axes");
         let j = m.to_json();
         assert_eq!(j["max_right_lateral"]["mm"], 5.0);
         assert_eq!(j["envelope_sagittal"]["vertices"], 5);
@@ -183,6 +192,15 @@ mod tests {
         let open_only = Metrics::compute(&[(0.0, 0, d(5.0, 0.0, -3.0))]).expect("a path");
         assert_eq!(open_only.max_retrusion, None, "never near closed");
         assert!(open_only.to_json()["max_retrusion"].is_null());
+    }
+
+    fn j_axes(m: &Metrics) -> Vec<String> {
+        m.to_json()["envelope_sagittal"]["axes"]
+            .as_array()
+            .expect("axes")
+            .iter()
+            .map(|a| a.to_string().replace('"', ""))
+            .collect()
     }
 
     #[test]
@@ -197,8 +215,13 @@ mod tests {
     fn openings_are_counted_however_small_the_first() {
         let cycle = |peak: f64| [0.0, peak / 2.0, peak, peak / 2.0, 0.0];
         let v: Vec<f64> = [10.0, 20.0, 30.0, 40.0].iter().flat_map(|&p| cycle(p)).collect();
-        assert_eq!(count_openings(&v), 4);
-        assert_eq!(count_openings(&[0.0, 1.0, 0.5, 1.5, 0.2]), 0, "tremor is not an opening");
-        assert_eq!(count_openings(&[0.0, 5.0, 10.0]), 1, "still open at the end");
+        let down = |v: &[f64]| v.iter().map(|&o| d(o, 0.0, 0.0)).collect::<Vec<_>>();
+        assert_eq!(count_openings(&down(&v)), 4);
+        assert_eq!(count_openings(&down(&[0.0, 1.0, 0.5, 1.5, 0.2])), 0, "tremor is not an opening");
+        assert_eq!(count_openings(&down(&[0.0, 5.0, 10.0])), 1, "still open at the end");
+        // Three protrusions along the incisal guidance: 8 mm forward, 4.6 mm down.
+        let glide: Vec<Displacement> =
+            (0..3).flat_map(|_| [0.0, 0.5, 1.0, 0.5, 0.0]).map(|k| d(4.6 * k, 0.0, 8.0 * k)).collect();
+        assert_eq!(count_openings(&glide), 0, "a protrusion is not an opening");
     }
 }

@@ -59,7 +59,9 @@ pub fn trc(mounting: &Mounting, rest: &Pose, frames: &[Frame], rate: f64, name: 
         "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames"
     );
     let _ = writeln!(out, "{rate}\t{rate}\t{n}\t{}\tmm\t{rate}\t1\t{n}", TRC_MARKERS.len());
-    let _ = writeln!(out, "Frame#\tTime\t{}", TRC_MARKERS.map(|m| format!("{m}\t\t")).join(""));
+    // Each name heads its three columns (X, Y, Z), so two empty cells follow it, as OpenSim
+    // writes the row.
+    let _ = writeln!(out, "Frame#\tTime\t{}", TRC_MARKERS.map(|m| format!("{m}\t\t")).join("\t"));
     let axes: Vec<String> = (1..=TRC_MARKERS.len()).map(|k| format!("X{k}\tY{k}\tZ{k}")).collect();
     let _ = writeln!(out, "\t\t{}", axes.join("\t"));
     for (i, ((t, _), at)) in frames.iter().zip(marker_positions(mounting, rest, frames)).enumerate() {
@@ -181,6 +183,12 @@ mod tests {
         assert_eq!(lines.len(), 5 + 3);
         assert!(lines[0].starts_with("PathFileType\t4") && lines[2].starts_with("10\t10\t3\t3\tmm"));
         assert!(lines[3].contains("LowerIncisor") && lines[4].contains("X3\tY3\tZ3"));
+        // Each marker's name stands over its X column.
+        let (names, axes): (Vec<&str>, Vec<&str>) = (lines[3].split('\t').collect(), lines[4].split('\t').collect());
+        for (k, marker) in TRC_MARKERS.iter().enumerate() {
+            let at = names.iter().position(|c| c == marker).expect("the marker's name");
+            assert_eq!(axes[at], format!("X{}", k + 1), "{marker} over its X column");
+        }
         // At rest the incisor sits where the mounting puts it, in OpenSim axes.
         let p = m.lower_incisal_point;
         let row: Vec<f64> = lines[5].split('\t').skip(2).take(3).map(|v| v.parse().expect("a number")).collect();

@@ -52,6 +52,12 @@ impl Incisor {
         Incisor { mounting: Mounting::default(), on_mandible: point_in_mandible_marker }
     }
 
+    /// A point given in the mandible marker's frame (mm), its displacement read in the head
+    /// frame of `mounting` (a patient's points file's, say).
+    pub fn on(mounting: Mounting, point_in_mandible_marker: Point3<f64>) -> Self {
+        Incisor { mounting, on_mandible: point_in_mandible_marker }
+    }
+
     /// The point in the mandible marker's frame (mm).
     pub fn point_in_mandible_marker(&self) -> Point3<f64> {
         self.on_mandible

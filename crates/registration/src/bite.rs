@@ -169,32 +169,48 @@ impl BiteWindow {
 
     /// The bite over the window, if the rule accepts it.
     pub fn judge(&self) -> Result<Bite, BiteRefusal> {
-        let r = &self.rule;
-        let got = self.samples.len();
-        if got < r.min_frames {
-            return Err(BiteRefusal::TooFewFrames { needed: r.min_frames, got, window_s: r.window_s });
-        }
-        let (first, last) = (self.samples[0].0, self.samples[got - 1].0);
-        let span_s = last - first;
-        if span_s < r.min_span_s {
-            return Err(BiteRefusal::TooShort { needed_s: r.min_span_s, span_s, frames: got });
-        }
-        let poses: Vec<Pose> = self.samples.iter().map(|&(_, p)| p).collect();
-        let Some(mean) = mean_pose(&poses) else {
-            return Err(BiteRefusal::TooFewFrames { needed: r.min_frames, got: 0, window_s: r.window_s });
-        };
-        let spread_mm = poses.iter().map(|p| (p.translation() - mean.translation()).norm()).fold(0.0, f64::max);
-        let spread_deg = poses.iter().map(|p| p.rotation().angle_to(&mean.rotation()).to_degrees()).fold(0.0, f64::max);
-        if spread_mm > r.max_spread_mm || spread_deg > r.max_spread_deg {
-            return Err(BiteRefusal::Moving {
-                spread_mm,
-                spread_deg,
-                limit_mm: r.max_spread_mm,
-                limit_deg: r.max_spread_deg,
-            });
-        }
-        Ok(Bite { t: last, maxilla_from_mandible: mean, frames: got, span_s, spread_mm, spread_deg })
+        let samples: Vec<(f64, Pose)> = self.samples.iter().copied().collect();
+        judge_held(&self.rule, &samples)
     }
+}
+
+/// The rule applied to a held position: the frames `samples` (time, jaw pose; oldest first),
+/// all of them, whether the last moments of a live bite step or a window marked afterwards in
+/// a recording (centric occlusion, maximal intercuspation).
+///
+/// # Examples
+///
+/// ```
+/// use jawtrack_registration::bite::{BiteRule, judge_held};
+/// let still: Vec<_> = (0..10).map(|i| (f64::from(i) * 0.05, jawtrack_pose::Pose::identity())).collect();
+/// assert!(judge_held(&BiteRule::default(), &still).is_ok());
+/// ```
+pub fn judge_held(rule: &BiteRule, samples: &[(f64, Pose)]) -> Result<Bite, BiteRefusal> {
+    let r = rule;
+    let got = samples.len();
+    if got < r.min_frames {
+        return Err(BiteRefusal::TooFewFrames { needed: r.min_frames, got, window_s: r.window_s });
+    }
+    let (first, last) = (samples[0].0, samples[got - 1].0);
+    let span_s = last - first;
+    if span_s < r.min_span_s {
+        return Err(BiteRefusal::TooShort { needed_s: r.min_span_s, span_s, frames: got });
+    }
+    let poses: Vec<Pose> = samples.iter().map(|&(_, p)| p).collect();
+    let Some(mean) = mean_pose(&poses) else {
+        return Err(BiteRefusal::TooFewFrames { needed: r.min_frames, got: 0, window_s: r.window_s });
+    };
+    let spread_mm = poses.iter().map(|p| (p.translation() - mean.translation()).norm()).fold(0.0, f64::max);
+    let spread_deg = poses.iter().map(|p| p.rotation().angle_to(&mean.rotation()).to_degrees()).fold(0.0, f64::max);
+    if spread_mm > r.max_spread_mm || spread_deg > r.max_spread_deg {
+        return Err(BiteRefusal::Moving {
+            spread_mm,
+            spread_deg,
+            limit_mm: r.max_spread_mm,
+            limit_deg: r.max_spread_deg,
+        });
+    }
+    Ok(Bite { t: last, maxilla_from_mandible: mean, frames: got, span_s, spread_mm, spread_deg })
 }
 
 #[cfg(test)]

@@ -50,10 +50,8 @@ pub fn incisor_charts(path: &[Timed]) -> Vec<(String, Document)> {
 
 /// The convex hull `envelope` of `path` in `view`, with the path over it.
 pub fn envelope_chart(view: PlaneView, envelope: &Envelope, path: &[Sample]) -> Document {
-    // The hulls are of (x, opening) pairs; drawn as `plot` draws the path, up upward.
-    let up = |(x, y): (f64, f64)| (x, -y);
-    // The hull closed back to its first corner.
-    let outline = envelope.hull.iter().chain(envelope.hull.first()).map(|&q| up(q)).collect();
+    // The hull is in the view's axes; closed back to its first corner.
+    let outline = envelope.hull.iter().chain(envelope.hull.first()).copied().collect();
     // The hull first, so the path stays visible where it runs along the outline.
     let series = [
         Series { name: "envelope (convex hull)", color: "#1f77b4", style: Style::Line, points: outline },

@@ -59,12 +59,7 @@ fn poses_in(inputs: &Inputs, w: Window) -> Vec<Pose> {
 pub(crate) fn render(inputs: &Inputs) -> Report {
     let rec = inputs.recording;
     let mounting = inputs.anatomy.mounting;
-    let incisor = Incisor::of(mounting);
-    let path: Vec<Sample> = rec
-        .frames
-        .iter()
-        .filter_map(|f| f.maxilla_from_mandible.map(|p| (f.t, f.frame, incisor.displacement(&p, &inputs.rest))))
-        .collect();
+    let path: Vec<Sample> = jawtrack_session::incisor::path(&rec.frames, &Incisor::of(mounting), &inputs.rest);
     let metrics = Metrics::compute(&path);
     let mut warnings = quality_warnings(inputs, path.len());
     let mut body = String::new();
@@ -282,7 +277,7 @@ fn incisor_section(m: &Metrics, path: &[Sample]) -> String {
             |e| vec![name.into(), mm(Some(e.mm), 1), e.frame.to_string(), format!("{} s", fixed(e.t, 2))],
         )
     };
-    let openings = count_openings(&path.iter().map(|(_, _, d)| d.opening).collect::<Vec<_>>());
+    let openings = count_openings(&path.iter().map(|(_, _, d)| *d).collect::<Vec<_>>());
     let mut s = table(
         &["measure (lower incisal point, from the closed jaw)", "value", "frame", "time"],
         &[
@@ -294,9 +289,20 @@ fn incisor_section(m: &Metrics, path: &[Sample]) -> String {
         ],
     );
     s += &format!(
-        "<p>{} frames with a jaw pose; the jaw opened {openings} times (rises of 3 mm or more).</p>",
+        "<p>{} frames with a jaw pose; the jaw opened {openings} times (rises of 3 mm or more, steeper than the \
+         teeth guide a glide).</p>",
         m.frames
     );
+    let widest = path.iter().find(|(_, f, _)| *f == m.max_opening.frame).map(|s| s.2);
+    if let Some(d) = widest.filter(|d| !jawtrack_kinematics::metrics::opens(d)) {
+        s += &format!(
+            "<p class=\"warn\">No opening was recorded: the largest downward move of the incisor, {}, came with a \
+             glide ({} sideways, {} forward), as the teeth guide the jaw; record an opening to measure one.</p>",
+            mm(Some(d.opening), 1),
+            mm(Some(d.lateral.abs()), 1),
+            mm(Some(d.protrusive), 1)
+        );
+    }
     s
 }
 

@@ -3,12 +3,13 @@
 //! is a variant of [`Format`] and an arm of [`export`].
 
 use crate::anatomy::anatomy;
+use crate::incisor::ChosenIncisor;
 use crate::rest::Rest;
 use crate::scan_pose::PoseSource;
 use crate::{SessionError, scan_pose::PosedFrame};
-use jawtrack_kinematics::{Displacement, Incisor};
+use jawtrack_kinematics::{Incisor, Mounting};
 use jawtrack_pose::Pose;
-use jawtrack_recording::{FrameRecord, Recording, RecordingHeader};
+use jawtrack_recording::{Recording, RecordingHeader};
 use jawtrack_registration::Registration;
 use std::io::Write;
 use std::path::Path;
@@ -30,6 +31,8 @@ pub enum Format {
     Trc,
     /// OpenSim: the jaw's coordinates over time from the rest position.
     Mot,
+    /// C3D (biomechanics tools): the `.trc`'s three points, on the recording's frame clock.
+    C3d,
 }
 
 /// What an export reads besides the recording.
@@ -39,8 +42,12 @@ pub struct Inputs<'a> {
     pub rest: Option<Rest>,
     /// The registration the scans' transforms are taken through (else the recorded ones).
     pub registration: Option<Registration>,
-    /// The anatomical points file (OpenSim formats; needs `registration`).
+    /// The anatomical points file (needs `registration`): the head frame and the lower incisal
+    /// point of the CSV's incisor columns and the OpenSim formats.
     pub points: Option<&'a Path>,
+    /// The incisal point in the mandible marker's frame (mm), for the CSV, in place of the
+    /// points file's or the standard mounting's.
+    pub incisor: Option<[f64; 3]>,
     /// The recording's name, for messages.
     pub recording: String,
     /// The name OpenSim files carry (the output file's name).
@@ -56,11 +63,13 @@ pub struct Exported {
     pub warnings: Vec<String>,
 }
 
-/// `v` in full (the shortest text that reads back the same), -0 as 0: users read a sign as a
-/// direction.
+/// `v` as a plain decimal to 9 places (a nanometre, a nanosecond; far below what is measured),
+/// trailing zeros dropped, and a value that rounds to zero without a sign: users read a sign as
+/// a direction, and `1.8e-16` in full is 0.00000000000000018041….
 pub fn full(v: f64) -> String {
-    // Adding +0.0 turns -0.0 into 0.0 and leaves every other value as it is.
-    (v + 0.0).to_string()
+    let text = format!("{v:.9}");
+    let text = if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.') } else { &text };
+    if text == "-0" { "0".to_owned() } else { text.to_owned() }
 }
 
 /// Writes `rec` as `format` to `out`, and says what it wrote. Nothing is written when the
@@ -73,27 +82,36 @@ pub fn full(v: f64) -> String {
 /// let rec = jawtrack_recording::read_recording(r#"{"frame":0,"t":0}"#.as_bytes()).unwrap();
 /// let mut out = Vec::new();
 /// export(Format::Csv, &rec, Inputs::default(), &mut out).unwrap();
-/// assert!(String::from_utf8(out).unwrap().starts_with("frame,seq,t,"));
+/// assert!(String::from_utf8(out).unwrap().starts_with("frame,seq,t_s,"));
 /// ```
 pub fn export(format: Format, rec: &Recording, inputs: Inputs, out: &mut dyn Write) -> Result<Exported, SessionError> {
     let written = |e: &dyn std::fmt::Display| SessionError::Write { path: inputs.name.clone(), reason: e.to_string() };
     let no_pose = || SessionError::NoJawPose { path: inputs.recording.clone(), what: "export" };
     let mut warnings = Vec::new();
     let summary = match format {
-        Format::Trc | Format::Mot => {
+        Format::Trc | Format::Mot | Format::C3d => {
             let Some(rest) = inputs.rest.map(Rest::pose) else {
                 return Err(no_pose());
             };
             let a = anatomy(inputs.points, inputs.registration.as_ref(), &rest)?;
             warnings.extend(a.warnings);
             let frames: Vec<(f64, Option<Pose>)> = rec.frames.iter().map(|f| (f.t, f.maxilla_from_mandible)).collect();
-            let (text, what) = if format == Format::Trc {
-                let rate = frame_rate(&frames);
-                (jawtrack_kinematics::opensim::trc(&a.mounting, &rest, &frames, rate, &inputs.name), "OpenSim .trc")
-            } else {
-                (jawtrack_kinematics::opensim::mot(&a.mounting, &rest, &frames, &inputs.name), "OpenSim .mot")
+            let rate = frame_rate(&frames);
+            let (bytes, what) = match format {
+                Format::Trc => {
+                    let text = jawtrack_kinematics::opensim::trc(&a.mounting, &rest, &frames, rate, &inputs.name);
+                    (text.into_bytes(), "OpenSim .trc".to_owned())
+                }
+                Format::Mot => {
+                    let text = jawtrack_kinematics::opensim::mot(&a.mounting, &rest, &frames, &inputs.name);
+                    (text.into_bytes(), "OpenSim .mot".to_owned())
+                }
+                _ => {
+                    let (bytes, slots) = c3d(&a.mounting, &rest, &frames, rate)?;
+                    (bytes, format!("C3D at {rate} frames/s ({slots} frames on its clock)"))
+                }
             };
-            out.write_all(text.as_bytes()).map_err(|e| written(&e))?;
+            out.write_all(&bytes).map_err(|e| written(&e))?;
             format!("{} frames as {what}", rec.frames.len())
         }
         Format::TransformsCsv | Format::TransformsJson => {
@@ -119,13 +137,55 @@ pub fn export(format: Format, rec: &Recording, inputs: Inputs, out: &mut dyn Wri
             format!("{} frames", rec.frames.len())
         }
         Format::Csv => {
-            csv(rec, inputs.rest.map(Rest::pose), out).map_err(|e| written(&e))?;
+            let rest = inputs.rest.map(Rest::pose);
+            if rest.is_none() && inputs.points.is_some() {
+                return Err(no_pose());
+            }
+            // Without a jaw pose there is no rest, and then no points file (refused above).
+            let a = anatomy(inputs.points, inputs.registration.as_ref(), &rest.unwrap_or_else(Pose::identity))?;
+            warnings.extend(a.warnings.iter().cloned());
+            let incisor = ChosenIncisor::of(&a, inputs.incisor).incisor;
+            csv(rec, &incisor, rest, out).map_err(|e| written(&e))?;
             format!("{} frames", rec.frames.len())
         }
     };
     // Dropping a BufWriter swallows its last write's error: a full disk must not pass.
     out.flush().map_err(|e| written(&e))?;
     Ok(Exported { summary, warnings })
+}
+
+/// The C3D file of `frames` at `rate`, and how many frames it holds. C3D frames are evenly
+/// spaced, so each recorded frame goes to the slot of its time; slots no frame reached (frames
+/// lost on the link) and frames without a jaw pose hold the points as missing.
+fn c3d(
+    mounting: &Mounting,
+    rest: &Pose,
+    frames: &[(f64, Option<Pose>)],
+    rate: f64,
+) -> Result<(Vec<u8>, usize), SessionError> {
+    let positions = jawtrack_kinematics::opensim::marker_positions(mounting, rest, frames);
+    let t0 = frames.iter().map(|f| f.0).fold(f64::INFINITY, f64::min);
+    let slot = |t: f64| ((t - t0) * rate).round();
+    let last = frames.iter().map(|f| slot(f.0)).fold(0.0, f64::max);
+    if last.is_nan() || last >= jawtrack_c3d::MAX_FRAMES as f64 {
+        return Err(jawtrack_c3d::C3dError::TooManyFrames { frames: last as usize + 1 }.into());
+    }
+    let mut tracks: Vec<jawtrack_c3d::PointTrack> = jawtrack_kinematics::opensim::TRC_MARKERS
+        .iter()
+        .zip(["lower incisal point", "left condyle", "right condyle"])
+        .map(|(label, what)| jawtrack_c3d::PointTrack {
+            label: (*label).into(),
+            description: format!("{what}; mm, X anterior, Y up, Z right"),
+            positions: vec![None; last as usize + 1],
+        })
+        .collect();
+    for ((t, _), at) in frames.iter().zip(positions) {
+        let k = slot(*t) as usize;
+        for (track, q) in tracks.iter_mut().zip(at.iter().flatten()) {
+            track.positions[k] = Some([q.x, q.y, q.z]);
+        }
+    }
+    Ok((jawtrack_c3d::write(&tracks, rate)?, last as usize + 1))
 }
 
 /// The frames' rate (frames/s): the inverse of the median interval, 30 when unknown.
@@ -169,7 +229,7 @@ fn transforms_json(transforms: &[PosedFrame], out: &mut dyn Write) -> std::io::R
 const CSV_COLUMNS: [&str; 22] = [
     "frame",
     "seq",
-    "t",
+    "t_s",
     "received_unix_s",
     "maxilla_tags",
     "mandible_tags",
@@ -191,8 +251,7 @@ const CSV_COLUMNS: [&str; 22] = [
     "protrusive_mm",
 ];
 
-fn csv(rec: &Recording, rest: Option<Pose>, out: &mut dyn Write) -> Result<(), csv::Error> {
-    let incisor = Incisor::standard();
+fn csv(rec: &Recording, incisor: &Incisor, rest: Option<Pose>, out: &mut dyn Write) -> Result<(), csv::Error> {
     let mut w = csv::Writer::from_writer(out);
     w.write_record(CSV_COLUMNS)?;
     let opt = |v: Option<f64>| v.map(full).unwrap_or_default();
@@ -222,10 +281,4 @@ fn csv(rec: &Recording, rest: Option<Pose>, out: &mut dyn Write) -> Result<(), c
     }
     w.flush()?;
     Ok(())
-}
-
-/// The standard incisor's time and displacement from `rest`, per frame with a jaw pose.
-pub fn displacements(frames: &[FrameRecord], rest: &Pose) -> Vec<(f64, Displacement)> {
-    let incisor = Incisor::standard();
-    frames.iter().filter_map(|f| f.maxilla_from_mandible.map(|m| (f.t, incisor.displacement(&m, rest)))).collect()
 }

@@ -10,6 +10,8 @@
 //!   recorded;
 //! - [`arches`] and [`survey`]: the tooth scans read and their contacts checked over frames;
 //!   [`contact_run`]: a whole `jawtrack contacts` run and the files it writes;
+//! - [`incisor`]: the lower incisal point chosen, and its path from the rest position (every
+//!   opening, lateral and protrusive number);
 //! - [`export`]: the export formats (CSV, JSON Lines, scan transforms, OpenSim);
 //! - [`measures`]: the measuring commands' JSON, and the frames a hinge-axis fit takes.
 //!
@@ -29,6 +31,7 @@ pub mod arches;
 pub mod contact_run;
 pub mod contacts;
 pub mod export;
+pub mod incisor;
 pub mod json;
 pub mod measures;
 pub mod movements;
@@ -84,6 +87,9 @@ pub enum SessionError {
         /// Why, line by line (as [`Opened::warnings`]), for the reader to print.
         warnings: Vec<String>,
     },
+    /// A C3D file cannot hold the session as it is (`jawtrack export --c3d`).
+    #[error("C3D: {0}")]
+    C3d(#[from] jawtrack_c3d::C3dError),
     /// The chosen rest frame is not in the recording.
     #[error("--rest-frame {0}: no such frame in the recording")]
     NoRestFrame(u64),
@@ -165,5 +171,18 @@ pub enum SessionError {
         path: String,
         /// Why.
         reason: String,
+    },
+    /// A contacts folder made from another recording than the one it is used with.
+    #[error(
+        "the contacts folder was made from {made_from}, not from {recording}: {differs}; run `jawtrack contacts` on \
+         this recording (or give --contacts the folder made from it)"
+    )]
+    OtherRecording {
+        /// The recording the folder was made from, in words.
+        made_from: String,
+        /// The recording it is used with, in words.
+        recording: String,
+        /// How they differ, in words.
+        differs: String,
     },
 }

@@ -6,7 +6,7 @@ use crate::SessionError;
 use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
-use jawtrack_registration::mean_pose;
+use jawtrack_registration::bite::{BiteRefusal, BiteRule, judge_held};
 
 /// The windows given, each with the flag that gave it (for messages).
 #[derive(Debug, Clone, Copy, Default)]
@@ -62,10 +62,39 @@ impl MovementWindows {
             }
             poses.push(p);
         }
-        let held = |k: usize| poses[k].as_deref().and_then(mean_pose);
-        let (co, mi) = (held(3), held(4));
+        let (co, mi) = (self.held(rec, name, "--co", self.co)?, self.held(rec, name, "--mi", self.mi)?);
         let mut it = poses.into_iter();
         Ok(MovementPoses { border: [it.next().flatten(), it.next().flatten(), it.next().flatten()], co, mi })
+    }
+}
+
+impl MovementWindows {
+    /// A held position's window (CO or MI) as its mean pose, when the jaw was held still in it
+    /// by the bite step's rule ([`BiteRule`]): a window over a moving jaw gives a mean that is
+    /// no position at all (a 29.6 mm "CO–MI slide" on a hinge opening).
+    fn held(&self, rec: &Recording, name: &str, flag: &str, w: Option<Window>) -> Result<Option<Pose>, SessionError> {
+        let Some(w) = w else { return Ok(None) };
+        let samples: Vec<(f64, Pose)> =
+            rec.frames.iter().filter(|f| w.holds(f.t)).filter_map(|f| Some((f.t, f.maxilla_from_mandible?))).collect();
+        // The live step's spread and span; of frames, any three, since a window marked
+        // afterwards is read whole, at whatever rate the phone recorded.
+        let rule = BiteRule { min_frames: 3, ..BiteRule::default() };
+        match judge_held(&rule, &samples) {
+            Ok(bite) => Ok(Some(bite.maxilla_from_mandible)),
+            Err(BiteRefusal::Moving { spread_mm, spread_deg, .. }) => Err(SessionError::Setting(format!(
+                "{flag} {}:{}: the jaw is not held still in that window of {name} ({spread_mm:.2} mm and \
+                 {spread_deg:.2}° from its mean; a held position stays within {} mm and {}°): choose the seconds \
+                 where the jaw is held",
+                w.from, w.to, rule.max_spread_mm, rule.max_spread_deg
+            ))),
+            Err(BiteRefusal::TooFewFrames { got, .. } | BiteRefusal::TooShort { frames: got, .. }) => {
+                Err(SessionError::Setting(format!(
+                    "{flag} {}:{}: {got} frames of {name} with a jaw pose in that window; a held position needs at \
+                     least {} over {} s: widen the window over the held jaw",
+                    w.from, w.to, rule.min_frames, rule.min_span_s
+                )))
+            }
+        }
     }
 }
 
