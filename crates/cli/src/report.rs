@@ -3,12 +3,12 @@
 
 use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, parse_window, registration};
 use crate::output::ForceArgs;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args};
 use jawtrack_kinematics::Window;
 use jawtrack_recording::Recording;
 use jawtrack_registration::Registration;
-use jawtrack_report::{Centric, ContactsResult, Inputs, Windows};
+use jawtrack_report::{Centric, ContactsResult, Inputs, Record, Windows};
 use jawtrack_session::anatomy::upper_scan_left;
 use jawtrack_session::arches::load_arch;
 use jawtrack_session::contacts::read_folder;
@@ -63,6 +63,18 @@ pub(crate) struct ReportArgs {
     /// session (every frame checked, in any mode).
     #[arg(long, value_name = "DIR")]
     contacts: Option<PathBuf>,
+    /// The patient's name or file number, printed at the top of the report (one line, at most
+    /// 200 characters); without it the report leaves a line to write it on.
+    #[arg(long, value_name = "TEXT")]
+    patient: Option<String>,
+    /// Who recorded the session, printed under the patient (one line, at most 200 characters);
+    /// without it, a line to write on.
+    #[arg(long, value_name = "TEXT")]
+    operator: Option<String>,
+    /// Notes printed under the operator (at most 2000 characters; line breaks are kept);
+    /// without them, lines to write on.
+    #[arg(long, value_name = "TEXT")]
+    notes: Option<String>,
     #[command(flatten)]
     force: ForceArgs,
 }
@@ -80,6 +92,10 @@ fn read_contacts(dir: &Path, rec: &Recording, rec_name: &str) -> Result<Contacts
 
 /// Runs `jawtrack report`.
 pub(crate) fn run(a: &ReportArgs) -> Result<()> {
+    let record = Record { patient: a.patient.clone(), operator: a.operator.clone(), notes: a.notes.clone() };
+    if let Err((field, why)) = record.check() {
+        bail!("--{}: {why}", field.name());
+    }
     let name = a.recording.display();
     a.force.check_file(&a.out)?;
     if let Some(pdf) = &a.pdf {
@@ -121,7 +137,7 @@ pub(crate) fn run(a: &ReportArgs) -> Result<()> {
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0.0, |d| d.as_secs_f64()),
     };
-    let report = jawtrack_report::render(&inputs);
+    let report = jawtrack_report::render_with(&inputs, &record);
     a.force.write_file(&a.out, report.html.as_bytes())?;
     for w in &report.warnings {
         tell!("warning: {w}");

@@ -194,3 +194,35 @@ fn a_contacts_folder_puts_its_maps_and_teeth_in_the_report() {
     std::fs::create_dir(&empty).expect("mkdir");
     refused(&jawtrack(&["report", s(&rec), "--out", s(&out), "--force", "--contacts", s(&empty)]), "summary.json");
 }
+
+#[test]
+fn patient_operator_and_notes_are_printed_escaped_and_checked() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (rec, _) = session(dir.path());
+    let out = dir.path().join("report.html");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["report", s(&rec), "--out", s(&out), "--force"];
+        args.extend(extra);
+        jawtrack(&args)
+    };
+    ok(&run(&["--patient", "Ana <Ruiz>", "--notes", "clicks on opening\nleft side"]));
+    let html = std::fs::read_to_string(&out).expect("the report");
+    assert!(html.contains("<tr><th>Patient</th><td>Ana &lt;Ruiz&gt;</td></tr>"), "escaped");
+    assert!(html.contains("<tr><th>Operator</th><td><span class=\"fill\">____"), "a line to fill in");
+    assert!(html.contains("<td>clicks on opening<br>left side</td>"), "line breaks kept");
+    // Refused by flag, before anything is written.
+    std::fs::remove_file(&out).expect("rm");
+    let long = "x".repeat(201);
+    refused(&run(&["--patient", &long]), "--patient: 201 characters; at most 200 are accepted");
+    refused(&run(&["--notes", &"x".repeat(2001)]), "--notes: 2001 characters; at most 2000 are accepted");
+    refused(
+        &run(&["--operator", "Dr A\nB"]),
+        "--operator: control character U+000A at character 5: it must be one line without control characters",
+    );
+    refused(
+        &run(&["--notes", "a\tb"]),
+        "--notes: control character U+0009 at character 2: the notes may hold line breaks but no other control \
+         character",
+    );
+    assert!(!out.exists(), "a refused report leaves no file");
+}

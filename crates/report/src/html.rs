@@ -78,7 +78,9 @@ pub(crate) fn page(title: &str, header: &str, toc: &[(&str, &str)], body: &str) 
     )
 }
 
-/// Screen and print: A4 portrait, figures and tables kept whole on a page.
+/// Screen and print: A4 portrait, figures and tables kept whole on a page. Contact maps take a
+/// row each: their text is sized for the SVG's own width (up to 960 units), so a half-page
+/// column (90 mm) printed its 12-unit labels at 3.2 pt, the full 182 mm prints them at 6.5 pt.
 const STYLE: &str = "\
 body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;color:#222;max-width:960px;margin:0 auto;padding:16px;line-height:1.4}\
 header h1{margin:0 0 4px;font-size:1.6em}header p{margin:0;color:#555}\
@@ -91,7 +93,8 @@ table.facts th{background:#f4f6f8;font-weight:600;width:34%}\
 thead th{background:#f4f6f8}\
 figure{margin:10px 0;break-inside:avoid}figure svg{max-width:100%;height:auto;border:1px solid #ddd}\
 figcaption{font-size:.85em;color:#444}\
-.plots{display:grid;grid-template-columns:1fr 1fr;gap:10px}\
+.plots{display:grid;grid-template-columns:1fr 1fr;gap:10px}.plots.maps{grid-template-columns:1fr}\
+.fill{color:#666}\
 .missing{color:#8a5a00;background:#fff7e6;border-left:4px solid #f0a500;padding:4px 8px}\
 .warn{color:#8a1f11;background:#fdecea;border-left:4px solid #d62728;padding:4px 8px;margin:4px 0}\
 .ok{color:#1b5e20;background:#e8f5e9;border-left:4px solid #2e7d32;padding:4px 8px}\

@@ -1,15 +1,17 @@
 //! The session report: one self-contained, print-friendly HTML page of a recording's jaw
 //! kinematics, for the patient's file. Every number on it comes from `jawtrack_kinematics`
 //! (each function there has its unit test against a closed form or the renderer's truth); this
-//! crate only chooses what to show and lays it out: the session and its calibration, quality
-//! flags, the lower incisor's metrics, Posselt's border movements as traced, the condylar
-//! paths, and, for the windows the caller names, the hinge axis, the articulator values and the
-//! CO–MI slide. Plots are inline SVG, the page has no script and loads nothing, so it prints
-//! and archives as it is.
+//! crate only chooses what to show and lays it out: the patient, operator and notes, the
+//! session and its calibration, quality flags, the lower incisor's metrics, Posselt's border
+//! movements as traced, the condylar paths, and, for the windows the caller names, the hinge
+//! axis, the articulator values and the CO–MI slide. Plots are inline SVG, the page has no
+//! script and loads nothing, so it prints and archives as it is.
 
+mod cautions;
 mod charts;
 mod html;
 mod pdf;
+mod record;
 mod sections;
 mod summary;
 
@@ -19,6 +21,7 @@ pub use jawtrack_kinematics::Window;
 use jawtrack_pose::Pose;
 use jawtrack_recording::Recording;
 pub use pdf::{ReportError, chromium, print_pdf};
+pub use record::{Record, RecordField};
 pub use summary::{
     articulator_summary, co_mi_summary, contact_findings, hinge_summary, metrics_figures, metrics_summary,
 };
@@ -128,7 +131,13 @@ pub fn border_chart(b: &jawtrack_kinematics::Border, path: &[jawtrack_kinematics
     jawtrack_plot::chart(&format!("Lower incisor, {}", b.view.title()), x, y, &series, true)
 }
 
-/// Makes the report of `inputs`.
+/// Makes the report of `inputs`, its patient, operator and notes left to fill in by hand.
 pub fn render(inputs: &Inputs) -> Report {
-    sections::render(inputs)
+    render_with(inputs, &Record::default())
+}
+
+/// Makes the report of `inputs` headed with `record` (kept apart from [`Inputs`] so that every
+/// caller that does not name a patient builds its inputs as before).
+pub fn render_with(inputs: &Inputs, record: &Record) -> Report {
+    sections::render(inputs, record)
 }

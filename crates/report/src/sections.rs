@@ -2,15 +2,16 @@
 //! lays them out. A section with nothing to show says why, and which flag would fill it.
 
 use crate::html::{esc, facts, figure, not_measured, page, section, table};
-use crate::{BLUE, GREEN, Inputs, Report, Window};
+use crate::{BLUE, GREEN, Inputs, Record, Report, Window};
 use jawtrack_kinematics::articulator::name as side_name;
 use jawtrack_kinematics::border::{Border, LANDMARK_MIN_MM, tag};
 
 use jawtrack_kinematics::metrics::{RETRUSION_OPENING_MM, count_openings};
 use jawtrack_kinematics::{
-    ArticulatorOptions, ArticulatorValues, Displacement, HingeOptions, Incisor, Metrics, Movements, PlaneView, Sample,
-    Side, co_mi, hinge,
+    ArticulatorOptions, ArticulatorValues, Displacement, HingeAxis, HingeOptions, Incisor, KinematicsError, Metrics,
+    Movements, PlaneView, Sample, Side, co_mi, hinge,
 };
+use jawtrack_marker::BodyKind;
 use jawtrack_plot::{Series, Style, chart, fixed};
 use jawtrack_pose::{Pose, median};
 use nalgebra::{Point3, Vector3};
@@ -56,14 +57,25 @@ fn poses_in(inputs: &Inputs, w: Window) -> Vec<Pose> {
     inputs.recording.frames.iter().filter(|f| w.holds(f.t)).filter_map(|f| f.maxilla_from_mandible).collect()
 }
 
-pub(crate) fn render(inputs: &Inputs) -> Report {
+/// The hinge axis fitted to the opening window, when one was given: the hinge section shows it
+/// and a warning compares the condyles with it.
+type HingeFit = Option<(Window, Result<HingeAxis, KinematicsError>)>;
+
+pub(crate) fn render(inputs: &Inputs, record: &Record) -> Report {
     let rec = inputs.recording;
     let mounting = inputs.anatomy.mounting;
     let path: Vec<Sample> = jawtrack_session::incisor::path(&rec.frames, &Incisor::of(mounting), &inputs.rest);
     let metrics = Metrics::compute(&path);
+    let fit: HingeFit = inputs
+        .windows
+        .opening
+        .map(|w| (w, hinge::fit(&poses_in(inputs, w), &inputs.rest, None, &HingeOptions::default())));
     let mut warnings = quality_warnings(inputs, path.len());
+    if let Some((_, Ok(axis))) = &fit {
+        warnings.extend(crate::cautions::condyles_off_axis(inputs, axis));
+    }
     let mut body = String::new();
-    body += &section("session", SECTIONS[0].1, &session(inputs));
+    body += &section("session", SECTIONS[0].1, &session(inputs, record));
     body += &section("quality", SECTIONS[1].1, &quality(inputs, path.len(), &warnings));
     match &metrics {
         Some(m) => {
@@ -79,7 +91,7 @@ pub(crate) fn render(inputs: &Inputs) -> Report {
             }
         }
     }
-    body += &section("hinge", SECTIONS[5].1, &hinge_section(inputs));
+    body += &section("hinge", SECTIONS[5].1, &hinge_section(inputs, &fit));
     body += &section("articulator", SECTIONS[6].1, &articulator_section(inputs));
     body += &section("co-mi", SECTIONS[7].1, &co_mi_section(inputs));
     body += &section("contacts", SECTIONS[8].1, &contacts_section(inputs));
@@ -94,7 +106,7 @@ pub(crate) fn render(inputs: &Inputs) -> Report {
     Report { html, sections: SECTIONS.iter().map(|(id, _)| *id).collect(), warnings }
 }
 
-fn session(inputs: &Inputs) -> String {
+fn session(inputs: &Inputs, record: &Record) -> String {
     let rec = inputs.recording;
     let h = rec.header.as_ref();
     let t: Vec<f64> = rec.frames.iter().map(|f| f.t).collect();
@@ -121,7 +133,8 @@ fn session(inputs: &Inputs) -> String {
     let a = &inputs.anatomy;
     let file = |f: &Option<String>| f.as_deref().map_or("none".into(), esc);
     let sessions = rec.sessions();
-    facts(&[
+    let mut rows = crate::record::rows(record);
+    rows.extend([
         ("Recording", esc(&inputs.recording_name)),
         ("Written by", h.map_or("unknown (no header)".into(), |h| esc(&h.source))),
         ("Device", esc(h.and_then(|h| h.device.as_deref()).unwrap_or("not recorded"))),
@@ -150,21 +163,35 @@ fn session(inputs: &Inputs) -> String {
         ("Reference plane", esc(a.reference_plane)),
         ("Condyles and incisal point", esc(a.landmarks)),
         ("Closed jaw (rest)", esc(&inputs.rest_words)),
-    ])
+    ]);
+    facts(&rows)
 }
 
-/// The marker the frames were tracked with: calibrated (and how many tags measured) or nominal.
+/// The marker the frames were tracked with: calibrated (how many of its tags were measured, in
+/// all and per body, out of the tags the marker has) or nominal.
 fn marker_words(inputs: &Inputs) -> String {
-    match marker_measured(inputs) {
-        None => "not recorded".into(),
-        Some(0) => "nominal (the ideal solid's tag places; not calibrated)".into(),
-        Some(n) => format!("calibrated: {n} tags measured"),
+    let Some(marker) = tracked_marker(inputs) else { return "not recorded".into() };
+    let measured = marker.measured_tags();
+    if measured.is_empty() {
+        return "nominal (the ideal solid's tag places; not calibrated)".into();
     }
+    let bodies: Vec<String> = BodyKind::ALL
+        .iter()
+        .filter_map(|&kind| {
+            let tags = &marker.body(kind)?.tags;
+            let n = tags.iter().filter(|t| measured.contains(&t.id)).count();
+            Some(format!("{kind} {n} of {}", tags.len()))
+        })
+        .collect();
+    format!("calibrated: {} of {} tags measured ({})", measured.len(), marker.tags().count(), bodies.join(", "))
+}
+
+fn tracked_marker(inputs: &Inputs) -> Option<jawtrack_marker::Marker> {
+    inputs.recording.header.as_ref()?.tracked_marker()?.ok()
 }
 
 fn marker_measured(inputs: &Inputs) -> Option<usize> {
-    let marker = inputs.recording.header.as_ref()?.tracked_marker()?.ok()?;
-    Some(marker.measured_tags().len())
+    Some(tracked_marker(inputs)?.measured_tags().len())
 }
 
 fn quality_warnings(inputs: &Inputs, with_pose: usize) -> Vec<String> {
@@ -411,17 +438,16 @@ fn condyles_section(inputs: &Inputs) -> String {
     s
 }
 
-fn hinge_section(inputs: &Inputs) -> String {
-    let Some(w) = inputs.windows.opening else {
+fn hinge_section(inputs: &Inputs, fit: &HingeFit) -> String {
+    let Some((w, fitted)) = fit else {
         return not_measured(
             "the hinge axis",
             "Give the window of a slow opening from the closed jaw: <code>--opening FROM:TO</code> (s).",
         );
     };
-    let poses = poses_in(inputs, w);
-    let axis = match hinge::fit(&poses, &inputs.rest, None, &HingeOptions::default()) {
+    let axis = match fitted {
         Ok(a) => a,
-        Err(e) => return format!("<p class=\"warn\">The opening {}: {}</p>", window_words(&w), esc(&e.to_string())),
+        Err(e) => return format!("<p class=\"warn\">The opening {}: {}</p>", window_words(w), esc(&e.to_string())),
     };
     let m = inputs.anatomy.mounting;
     let head_from_maxilla = m.head_from_maxilla;
@@ -434,7 +460,7 @@ fn hinge_section(inputs: &Inputs) -> String {
             "Window",
             format!(
                 "{} ({} poses used, turned up to {}°)",
-                window_words(&w),
+                window_words(w),
                 axis.poses,
                 fixed(axis.max_rotation_deg, 1)
             ),
@@ -586,7 +612,8 @@ fn contacts_section(inputs: &Inputs) -> String {
         ),
         ("Deepest", deepest),
     ]);
-    s += "<div class=\"plots\">";
+    // One map per row: see `html::STYLE` for what that does to their text's printed size.
+    s += "<div class=\"plots maps\">";
     for (what, svg) in &c.maps {
         s += &figure(svg, &esc(what));
     }

@@ -3,7 +3,7 @@
 
 use jawtrack_kinematics::{Anatomy, Mounting, Window};
 use jawtrack_recording::{Recording, RecordingHeader, read_recording};
-use jawtrack_report::{Centric, Inputs, Windows, render};
+use jawtrack_report::{Centric, ContactsResult, Inputs, Record, Windows, render, render_with};
 use jawtrack_synth::scenes::guided::ClinicalSession;
 use jawtrack_synth::scenes::{Guidance, Rig};
 use serde_json::{Value, json};
@@ -46,6 +46,12 @@ fn inputs<'a>(rec: &'a Recording, name: &str, rest: jawtrack_pose::Pose) -> Inpu
 
 fn window((from, to): (f64, f64)) -> Option<Window> {
     Some(Window { from, to })
+}
+
+/// The section `id` of a page, from its tag to its end.
+fn section<'a>(html: &'a str, id: &str) -> &'a str {
+    let s = &html[html.find(&format!("<section id=\"{id}\">")).expect("the section")..];
+    &s[..s.find("</section>").expect("its end")]
 }
 
 #[test]
@@ -188,4 +194,142 @@ fn frames_out_of_focus_are_counted_and_explained() {
     assert_eq!(focus.len(), 1, "{:?}", r.warnings);
     assert!(focus[0].starts_with("3 of 10 frames had a marker out of focus") && focus[0].contains("jawtrack plan"));
     assert!(r.html.contains("<td>maxilla:defocused</td><td>3</td>"), "the flag's count in the table");
+}
+
+#[test]
+fn patient_operator_and_notes_head_the_page_and_blanks_are_lines_to_fill_in() {
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 10.0, 1.0);
+    let rec = recording(&session);
+    let inputs = inputs(&rec, "s.jsonl", rec.frames[0].maxilla_from_mandible.expect("a pose"));
+    let record = Record {
+        patient: Some("Ana <Ruiz> & Co".into()),
+        operator: None,
+        notes: Some("clicks on opening\n<left> TMJ".into()),
+    };
+    let r = render_with(&inputs, &record);
+    let first = section(&r.html, "session");
+    let line = "_".repeat(40);
+    // The first rows, escaped, the operator left as a line to write on.
+    assert!(
+        first.contains(&format!(
+            "<tbody><tr><th>Patient</th><td>Ana &lt;Ruiz&gt; &amp; Co</td></tr>\
+             <tr><th>Operator</th><td><span class=\"fill\">{line}</span></td></tr>\
+             <tr><th>Notes</th><td>clicks on opening<br>&lt;left&gt; TMJ</td></tr>\
+             <tr><th>Recording</th>"
+        )),
+        "{first}"
+    );
+    // Not given at all: three blanks, the notes with three lines of room.
+    let blank = render(&inputs);
+    let first = section(&blank.html, "session");
+    assert!(first.contains(&format!("<tr><th>Patient</th><td><span class=\"fill\">{line}</span></td></tr>")));
+    assert!(first.contains(&format!("<tr><th>Notes</th><td><span class=\"fill\">{line}<br>{line}<br>{line}</span>")));
+    assert_eq!(r.warnings, blank.warnings, "the record changes no number");
+}
+
+/// A recording of the session's first 10 frames whose header carries `marker`.
+fn with_marker(session: &ClinicalSession, marker: &jawtrack_marker::Marker) -> Recording {
+    let mut header = RecordingHeader::new("marker test");
+    header.marker = serde_json::from_str(&marker.to_json()).ok();
+    let mut lines = vec![header.to_line()];
+    for (k, (t, pose)) in session.poses.iter().take(10).enumerate() {
+        lines.push(json!({"frame": k, "t": t, "maxilla_from_mandible": pose}).to_string());
+    }
+    read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording")
+}
+
+#[test]
+fn measured_tags_are_counted_out_of_the_marker_s_own() {
+    use jawtrack_marker::{Marker, PrintError, SolidKind, TagFamily};
+    let session = Rig::default().clinical_session(&GUIDANCE, 20.0, 0.0);
+    let moved = PrintError { shift_x: 0.2, ..PrintError::default() };
+    let marker_row = |marker: &Marker| {
+        let rec = with_marker(&session, marker);
+        let html = render(&inputs(&rec, "m.jsonl", session.poses[0].1)).html;
+        let row = "<tr><th>Marker</th><td>";
+        let at = html.find(row).expect("the marker's row") + row.len();
+        html[at..at + html[at..].find("</td>").expect("its end")].to_string()
+    };
+    // Three tags of the dodecahedron pair placed by a calibration: two on the maxilla.
+    let dodecahedron = Marker::default().with_print_errors(&[(0, moved), (5, moved), (12, moved)]).expect("ids");
+    assert_eq!(marker_row(&dodecahedron), "calibrated: 3 of 24 tags measured (maxilla 2 of 12, mandible 1 of 12)");
+    // A cube pair has 6 tags a body: the totals are the marker's, not the dodecahedron's.
+    let cube = Marker::nominal_on(SolidKind::Cube, TagFamily::TAG36H11, 12.7, None).expect("a cube pair");
+    let cube = cube.with_print_errors(&[(12, moved)]).expect("id 12");
+    assert_eq!(marker_row(&cube), "calibrated: 1 of 12 tags measured (maxilla 0 of 6, mandible 1 of 6)");
+    assert_eq!(marker_row(&Marker::default()), "nominal (the ideal solid's tag places; not calibrated)");
+}
+
+#[test]
+fn assumed_condyles_far_from_the_fitted_hinge_axis_are_warned_of() {
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 20.0, 5.0);
+    let rec = recording(&session);
+    let rest = rec.frames[0].maxilla_from_mandible.expect("a pose");
+    // The session opens about the standard mounting's condylar axis (head X through the
+    // condyles); move the condyles 20 mm and 25 mm off it (the right one also 5 mm along it,
+    // which does not count).
+    let mut mounting = Mounting::default();
+    mounting.condyles[0] += nalgebra::Vector3::new(0.0, 12.0, -16.0);
+    mounting.condyles[1] += nalgebra::Vector3::new(5.0, -15.0, 20.0);
+    let report = |mounting: Mounting, condyles_given: bool, opening: Option<Window>| {
+        let anatomy = Anatomy { mounting, condyles_given, ..Anatomy::standard() };
+        let inputs =
+            Inputs { anatomy, windows: Windows { opening, ..Windows::default() }, ..inputs(&rec, "h.jsonl", rest) };
+        render(&inputs)
+    };
+    let off = |r: &jawtrack_report::Report| {
+        r.warnings.iter().filter(|w| w.contains("hinge axis")).cloned().collect::<Vec<_>>()
+    };
+    let r = report(mounting, false, window(session.opening));
+    assert_eq!(
+        off(&r),
+        ["the condyles assumed for the condylar paths are 20.0 mm (left) and 25.0 mm (right) from the fitted hinge \
+          axis: their paths show the jaw's turn about the axis as travel; give the condyles in a points file \
+          (jawtrack points --condyles) or read the hinge axis section"]
+    );
+    assert!(
+        section(&r.html, "quality").contains("are 20.0 mm (left) and 25.0 mm (right) from the fitted"),
+        "on the page"
+    );
+    assert!(
+        section(&r.html, "hinge").contains("moved 20.00 mm") && section(&r.html, "hinge").contains("moved 25.00 mm"),
+        "as the hinge section says"
+    );
+    // Given in a points file, or no axis fitted: nothing to warn of.
+    assert!(off(&report(mounting, true, window(session.opening))).is_empty());
+    assert!(off(&report(mounting, false, None)).is_empty());
+    // 3 mm off the axis is within what a palpated condyle misses by.
+    let mut near = Mounting::default();
+    near.condyles[0].y += 3.0;
+    assert!(off(&report(near, false, window(session.opening))).is_empty());
+}
+
+#[test]
+fn contact_maps_take_a_row_each() {
+    let rig = Rig::default();
+    let session = rig.clinical_session(&GUIDANCE, 10.0, 1.0);
+    let rec = recording(&session);
+    // As `jawtrack contacts` draws them: up to 960 units wide, labels 12 units high.
+    let map = |n: &str| {
+        (
+            format!("map {n}"),
+            format!(
+                "<svg viewBox=\"0 0 960 800\" width=\"960\" height=\"800\" font-size=\"12\"><text>{n}</text></svg>"
+            ),
+        )
+    };
+    let contacts = ContactsResult { folder: "c".into(), summary: json!({}), maps: vec![map("36"), map("46")] };
+    let inputs = Inputs {
+        contacts: Some(contacts),
+        ..inputs(&rec, "c.jsonl", rec.frames[0].maxilla_from_mandible.expect("a pose"))
+    };
+    let html = render(&inputs).html;
+    let maps = section(&html, "contacts");
+    let grid = &maps[maps.find("<div class=\"plots maps\">").expect("the maps' grid")..];
+    assert_eq!(grid.matches("<figure><svg viewBox=\"0 0 960 800\"").count(), 2, "both maps, as they are");
+    // One column on screen and in print (two classes outweigh the print rule's `.plots`): the
+    // full 182 mm of an A4 page, not half of it.
+    assert!(html.contains(".plots.maps{grid-template-columns:1fr}"));
 }
