@@ -42,7 +42,7 @@ fn every_door_gives_the_same_maximum_opening() {
     let rest_at = jawtrack_session::rest_of(&rec, None).expect("rest").expect("a posed frame");
     let rest = rest_at.pose();
     let anatomy = jawtrack_session::anatomy(None, None, &rest).expect("the standard anatomy");
-    let chosen = jawtrack_session::incisor::ChosenIncisor::of(&anatomy, None);
+    let chosen = jawtrack_session::incisor::ChosenIncisor::of(&anatomy, None).expect("the standard point");
 
     // `jawtrack metrics --json`.
     let samples = jawtrack_session::incisor::path(&rec.frames, &chosen.incisor, &rest);

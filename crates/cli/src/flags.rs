@@ -57,7 +57,7 @@ impl IncisorArgs {
     pub(crate) fn choose(&self, rest: &Pose) -> Result<ChosenIncisor> {
         let reg = registration(self.registration.as_deref())?;
         let a = anatomy(self.points.as_deref(), reg.as_ref(), rest)?;
-        Ok(ChosenIncisor::of(&a, self.incisor))
+        Ok(ChosenIncisor::of(&a, self.incisor)?)
     }
 }
 

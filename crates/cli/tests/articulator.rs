@@ -206,3 +206,47 @@ fn the_co_mi_slide_is_the_held_offset() {
     assert!(text.contains("CO–MI slide") && text.contains("0.85"), "{text}");
     refused(&jawtrack(&["articulator", s(&rec), "--mi", "0:0.1"]), "--co");
 }
+
+#[test]
+fn a_points_file_reaches_every_measure_of_the_incisor() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    let (points, reg, _) = tilted_anatomy(dir.path(), 10.0);
+    let anatomy = ["--points", s(&points), "--registration", s(&reg)];
+    let with = |args: &[&str]| -> Vec<String> { args.iter().chain(&anatomy).map(|a| (*a).to_owned()).collect() };
+    let run = |args: Vec<String>| ok(&jawtrack(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+    let opening = |v: &Value| num(&v["max_opening"]["mm"]);
+    let metrics: Value = serde_json::from_str(&run(with(&["metrics", s(&rec), "--json"]))).expect("JSON");
+    let standard: Value = serde_json::from_str(&ok(&jawtrack(&["metrics", s(&rec), "--json"]))).expect("JSON");
+    // The tilted occlusal plane changes what "down" is: the points file must show.
+    assert!((opening(&metrics) - opening(&standard)).abs() > 0.05, "{} vs {}", opening(&metrics), opening(&standard));
+    assert_eq!(metrics["incisor_standard"], false);
+    // The CSV's largest opening_mm, with the same flags.
+    let csv = run(with(&["export", s(&rec), "--csv"]));
+    let mut lines = csv.lines();
+    let column = lines.next().expect("header").split(',').position(|c| c == "opening_mm").expect("opening_mm");
+    let widest = lines
+        .filter_map(|l| l.split(',').nth(column).and_then(|v| v.parse::<f64>().ok()))
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!((widest - opening(&metrics)).abs() < 1e-8, "CSV {widest} vs metrics {}", opening(&metrics));
+    // plot prints the same widest opening.
+    let plots = dir.path().join("plots");
+    let o = jawtrack(&with(&["plot", s(&rec), "--out", s(&plots)]).iter().map(String::as_str).collect::<Vec<_>>());
+    let said = common::stderr(&o);
+    assert!(said.contains(&format!("widest opening {:.1} mm", opening(&metrics))), "{said}");
+    // Without the registration the points cannot be placed.
+    refused(&jawtrack(&["metrics", s(&rec), "--points", s(&points)]), "--registration");
+}
+
+#[test]
+fn held_positions_and_options_are_checked_before_anything_is_measured() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rec = session(dir.path());
+    // The protrusion moves: it is no held position, so no CO–MI slide is read from it.
+    refused(&jawtrack(&["articulator", s(&rec), "--co", "0:2"]), "the jaw is not held still in that window");
+    refused(&jawtrack(&["articulator", s(&rec), "--co", "NaN:1"]), "'NaN' in 'NaN:1' is not a number of seconds");
+    refused(&jawtrack(&["metrics", s(&rec), "--rest-frame=-1"]), "a whole number, 0 or more");
+    refused(&jawtrack(&["metrics", s(&rec), "--rest-frame", "-1"]), "a whole number, 0 or more");
+    refused(&jawtrack(&["hinge-axis", s(&rec), "--max-rotation-deg", "-5"]), "expected a positive angle in degrees");
+    refused(&jawtrack(&["metrics", s(&rec), "--incisor", "0,-20.5,-39000"]), "39000 mm from the mandible marker");
+}

@@ -113,6 +113,16 @@ const LEAST_SIDE_MM: f64 = 20.0;
 const LEAST_HEIGHT_MM: f64 = 10.0;
 /// The least distance between given condyles (mm).
 const LEAST_INTERCONDYLAR_MM: f64 = 60.0;
+/// The farthest the lower incisal point may be from the upper with the teeth together (mm):
+/// overjet and overbite are 2–4 mm in most adults and beyond 10 mm only in severe malocclusion
+/// (Proffit, Contemporary Orthodontics, ch. 6), so 20 mm means a point picked off the teeth.
+const MOST_INCISAL_GAP_MM: f64 = 20.0;
+/// The condyle-to-lower-incisor distance accepted (mm): Bonwill's triangle has 101.6 mm sides,
+/// and measured adults range about 85–115 mm; wider bounds leave room for picking error.
+const CONDYLE_REACH_MM: (f64, f64) = (70.0, 140.0);
+/// The least a condyle lies behind the upper incisal point (mm), along the occlusal plane's
+/// posterior axis: about 80 mm in an adult.
+const LEAST_CONDYLE_BEHIND_MM: f64 = 50.0;
 
 fn v(p: &[f64; 3]) -> Vector3<f64> {
     Vector3::new(p[0], p[1], p[2])
@@ -216,6 +226,41 @@ impl AnatomicalPoints {
                 (v(&c.left) - v(&c.right)).norm()
             )));
         }
+        self.check_in_head()
+    }
+
+    /// The points where a head puts them, read in the head frame the occlusal plane fixes (X the
+    /// patient's left, Y down, Z posterior, origin the upper incisal point).
+    fn check_in_head(&self) -> Result<(), KinematicsError> {
+        let head = self.head_from_scan();
+        let at = |p: &[f64; 3]| head.transform_point(&nalgebra::Point3::from(v(p))).coords;
+        let lower = at(&self.lower_incisal_point);
+        if lower.norm() > MOST_INCISAL_GAP_MM {
+            let (ahead, up) = (-lower.z, -lower.y);
+            return Err(points_error(format!(
+                "the lower incisal point is {:.1} mm from the upper ({ahead:.1} mm in front of it, {up:.1} mm above, \
+                 {:.1} mm to the patient's left); with the teeth together the lower incisal edge is within a few mm \
+                 of the upper (overjet and overbite 2–4 mm, rarely over 10 mm): pick it with the lower scan in its \
+                 bite",
+                lower.norm(),
+                lower.x
+            )));
+        }
+        let Some(c) = &self.condyles else { return Ok(()) };
+        for (side, p, sign) in [("left", at(&c.left), 1.0), ("right", at(&c.right), -1.0)] {
+            let reach = (p - lower).norm();
+            if sign * p.x <= 0.0
+                || p.z < LEAST_CONDYLE_BEHIND_MM
+                || !(CONDYLE_REACH_MM.0..=CONDYLE_REACH_MM.1).contains(&reach)
+            {
+                return Err(points_error(format!(
+                    "the {side} condyle is {reach:.1} mm from the lower incisal point, {:.1} mm behind the upper \
+                     incisors and {:.1} mm to the patient's left: a condyle lies 80–120 mm behind the incisors on its \
+                     own side (Bonwill's triangle, 101.6 mm a side): are the condyles swapped, or in another frame?",
+                    p.z, p.x
+                )));
+            }
+        }
         Ok(())
     }
 
@@ -305,6 +350,36 @@ mod tests {
             condyles.map(|[l, r]| Condyles { left: at(l), right: at(r) }),
         )
         .expect("the points are an arch's")
+    }
+
+    /// The same, with the lower incisal point and the condyles placed in the head frame.
+    fn placed(lower: Vector3<f64>, condyles: Option<[Vector3<f64>; 2]>) -> Result<AnatomicalPoints, KinematicsError> {
+        let s = scan_from_head();
+        let at = |h: Vector3<f64>| arr(s.transform_point(&Point3::from(h)).coords);
+        AnatomicalPoints::new(
+            OcclusalPlane {
+                incisal: at(Vector3::zeros()),
+                left_molar: at(Vector3::new(24.0, 0.0, 34.0)),
+                right_molar: at(Vector3::new(-23.0, 0.0, 34.0)),
+            },
+            at(lower),
+            condyles.map(|[l, r]| Condyles { left: at(l), right: at(r) }),
+        )
+    }
+
+    #[test]
+    fn points_no_head_has_are_refused_by_what_is_wrong() {
+        let [l, r] = bonwill_condyles();
+        let near = Vector3::new(0.0, -2.0, 3.0);
+        assert!(placed(near, Some([l, r])).is_ok(), "an ordinary arch");
+        let said = |p: Result<AnatomicalPoints, KinematicsError>| p.expect_err("refused").to_string();
+        let ahead = said(placed(Vector3::new(0.0, -2.0, -30.0), None));
+        assert!(ahead.contains("30.0 mm in front of it") && ahead.contains("in its bite"), "{ahead}");
+        let swapped = said(placed(near, Some([r, l])));
+        assert!(swapped.contains("left condyle") && swapped.contains("swapped"), "{swapped}");
+        let forward = |c: Vector3<f64>| Vector3::new(c.x, c.y, -c.z);
+        let in_front = said(placed(near, Some([forward(l), forward(r)])));
+        assert!(in_front.contains("behind the upper incisors"), "{in_front}");
     }
 
     #[test]

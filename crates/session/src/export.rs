@@ -144,7 +144,7 @@ pub fn export(format: Format, rec: &Recording, inputs: Inputs, out: &mut dyn Wri
             // Without a jaw pose there is no rest, and then no points file (refused above).
             let a = anatomy(inputs.points, inputs.registration.as_ref(), &rest.unwrap_or_else(Pose::identity))?;
             warnings.extend(a.warnings.iter().cloned());
-            let incisor = ChosenIncisor::of(&a, inputs.incisor).incisor;
+            let incisor = ChosenIncisor::of(&a, inputs.incisor)?.incisor;
             csv(rec, &incisor, rest, out).map_err(|e| written(&e))?;
             format!("{} frames", rec.frames.len())
         }

@@ -5,10 +5,16 @@
 //! point (`--points` with `--registration`), else the standard harness mounting's; the head
 //! frame it is read in is the points file's when given, else the standard mounting's.
 
+use crate::SessionError;
 use jawtrack_kinematics::{Anatomy, Incisor, Sample};
 use jawtrack_pose::Pose;
 use jawtrack_recording::FrameRecord;
 use nalgebra::Point3;
+
+/// The farthest a point given in the mandible marker's frame may be from the marker (mm): the
+/// condyles, the farthest points of the jaw from a harness on the front teeth, are about
+/// 140 mm from it.
+pub const MOST_FROM_MARKER_MM: f64 = 200.0;
 
 /// The point chosen, and how to name it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,31 +27,36 @@ pub struct ChosenIncisor {
 
 impl ChosenIncisor {
     /// The point `given` in the mandible marker's frame, else `anatomy`'s lower incisal point;
-    /// read in `anatomy`'s head frame.
+    /// read in `anatomy`'s head frame. A given point farther than [`MOST_FROM_MARKER_MM`] from
+    /// the marker is refused: no point of a jaw is.
     ///
     /// # Examples
     ///
     /// ```
+    /// use jawtrack_session::incisor::ChosenIncisor;
     /// let anatomy = jawtrack_kinematics::Anatomy::standard();
-    /// let chosen = jawtrack_session::incisor::ChosenIncisor::of(&anatomy, None);
-    /// assert!(chosen.standard);
+    /// assert!(ChosenIncisor::of(&anatomy, None).unwrap().standard);
+    /// assert!(ChosenIncisor::of(&anatomy, Some([0.0, -20.5, -39000.0])).is_err(), "39 m from the marker");
     /// ```
-    pub fn of(anatomy: &Anatomy, given: Option<[f64; 3]>) -> Self {
+    pub fn of(anatomy: &Anatomy, given: Option<[f64; 3]>) -> Result<Self, SessionError> {
         let standard = given.is_none() && anatomy.is_standard();
         let incisor = match given {
-            Some(p) => Incisor::on(anatomy.mounting, Point3::from(p)),
+            Some(p) => {
+                let far = Point3::from(p).coords.norm();
+                if far > MOST_FROM_MARKER_MM {
+                    return Err(SessionError::Setting(format!(
+                        "--incisor {},{},{} is {far:.0} mm from the mandible marker; the harness holds it within a \
+                         few centimetres of the teeth, so every point of the jaw is within {MOST_FROM_MARKER_MM} mm \
+                         (the standard incisal point is 44 mm away): give the point in mm, in the mandible marker's \
+                         frame",
+                        p[0], p[1], p[2]
+                    )));
+                }
+                Incisor::on(anatomy.mounting, Point3::from(p))
+            }
             None => Incisor::of(anatomy.mounting),
         };
-        ChosenIncisor { incisor, standard }
-    }
-
-    /// Which point, in words, for the printed summaries.
-    pub fn words(&self, given: bool) -> &'static str {
-        match (self.standard, given) {
-            (true, _) => "the standard harness mounting's lower incisal point",
-            (false, true) => "the point given with --incisor",
-            (false, false) => "the points file's lower incisal point",
-        }
+        Ok(ChosenIncisor { incisor, standard })
     }
 }
 
