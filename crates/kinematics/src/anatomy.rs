@@ -338,18 +338,7 @@ mod tests {
 
     /// Points placed in the head frame, written in the scan's.
     fn points(condyles: Option<[Vector3<f64>; 2]>) -> AnatomicalPoints {
-        let s = scan_from_head();
-        let at = |h: Vector3<f64>| arr(s.transform_point(&Point3::from(h)).coords);
-        AnatomicalPoints::new(
-            OcclusalPlane {
-                incisal: at(Vector3::zeros()),
-                left_molar: at(Vector3::new(24.0, 0.0, 34.0)),
-                right_molar: at(Vector3::new(-23.0, 0.0, 34.0)),
-            },
-            at(Vector3::new(0.0, 1.5, 1.0)),
-            condyles.map(|[l, r]| Condyles { left: at(l), right: at(r) }),
-        )
-        .expect("the points are an arch's")
+        placed(Vector3::new(0.0, 1.5, 1.0), condyles).expect("the points are an arch's")
     }
 
     /// The same, with the lower incisal point and the condyles placed in the head frame.
