@@ -61,11 +61,11 @@ fn the_report_is_written_and_chromium_shows_every_section() {
     assert!(!html.contains("<script") && !html.contains("src=\"http"), "self-contained, no script");
     refused(&jawtrack(&args), "--force");
     let Some(browser) = chromium() else {
-        eprintln!("SKIPPED: the Chromium check of the report: no Chromium (set CHROMIUM)");
+        jawtrack_test_support::say_skipped("the Chromium check of the report: no Chromium (set CHROMIUM)");
         return;
     };
     if !viewer_dir().join("node_modules/playwright-core/package.json").is_file() {
-        eprintln!("SKIPPED: the Chromium check of the report: run `npm ci --prefix viewer`");
+        jawtrack_test_support::say_skipped("the Chromium check of the report: run `npm ci --prefix viewer`");
         return;
     }
     let shot = dir.path().join("report.png");

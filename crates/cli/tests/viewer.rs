@@ -71,7 +71,7 @@ fn check(url: &str, mode: &str, screenshot: &Path, expect: &[&str]) -> Output {
 #[test]
 fn the_viewer_moves_the_mandible_live_and_replays_the_recording() {
     if let Some(why) = missing() {
-        eprintln!("SKIPPED: the viewer check: {why}");
+        jawtrack_test_support::say_skipped(&format!("the viewer check: {why}"));
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");

@@ -11,7 +11,7 @@ use std::process::Command;
 #[test]
 fn c_tracks_the_fixture_as_rust_does_and_misuse_is_refused() {
     if !support::have("cc", "--version") {
-        eprintln!("SKIPPED: no C compiler (cc) to build the C API test");
+        jawtrack_test_support::say_skipped("no C compiler (cc) to build the C API test");
         return;
     }
     let lib_dir = support::build_library();

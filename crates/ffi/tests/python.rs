@@ -10,7 +10,7 @@ use std::process::Command;
 #[test]
 fn python_drives_the_tracker_recorder_and_link_encoder() {
     if !support::have("python3", "--version") {
-        eprintln!("SKIPPED: no python3 for the uniffi binding test");
+        jawtrack_test_support::say_skipped("no python3 for the uniffi binding test");
         return;
     }
     let lib_dir = support::build_library();

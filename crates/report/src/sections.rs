@@ -337,7 +337,8 @@ fn border_section(m: &Metrics, path: &[Sample]) -> String {
     let mut s = format!(
         "<p>The border is the outermost path the lower incisal point traced, seen from inside the region it \
          covers (not a convex hull): it follows the path into concave parts. Landmarks are the extremes of \
-         {} mm or more; the movements between neighbouring landmarks are named below each plot.</p>\
+         {} mm or more where that movement was made (a widest opening that is an opening, a farthest left, right \
+         or forward that is a glide); the movements between neighbouring landmarks are named below each plot.</p>\
          <div class=\"plots\">",
         fixed(LANDMARK_MIN_MM, 1)
     );
