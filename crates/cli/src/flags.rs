@@ -88,43 +88,29 @@ pub(crate) fn registration(path: Option<&Path>) -> Result<Option<Registration>> 
     Ok(jawtrack_session::read_registration(path)?)
 }
 
-/// Parses a window, `FROM:TO` in seconds of the frames' `t`.
-pub(crate) fn parse_window(s: &str) -> Result<Window, String> {
-    let (a, b) = s.split_once(':').ok_or_else(|| format!("expected FROM:TO in seconds, got '{s}'"))?;
-    let num = |v: &str| match v.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() => Ok(x),
-        _ => Err(format!("'{v}' in '{s}' is not a number of seconds")),
-    };
-    let (from, to) = (num(a)?, num(b)?);
-    if from >= to {
-        return Err(format!("'{s}': FROM must be before TO"));
-    }
-    Ok(Window { from, to })
-}
-
 /// Where each movement was made in a recording, FROM:TO in seconds of the frames' `t`: the
 /// flags `articulator` and `report` share.
 #[derive(clap::Args, Clone, Copy, Debug)]
 pub(crate) struct MovementArgs {
     /// The protrusion's window, FROM:TO (s): the condylar inclination per side and the
     /// protrusive incisal guidance.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    #[arg(long, value_name = "FROM:TO", value_parser = Window::parse)]
     pub(crate) protrusion: Option<Window>,
     /// The laterotrusion toward the patient's left (s): the right condyle's Bennett angle and
     /// side shift, the lateral guidance toward the left.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    #[arg(long, value_name = "FROM:TO", value_parser = Window::parse)]
     pub(crate) left: Option<Window>,
     /// The laterotrusion toward the patient's right (s): the left condyle's Bennett angle and
     /// side shift, the lateral guidance toward the right.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    #[arg(long, value_name = "FROM:TO", value_parser = Window::parse)]
     pub(crate) right: Option<Window>,
     /// The jaw held in centric occlusion (s): guided back into centric relation and closed to
     /// the first tooth contact. With it, the CO–MI slide into the bite is measured.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    #[arg(long, value_name = "FROM:TO", value_parser = Window::parse)]
     pub(crate) co: Option<Window>,
     /// The jaw held in maximal intercuspation (s), for --co; default: the closed jaw (--rest-frame,
     /// else the bite accepted while recording, else the first frame with a jaw pose).
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window, requires = "co")]
+    #[arg(long, value_name = "FROM:TO", value_parser = Window::parse, requires = "co")]
     pub(crate) mi: Option<Window>,
 }
 
@@ -215,23 +201,5 @@ pub(crate) fn warn_if_exposed(addr: std::net::SocketAddr) {
             "warning: the viewer at {addr} is open to the network with no password: anyone who can reach it \
              sees the poses (and, live, can press Calibrate); serve on 127.0.0.1 unless the network is trusted"
         );
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_window_names_what_is_wrong_with_it() {
-        assert_eq!(parse_window("1.5:3"), Ok(Window { from: 1.5, to: 3.0 }));
-        for (bad, says) in [
-            ("NaN:1", "'NaN' in 'NaN:1' is not a number of seconds"),
-            ("1:inf", "'inf' in '1:inf' is not a number of seconds"),
-            ("2:1", "FROM must be before TO"),
-            ("2", "expected FROM:TO"),
-        ] {
-            assert!(parse_window(bad).is_err_and(|e| e.contains(says)), "{bad}: {:?}", parse_window(bad));
-        }
     }
 }

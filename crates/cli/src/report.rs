@@ -1,7 +1,7 @@
 //! `jawtrack report`: one self-contained HTML report of a session (`jawtrack_report`), and a PDF
 //! of it through headless Chromium when asked.
 
-use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, parse_window, registration};
+use crate::flags::{MovementArgs, PointsArg, SessionArg, anatomy, load, registration};
 use crate::output::ForceArgs;
 use anyhow::{Context, Result, bail};
 use clap::{ArgAction, Args};
@@ -43,7 +43,7 @@ pub(crate) struct ReportArgs {
     #[arg(long, value_name = "FRAME", value_parser = crate::numbers::parse_frame, allow_hyphen_values = true)]
     rest_frame: Option<u64>,
     /// A slow opening from the closed jaw: the hinge axis.
-    #[arg(long, value_name = "FROM:TO", value_parser = parse_window)]
+    #[arg(long, value_name = "FROM:TO", value_parser = Window::parse)]
     opening: Option<Window>,
     #[command(flatten)]
     moves: MovementArgs,

@@ -60,6 +60,31 @@ impl Window {
     pub fn holds(&self, t: f64) -> bool {
         (self.from..=self.to).contains(&t)
     }
+
+    /// A window written `FROM:TO` in seconds (the CLI's movement flags), each end a finite
+    /// number and FROM before TO; the error names what is wrong.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use jawtrack_kinematics::Window;
+    /// assert_eq!(Window::parse("1.5:3"), Ok(Window { from: 1.5, to: 3.0 }));
+    /// assert!(Window::parse("NaN:1").is_err_and(|e| e.contains("'NaN' in 'NaN:1' is not a number of seconds")));
+    /// assert!(Window::parse("2:1").is_err_and(|e| e.contains("FROM must be before TO")));
+    /// assert!(Window::parse("2").is_err_and(|e| e.contains("expected FROM:TO")));
+    /// ```
+    pub fn parse(s: &str) -> Result<Window, String> {
+        let (a, b) = s.split_once(':').ok_or_else(|| format!("expected FROM:TO in seconds, got '{s}'"))?;
+        let num = |v: &str| match v.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => Err(format!("'{v}' in '{s}' is not a number of seconds")),
+        };
+        let (from, to) = (num(a)?, num(b)?);
+        if from >= to {
+            return Err(format!("'{s}': FROM must be before TO"));
+        }
+        Ok(Window { from, to })
+    }
 }
 
 /// What the kinematics refuses.
