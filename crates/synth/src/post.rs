@@ -1,8 +1,11 @@
-//! Image formation after the ideal render: defocus, glare, illumination, sensor noise and the
-//! transfer curve, in that physical order, all in linear light until the final encoding.
+//! Image formation after the ideal render: defocus, glare, illumination and sensor noise, in
+//! that physical order and in linear light; then the phone's own processing ([`develop`]): a
+//! local tone map, the tone curve, and sharpening of the encoded values.
 
+use crate::realism::{Realism, Sharpen};
 use crate::render::LinearImage;
 use jawtrack_pose::CameraIntrinsics;
+use jawtrack_tone::ToneCurve;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
@@ -271,39 +274,107 @@ pub fn sensor_noise(img: &mut LinearImage, full_well: f64, read_noise: f64, rng:
     }
 }
 
-/// The sRGB transfer curve (linear → encoded, both in 0..1).
+/// The sRGB transfer curve (linear → encoded, both in 0..1): [`ToneCurve::Srgb`], the one
+/// definition, under the name tests of other crates draw their frames with.
 pub fn srgb_encode(v: f64) -> f64 {
-    if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+    ToneCurve::Srgb.encode(v)
 }
 
-/// The inverse sRGB curve (encoded → linear).
-pub fn srgb_decode(v: f64) -> f64 {
-    if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
-}
+/// Smallest local mean the local tone map divides by (white paper ≈ 0.85): black regions, and
+/// noise below zero, are not lifted without bound.
+const LOCAL_MEAN_FLOOR: f64 = 1e-3;
 
-/// Encodes to 8 bits, through sRGB or linearly, rounding and clipping.
-pub fn encode_u8(img: &LinearImage, gamma: bool) -> Vec<u8> {
-    img.radiance
-        .par_iter()
-        .map(|&v| {
-            let v = f64::from(v).clamp(0.0, 1.0);
-            let e = if gamma { srgb_encode(v) } else { v };
-            (e * 255.0).round() as u8
+/// A Gaussian blur of a large σ (px), fast at any size: box-averaged down by a factor f that
+/// leaves σ 4–8 cells, blurred there and interpolated back. The boxes add f²/12 px² of
+/// variance, under 1 % of σ², and the result is smooth by construction.
+fn wide_blur(img: &[f32], w: usize, h: usize, sigma: f64) -> Vec<f32> {
+    let f = ((sigma / 4.0).floor() as usize).max(1);
+    if f == 1 {
+        return blur_window(img, w, h, [0, 0, w, h], sigma);
+    }
+    let (sw, sh) = (w.div_ceil(f), h.div_ceil(f));
+    let small: Vec<f32> = (0..sh)
+        .into_par_iter()
+        .flat_map_iter(|sy| {
+            let (y0, y1) = (sy * f, ((sy + 1) * f).min(h));
+            (0..sw).map(move |sx| {
+                let (x0, x1) = (sx * f, ((sx + 1) * f).min(w));
+                let sum: f64 = (y0..y1).flat_map(|y| &img[y * w + x0..y * w + x1]).map(|&v| f64::from(v)).sum();
+                (sum / ((x1 - x0) * (y1 - y0)) as f64) as f32
+            })
+        })
+        .collect();
+    let blurred = blur_window(&small, sw, sh, [0, 0, sw, sh], sigma / f as f64);
+    // A cell's centre is at (s + 0.5)·f − 0.5 px: each pixel's two cells either side, and how
+    // far it is from the first, along one axis of `n` cells.
+    let cells = |p: usize, n: usize| {
+        let u = ((p as f64 + 0.5) / f as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+        let i = u.floor() as usize;
+        (i, (i + 1).min(n - 1), (u - i as f64) as f32)
+    };
+    let columns: Vec<_> = (0..w).map(|x| cells(x, sw)).collect();
+    (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let (r0, r1, ty) = cells(y, sh);
+            let (above, below) = (&blurred[r0 * sw..(r0 + 1) * sw], &blurred[r1 * sw..(r1 + 1) * sw]);
+            columns.iter().map(move |&(c0, c1, tx)| {
+                let top = above[c0] + tx * (above[c1] - above[c0]);
+                let bottom = below[c0] + tx * (below[c1] - below[c0]);
+                top + ty * (bottom - top)
+            })
         })
         .collect()
+}
+
+/// A local tone map in linear light, as phones' "smart HDR" video applies before its curve:
+/// L' = L·(m/B)^strength, B the radiance blurred by a Gaussian of σ = 1/16 of the image's
+/// diagonal (floored at 0.001, so black is not lifted without bound) and m the mean of B. Dark
+/// regions are lifted and bright ones lowered, smoothly over a scale far larger than a tag, so
+/// a tag's edges keep their shape while the frame's effective curve varies across it.
+/// Strength 0 changes nothing.
+pub fn local_tone_map(img: &mut LinearImage, strength: f64) {
+    if strength <= 0.0 || img.radiance.is_empty() {
+        return;
+    }
+    let (w, h) = (img.width as usize, img.height as usize);
+    let local = wide_blur(&img.radiance, w, h, (w as f64).hypot(h as f64) / 16.0);
+    let floored = |b: f32| f64::from(b).max(LOCAL_MEAN_FLOOR);
+    let mean = local.par_iter().map(|&b| floored(b)).sum::<f64>() / local.len() as f64;
+    img.radiance.par_iter_mut().zip(local.par_iter()).for_each(|(v, &b)| {
+        *v *= (mean / floored(b)).powf(strength) as f32;
+    });
+}
+
+/// Encodes linear light to 8 bits: through `curve` (`None`: linear light), then sharpened
+/// ([`Sharpen`], on the encoded values as a phone does, so its halos are in the curve's
+/// units), rounded and clipped.
+pub fn encode_u8(img: &LinearImage, curve: Option<ToneCurve>, sharpen: Option<Sharpen>) -> Vec<u8> {
+    let encode = |v: f32| {
+        let v = f64::from(v).clamp(0.0, 1.0);
+        curve.map_or(v, |c| c.encode(v))
+    };
+    let to_u8 = |e: f64| (e.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let Some(Sharpen { amount, radius_px }) = sharpen else {
+        return img.radiance.par_iter().map(|&v| to_u8(encode(v))).collect();
+    };
+    let (w, h) = (img.width as usize, img.height as usize);
+    let encoded: Vec<f32> = img.radiance.par_iter().map(|&v| encode(v) as f32).collect();
+    let blurred = blur_window(&encoded, w, h, [0, 0, w, h], radius_px);
+    encoded.par_iter().zip(blurred.par_iter()).map(|(&e, &b)| to_u8(f64::from(e) + amount * f64::from(e - b))).collect()
+}
+
+/// The phone's processing of a sensor frame, in its order: the local tone map
+/// ([`Realism::local_tone_map`]) in linear light, the tone curve ([`Realism::encoding`]), then
+/// sharpening ([`Realism::sharpen`]) and 8 bits.
+pub fn develop(img: &mut LinearImage, realism: &Realism) -> Vec<u8> {
+    local_tone_map(img, realism.local_tone_map);
+    encode_u8(img, realism.encoding(), realism.sharpen)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_round_trips() {
-        for i in 0..=100 {
-            let v = f64::from(i) / 100.0;
-            assert!((srgb_decode(srgb_encode(v)) - v).abs() < 1e-12);
-        }
-    }
 
     #[test]
     fn defocus_sigma_is_zero_in_focus_and_grows_away() {

@@ -2,6 +2,7 @@
 //! default and drawn from the scene's seed so that a frame can be made again exactly.
 
 use jawtrack_pose::RollingShutter;
+use jawtrack_tone::ToneCurve;
 use serde::{Deserialize, Serialize};
 
 /// The shape a point out of focus spreads into.
@@ -15,6 +16,19 @@ pub enum Pupil {
     /// The uniform disc a real circular aperture makes, as wide as the blur circle: edges
     /// blurred into straight ramps with hard ends.
     Disc,
+}
+
+/// An unsharp mask on the encoded values, as phones sharpen after their tone curve:
+/// e' = e + amount·(e − G∗e), clipped to 0–1, G a Gaussian of σ = `radius_px`. Edges gain the
+/// halos (overshoot either side) that real phone frames show and a linear-light edge fit must
+/// survive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sharpen {
+    /// How much of the detail (e − G∗e) is added back (0–4; phones use about 0.5–1.5).
+    pub amount: f64,
+    /// σ of the Gaussian the detail is taken against (px, 0.3–5): the halo's width.
+    pub radius_px: f64,
 }
 
 /// How a frame departs from the ideal pinhole image. `Realism::default()` is a plausible iPhone
@@ -61,8 +75,20 @@ pub struct Realism {
     pub full_well_e: f64,
     /// Read noise (electrons, standard deviation).
     pub read_noise_e: f64,
-    /// Encode with the sRGB transfer curve (as phone frames are); false writes linear light.
+    /// Encode with the tone curve [`Realism::tone`] (as phone frames are); false writes linear
+    /// light.
     pub gamma: bool,
+    /// The curve frames are encoded with when [`Realism::gamma`] is set: sRGB by default (and in
+    /// every settings file written before phones' own curves were rendered), or a phone's
+    /// steeper, flatter or S-shaped curve, so the detector's decoding can be tested against it.
+    pub tone: ToneCurve,
+    /// Sharpening of the encoded values before they are rounded to 8 bits; `None`: none.
+    pub sharpen: Option<Sharpen>,
+    /// Strength (0–1; 0 is off) of a local tone map in linear light before encoding, as phones'
+    /// "smart HDR" video applies: L' = L·(m/B)^strength, B the radiance blurred over a sixteenth
+    /// of the image's diagonal and m its mean. Dark regions are lifted and bright ones lowered,
+    /// so the curve a frame was encoded with varies (smoothly) across it.
+    pub local_tone_map: f64,
     /// Fraction of light lost at the image corners (cos⁴-like fall-off).
     pub vignetting: f64,
     /// Largest fractional change of illumination across the image (a lighting gradient in a
@@ -95,6 +121,9 @@ impl Default for Realism {
             full_well_e: 8000.0,
             read_noise_e: 3.0,
             gamma: true,
+            tone: ToneCurve::Srgb,
+            sharpen: None,
+            local_tone_map: 0.0,
             vignetting: 0.25,
             lighting_gradient: 0.2,
             print_error_mm: 0.2,
@@ -169,8 +198,20 @@ impl Realism {
         t + shutter.offset_s(y)
     }
 
+    /// The curve frames are encoded with: [`Realism::tone`] when [`Realism::gamma`] is set,
+    /// `None` (linear light) otherwise.
+    pub fn encoding(&self) -> Option<ToneCurve> {
+        self.gamma.then_some(self.tone)
+    }
+
     /// Checks the numbers, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
+        self.validate_optics()?;
+        self.validate_processing()
+    }
+
+    /// Checks the lens, sensor and scene settings.
+    fn validate_optics(&self) -> Result<(), String> {
         let fields = [
             ("f_number", self.f_number),
             ("focal_length_mm", self.focal_length_mm),
@@ -227,6 +268,30 @@ impl Realism {
         }
         Ok(())
     }
+
+    /// Checks the phone's processing: the tone curve, the sharpening and the local tone map.
+    fn validate_processing(&self) -> Result<(), String> {
+        self.tone.validate().map_err(|e| format!("realism.tone: {e}"))?;
+        if !self.gamma && self.tone != ToneCurve::Srgb {
+            return Err(format!(
+                "realism.tone is {} but realism.gamma is false: a linear frame has no tone curve \
+                 (set realism.gamma to true, or leave realism.tone at srgb)",
+                self.tone
+            ));
+        }
+        if let Some(Sharpen { amount, radius_px }) = self.sharpen {
+            if !(amount.is_finite() && (0.0..=4.0).contains(&amount)) {
+                return Err(format!("realism.sharpen.amount must be from 0 to 4, got {amount}"));
+            }
+            if !(radius_px.is_finite() && (0.3..=5.0).contains(&radius_px)) {
+                return Err(format!("realism.sharpen.radius_px must be from 0.3 to 5 px, got {radius_px}"));
+            }
+        }
+        if !(self.local_tone_map.is_finite() && (0.0..=1.0).contains(&self.local_tone_map)) {
+            return Err(format!("realism.local_tone_map is a strength from 0 to 1, got {}", self.local_tone_map));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -245,5 +310,55 @@ mod tests {
         // Settings files written before the readout existed read as a global shutter.
         let old: Realism = serde_json::from_str(r#"{"exposure_s": 0.004}"#).expect("reads");
         assert_eq!((old.exposure_s, old.readout_s), (0.004, 0.0));
+    }
+
+    #[test]
+    fn settings_from_before_tone_curves_load_as_srgb_without_processing() {
+        let old: Realism = serde_json::from_str(r#"{"exposure_s": 0.004, "gamma": true}"#).expect("reads");
+        assert_eq!((old.tone, old.sharpen, old.local_tone_map), (ToneCurve::Srgb, None, 0.0));
+        assert_eq!(old.encoding(), Some(ToneCurve::Srgb));
+        assert_eq!(Realism::clean().encoding(), None, "clean frames are linear light");
+        let phone: Realism = serde_json::from_str(
+            r#"{"tone": "s-curve:2.2:0.5", "sharpen": {"amount": 1.2, "radius_px": 1.5}, "local_tone_map": 0.4}"#,
+        )
+        .expect("reads");
+        assert_eq!(phone.encoding(), Some(ToneCurve::SCurve { gamma: 2.2, contrast: 0.5 }));
+        assert_eq!(phone.sharpen, Some(Sharpen { amount: 1.2, radius_px: 1.5 }));
+        assert_eq!(phone.local_tone_map, 0.4);
+        assert_eq!(phone.validate(), Ok(()));
+        let back: Realism = serde_json::from_str(&serde_json::to_string(&phone).expect("writes")).expect("reads");
+        assert_eq!(back, phone);
+        for bad in [r#"{"tone": "gamma:22"}"#, r#"{"sharpen": {"amount": 1, "radius_px": 1, "sigma": 2}}"#] {
+            assert!(serde_json::from_str::<Realism>(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn validation_names_each_bad_processing_field() {
+        let sharpen =
+            |amount, radius_px| Realism { sharpen: Some(Sharpen { amount, radius_px }), ..Realism::default() };
+        let cases = [
+            (Realism { gamma: false, tone: ToneCurve::Gamma { gamma: 1.8 }, ..Realism::default() }, "realism.gamma"),
+            (Realism { tone: ToneCurve::Gamma { gamma: 22.0 }, ..Realism::default() }, "realism.tone: "),
+            (sharpen(-0.1, 1.0), "realism.sharpen.amount"),
+            (sharpen(4.5, 1.0), "realism.sharpen.amount"),
+            (sharpen(f64::NAN, 1.0), "realism.sharpen.amount"),
+            (sharpen(1.0, 0.2), "realism.sharpen.radius_px"),
+            (sharpen(1.0, 5.5), "realism.sharpen.radius_px"),
+            (sharpen(1.0, f64::INFINITY), "realism.sharpen.radius_px"),
+            (Realism { local_tone_map: -0.1, ..Realism::default() }, "realism.local_tone_map"),
+            (Realism { local_tone_map: 1.5, ..Realism::default() }, "realism.local_tone_map"),
+            (Realism { local_tone_map: f64::NAN, ..Realism::default() }, "realism.local_tone_map"),
+        ];
+        for (r, says) in cases {
+            let e = r.validate().expect_err(says);
+            assert!(e.contains(says), "{says}: {e}");
+        }
+        // A linear frame names both fields; with sRGB (the default) it is fine.
+        let e = cases[0].0.validate().expect_err("linear with a curve");
+        assert!(e.contains("realism.tone is gamma:1.8"), "{e}");
+        assert_eq!(Realism::clean().validate(), Ok(()));
+        assert_eq!(sharpen(4.0, 0.3).validate(), Ok(()), "the ends of the ranges are allowed");
+        assert_eq!(sharpen(0.0, 5.0).validate(), Ok(()));
     }
 }

@@ -348,7 +348,7 @@ impl Synthesizer {
         // A crop gathers 1/zoom² of the light per pixel.
         let full_well = realism.full_well_e / (realism.zoom * realism.zoom);
         post::sensor_noise(&mut img, full_well, realism.read_noise_e, &mut rng);
-        let luma = post::encode_u8(&img, realism.gamma);
+        let luma = post::develop(&mut img, realism);
 
         let scene_mid = self.scene_at(&cam_head, cam_max, cam_man, &extra);
         let tags = self.tag_truth(&spec, &scene_mid, &extra);
