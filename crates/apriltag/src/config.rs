@@ -3,6 +3,7 @@
 
 use crate::DetectError;
 use jawtrack_tag_family::TagFamily;
+use jawtrack_tone::{ToneCurve, ToneSetting};
 
 /// A rectangle of the full frame to search (px); detections keep full-frame coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,8 +80,8 @@ pub struct DetectorConfig {
     /// Refine each edge at full resolution from the image gradient. Costs little, gains much
     /// corner accuracy, most of all with decimation.
     pub refine_edges: bool,
-    /// JawTrack's edge fit instead of C's: (1) in linear light, reading the frame as
-    /// sRGB-encoded (as phone frames are) — a blurred edge located in encoded values moves
+    /// JawTrack's edge fit instead of C's: (1) in linear light, reading the frame through
+    /// [`DetectorConfig::tone`] — a blurred edge located in encoded values moves
     /// toward its dark side by a fraction of the blur, in linear light it stays put; (2) with
     /// the gradient's plain mean along the normal rather than the mean weighted by its square,
     /// which pulls toward pixel centres by up to 0.1 px; (3) with the search window re-centred
@@ -92,6 +93,12 @@ pub struct DetectorConfig {
     /// a dim, blurred grazing tag dips by noise alone). `false` reproduces the C library
     /// exactly.
     pub linear_edges: bool,
+    /// With `linear_edges`, the curve the camera encoded frames with, undone to fit edges in
+    /// linear light. A curve that is not the camera's moves every blurred edge toward one side
+    /// by a share of its blur (a phone's gamma 1.8 read as sRGB: the jaw 6× further off).
+    /// `Auto` (the default) estimates it from the tags over the frames a detector sees
+    /// ([`crate::tone`]); a fixed curve is read through as given.
+    pub tone: ToneSetting,
     /// With `linear_edges`, fit edges smeared by motion: where a side's edge runs past the
     /// window, the window is widened, up to a cell, over the whole ramp (motion blur smears an
     /// edge into a ramp as wide as the motion during the exposure, whose centre is the edge at
@@ -133,6 +140,7 @@ impl Default for DetectorConfig {
             nthreads: 1,
             refine_edges: true,
             linear_edges: true,
+            tone: ToneSetting::Auto,
             smeared_edges: false,
             blur_aware_edges: true,
             decode_sharpening: 0.25,
@@ -148,7 +156,12 @@ impl DetectorConfig {
     /// The C library's defaults exactly, edges refined as C does (in encoded values): the
     /// settings under which this detector returns the C library's results.
     pub fn reference() -> Self {
-        DetectorConfig { linear_edges: false, quad: QuadThreshold::reference(), ..DetectorConfig::default() }
+        DetectorConfig {
+            linear_edges: false,
+            tone: ToneSetting::Fixed(ToneCurve::Srgb),
+            quad: QuadThreshold::reference(),
+            ..DetectorConfig::default()
+        }
     }
 
     /// Checks every setting, naming the first bad one.
@@ -173,6 +186,9 @@ impl DetectorConfig {
             ));
         }
         self.family.validate().map_err(DetectError::BadConfig)?;
+        if let ToneSetting::Fixed(curve) = self.tone {
+            curve.validate().map_err(|e| DetectError::BadConfig(e.to_string()))?;
+        }
         let q = &self.quad;
         if q.max_nmaxima == 0 {
             return bad("quad.max_nmaxima must be at least 1".into());

@@ -36,6 +36,7 @@ pub mod image;
 pub mod preprocess;
 pub mod quads;
 pub mod threshold;
+pub mod tone;
 pub mod workers;
 
 pub use backend::TagDetector;
@@ -45,6 +46,7 @@ pub use detector::{Detection, Detector};
 pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra, luma_from_bgra_into};
 pub use jawtrack_tag_family::{self as family, TagBitmap, TagFamily};
+pub use jawtrack_tone::{ToneCurve, ToneSetting};
 
 /// Why detection could not run.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

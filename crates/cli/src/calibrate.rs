@@ -32,9 +32,8 @@ pub(crate) struct CalibrateArgs {
     /// Views a tag needs to be calibrated (with another tag of its body in each).
     #[arg(long, default_value_t = 3)]
     min_views: usize,
-    /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    linear_edges: bool,
+    #[command(flatten)]
+    edges: crate::flags::EdgeArgs,
     /// A video to read (needs ffmpeg and ffprobe on the PATH); give it again for more
     /// recordings: a tracked session's video places the tags a calibration recording missed.
     #[arg(long)]
@@ -56,10 +55,10 @@ pub(crate) fn run(a: &CalibrateArgs) -> Result<()> {
     };
     let mut frames = Vec::new();
     for video in &a.video {
-        frames.extend(detect_views(open_frames(Some(video), &[], None)?, &marker, &a.intrinsics, a.linear_edges)?);
+        frames.extend(detect_views(open_frames(Some(video), &[], None)?, &marker, &a.intrinsics, a.edges)?);
     }
     if !a.frames.is_empty() {
-        frames.extend(detect_views(open_frames(None, &a.frames, None)?, &marker, &a.intrinsics, a.linear_edges)?);
+        frames.extend(detect_views(open_frames(None, &a.frames, None)?, &marker, &a.intrinsics, a.edges)?);
     }
     let options = CalibrationOptions { min_views: a.min_views, ..CalibrationOptions::default() };
     // The marker file names what it was calibrated from: the videos and the frames as given.

@@ -48,9 +48,8 @@ pub(crate) struct CalibrateCameraArgs {
     /// Refuse a fit whose RMS corner residual exceeds this (px).
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     max_rms_px: f64,
-    /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    linear_edges: bool,
+    #[command(flatten)]
+    edges: crate::flags::EdgeArgs,
     /// The lens position (AVFoundation's 0 near – 1 far) focus was locked at while filming,
     /// recorded with the calibration: intrinsics belong to a focus, and `jawtrack track
     /// --camera` warns when a recording's differs. Default: the --like recording's.
@@ -129,7 +128,7 @@ fn calibrated_at(a: &CalibrateCameraArgs) -> Result<CalibratedAt> {
 
 /// Detects the marker's tags in every frame, with a progress bar; the frames and their size.
 fn detect(a: &CalibrateCameraArgs, marker: &Marker) -> Result<(Vec<CameraFrame>, u32, u32)> {
-    let frames = detect_marker_tags(open_frames(a.video.as_deref(), &a.frames, a.fps)?, marker, a.linear_edges)?;
+    let frames = detect_marker_tags(open_frames(a.video.as_deref(), &a.frames, a.fps)?, marker, a.edges)?;
     let (w, h) = jawtrack_frames::one_size(&frames)?;
     Ok((frames.into_iter().map(|f| CameraFrame { t: f.t, tags: f.tags }).collect(), w, h))
 }

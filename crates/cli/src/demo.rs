@@ -38,7 +38,9 @@ pub(crate) fn run(a: &DemoArgs) -> Result<()> {
     let rendered = render_with_progress(calibration_scene(a.seed), &dir)?;
     let turned = read_truth(&dir)?;
     let source = jawtrack_frames::open_frames(None, std::slice::from_ref(&dir), None)?;
-    let views = detect_views(source, &Marker::default(), &turned.intrinsics, turned.realism.gamma)?;
+    let edges =
+        crate::flags::EdgeArgs { linear_edges: turned.realism.gamma, tone: jawtrack_apriltag::ToneSetting::Auto };
+    let views = detect_views(source, &Marker::default(), &turned.intrinsics, edges)?;
     let calibrated = jawtrack_demo::calibrate_marker(&a.out, &dir, &views, rendered.frames)?;
     say!("{calibrated}");
 

@@ -29,11 +29,8 @@ pub(crate) struct DetectArgs {
     /// Refine edges at full resolution.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     refine_edges: bool,
-    /// Refine edges JawTrack's way: in linear light, reading the images as sRGB (as phone
-    /// frames are), with a re-centred, unsquared gradient fit; false refines them as the C
-    /// library does.
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    linear_edges: bool,
+    #[command(flatten)]
+    edges: crate::flags::EdgeArgs,
     /// Run each image this many times and report the median time.
     #[arg(long, default_value_t = 1)]
     repeat: usize,
@@ -51,7 +48,8 @@ pub(crate) fn run(a: &DetectArgs) -> Result<()> {
         quad_sigma: a.sigma,
         nthreads: a.threads,
         refine_edges: a.refine_edges,
-        linear_edges: a.linear_edges,
+        linear_edges: a.edges.linear_edges,
+        tone: a.edges.tone,
         max_hamming: a.max_hamming,
         quad: QuadThreshold { min_white_black_diff: a.min_white_black_diff, ..QuadThreshold::default() },
         ..DetectorConfig::default()

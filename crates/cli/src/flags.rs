@@ -23,6 +23,20 @@ pub(crate) struct SessionArg {
     pub(crate) session: Option<SessionId>,
 }
 
+/// How tag edges are fitted, for the commands that detect tags.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub(crate) struct EdgeArgs {
+    /// Fit tag edges in linear light, JawTrack's way; false fits them as the C library does,
+    /// in the frames' own values.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub(crate) linear_edges: bool,
+    /// The camera's tone curve, undone to reach linear light: auto (estimated from the tags'
+    /// edges, sRGB until they tell), srgb, gamma:G (a plain power law, e.g. gamma:1.8) or
+    /// s-curve:G:C.
+    #[arg(long, default_value = "auto", value_name = "CURVE")]
+    pub(crate) tone: jawtrack_apriltag::ToneSetting,
+}
+
 /// The `--points` flag.
 #[derive(clap::Args, Clone, Debug)]
 pub(crate) struct PointsArg {

@@ -3,8 +3,6 @@
 //! sign as a direction.
 
 pub(crate) use jawtrack_plot::fixed;
-#[cfg(test)]
-use jawtrack_session::export::full;
 
 /// Parses `count` comma-separated finite numbers (mm), for flags giving points; `what` names
 /// them in the error ("LX,LY,LZ,RX,RY,RZ").
@@ -43,15 +41,6 @@ pub(crate) fn parse_positive_deg(s: &str) -> Result<f64, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn zero_has_no_sign_and_everything_else_keeps_its_own() {
-        assert_eq!(
-            [fixed(-0.0, 2), fixed(-0.004, 2), fixed(-0.005, 3), fixed(1.5, 1)],
-            ["0.00", "0.00", "-0.005", "1.5"]
-        );
-        assert_eq!([full(-0.0), full(-0.001), full(2.5)], ["0", "-0.001", "2.5"]);
-    }
 
     #[test]
     fn frame_numbers_and_angles_say_what_they_expect() {

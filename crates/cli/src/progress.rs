@@ -13,18 +13,19 @@ pub(crate) fn progress_bar(what: &str, len: usize) -> ProgressBar {
 pub(crate) fn detect_marker_tags(
     source: Box<dyn jawtrack_frames::FrameSource>,
     marker: &jawtrack_marker::Marker,
-    linear_edges: bool,
+    edges: crate::flags::EdgeArgs,
 ) -> anyhow::Result<Vec<jawtrack_frames::TaggedFrame>> {
     use jawtrack_frames::Progress;
     let bar = bar("detecting", source.frame_count().map(|n| n as u64), "frames");
     let mut unreadable = 0;
-    let frames = jawtrack_frames::detect_marker_tags(source, marker, linear_edges, &mut |p| match p {
-        Progress::Frame => bar.inc(1),
-        Progress::Unreadable(name, why) => {
-            unreadable += 1;
-            bar.suspend(|| tell!("warning: {name}: {why}; skipped"));
-        }
-    });
+    let frames =
+        jawtrack_frames::detect_marker_tags(source, marker, (edges.linear_edges, edges.tone), &mut |p| match p {
+            Progress::Frame => bar.inc(1),
+            Progress::Unreadable(name, why) => {
+                unreadable += 1;
+                bar.suspend(|| tell!("warning: {name}: {why}; skipped"));
+            }
+        });
     bar.finish_and_clear();
     if unreadable > 0 {
         tell!("warning: {unreadable} frames could not be read and were left out");
@@ -37,9 +38,9 @@ pub(crate) fn detect_views(
     source: Box<dyn jawtrack_frames::FrameSource>,
     marker: &jawtrack_marker::Marker,
     camera: &jawtrack_pose::CameraIntrinsics,
-    linear_edges: bool,
+    edges: crate::flags::EdgeArgs,
 ) -> anyhow::Result<Vec<jawtrack_calibration::CalibrationFrame>> {
-    let frames = detect_marker_tags(source, marker, linear_edges)?;
+    let frames = detect_marker_tags(source, marker, edges)?;
     Ok(frames.into_iter().map(|f| jawtrack_calibration::CalibrationFrame { camera: *camera, tags: f.tags }).collect())
 }
 

@@ -71,9 +71,8 @@ pub(crate) struct TrackArgs {
     /// Detector threads.
     #[arg(long, default_value_t = 1)]
     threads: usize,
-    /// Refine tag edges in linear light, reading frames as sRGB (as phones deliver them).
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    linear_edges: bool,
+    #[command(flatten)]
+    edges: crate::flags::EdgeArgs,
     /// Search only where the markers are expected once tracked (the whole frame every 30
     /// frames and whenever a body is missing); `false` searches every frame whole.
     #[arg(long, alias = "roi", default_value_t = true, action = clap::ArgAction::Set)]
@@ -118,7 +117,8 @@ impl TrackArgs {
             exposure_ms: self.exposure_ms,
             decimate: self.decimate,
             threads: self.threads,
-            linear_edges: self.linear_edges,
+            linear_edges: self.edges.linear_edges,
+            tone: self.edges.tone,
             region_search: self.region_search,
             smooth: self.smooth,
             out: self.out.clone(),
@@ -189,6 +189,7 @@ impl TrackEvents for Printed<'_> {
 pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let mut tracked = track(&a.options(), &mut Printed { a, bar: None })?;
     tell!("tracked {} frames: {}; poses in {}", tracked.frames, tracked.summary.describe(), a.out.display());
+    tell!("tone curve: {}", tracked.tone.describe());
     for w in &tracked.warnings {
         tell!("warning: {w}");
     }

@@ -217,6 +217,10 @@ fn track_writes_one_line_per_frame_with_the_jaw_pose() {
     assert_eq!(lines.len(), 7, "a header and six frames");
     assert_eq!(lines[0]["recording"]["source"], "jawtrack track");
     assert_eq!(lines[0]["recording"]["intrinsics"]["fx"], 1500.0);
+    // The tone curve: asked for in the header, read through on the first frame, and said.
+    assert_eq!(lines[0]["recording"]["settings"]["tone"], "auto");
+    assert_eq!((&lines[1]["tone"]["setting"], &lines[1]["tone"]["curve"]), (&"auto".into(), &"srgb".into()));
+    assert!(stderr(&o).contains("tone curve: srgb (auto"), "{}", stderr(&o));
     let near_truth = |lines: &[serde_json::Value]| {
         for (i, (line, f)) in lines[1..].iter().zip(truth["frames"].as_array().expect("frames")).enumerate() {
             assert_eq!(line["frame"], i);
@@ -233,8 +237,22 @@ fn track_writes_one_line_per_frame_with_the_jaw_pose() {
     // With a rolling shutter: the header says how the frames were tracked, and the fixture's
     // jumps between views (taken as 30 fps footage) do not spoil the poses.
     let k = "1500,1500,959.5,539.5";
-    let timed = jawtrack(&["track", "--intrinsics", k, "--readout-ms", "5", "--exposure-ms", "2", "--out", "-", set]);
+    let timed = jawtrack(&[
+        "track",
+        "--intrinsics",
+        k,
+        "--readout-ms",
+        "5",
+        "--exposure-ms",
+        "2",
+        "--tone",
+        "srgb",
+        "--out",
+        "-",
+        set,
+    ]);
     assert!(timed.status.success(), "{}", stderr(&timed));
+    assert!(stderr(&timed).contains("tone curve: srgb (as given)"), "{}", stderr(&timed));
     let timed: Vec<serde_json::Value> =
         String::from_utf8_lossy(&timed.stdout).lines().map(|l| serde_json::from_str(l).expect("json line")).collect();
     assert_eq!(timed[0]["recording"]["readout_s"], 0.005);
@@ -243,6 +261,7 @@ fn track_writes_one_line_per_frame_with_the_jaw_pose() {
     near_truth(&timed);
     refused(&jawtrack(&["track", "--intrinsics", k, "--readout-ms", "-1", "--out", out, set]), "--readout-ms");
     refused(&jawtrack(&["track", "--intrinsics", k, "--exposure-ms", "0", "--out", out, set]), "--exposure-ms");
+    refused(&jawtrack(&["track", "--intrinsics", k, "--tone", "gamma:0.5", "--out", out, set]), "between 1 and 4");
     refused(&jawtrack(&["track", "--intrinsics", "1500,1500,959.5", "--out", out, set]), "intrinsics");
     refused(
         &jawtrack(&["track", "--intrinsics", "1500,1500,959.5,539.5", "--out", out, "/nonexistent"]),

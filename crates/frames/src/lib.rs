@@ -12,7 +12,7 @@
 //! # Ok::<(), jawtrack_frames::FramesError>(())
 //! ```
 
-use jawtrack_apriltag::{DetectError, Detector, DetectorConfig, ImageView};
+use jawtrack_apriltag::{DetectError, Detector, DetectorConfig, ImageView, ToneSetting};
 use jawtrack_calibration::SeenTag;
 use jawtrack_marker::Marker;
 use std::io::{BufRead, Read};
@@ -112,7 +112,7 @@ pub enum Progress<'a> {
 pub fn detect_marker_tags(
     mut source: Box<dyn FrameSource>,
     marker: &Marker,
-    linear_edges: bool,
+    (linear_edges, tone): (bool, ToneSetting),
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Vec<TaggedFrame>> {
     // Without the border model's sides: a marker turned in the hand is smeared by motion no
@@ -121,6 +121,7 @@ pub fn detect_marker_tags(
     // jaw 0.081 mm off after calibrating with them, 0.025 mm without; crates/cli/tests/calibrate.rs).
     let detector = Detector::new(DetectorConfig {
         linear_edges,
+        tone,
         blur_aware_edges: false,
         family: marker.family,
         ..DetectorConfig::default()

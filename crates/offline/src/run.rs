@@ -7,13 +7,13 @@
 use crate::{
     FocalViews, Kept, OfflineError, RecordedCapture, Summary, closing_warnings, first_pass, refine_marker, track_frame,
 };
-use jawtrack_apriltag::DetectorConfig;
+use jawtrack_apriltag::{DetectorConfig, ToneSetting};
 use jawtrack_calibration::Refinement;
 use jawtrack_camera_calibration::CameraFile;
 use jawtrack_frames::{FrameSource, open_frames};
 use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
-use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter};
+use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, ToneRecord};
 use jawtrack_registration::Registration;
 use jawtrack_tracker::{FrameResult, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::io::Write;
@@ -49,6 +49,8 @@ pub struct TrackOptions {
     pub threads: usize,
     /// Refine tag edges in linear light.
     pub linear_edges: bool,
+    /// The camera's tone curve, undone to reach linear light (`auto`: estimated from the tags).
+    pub tone: ToneSetting,
     /// Search only where the markers are expected once tracked.
     pub region_search: bool,
     /// Smooth the jaw pose.
@@ -113,6 +115,8 @@ pub struct Tracked {
     pub summary: Summary,
     /// The warnings the run calls for ([`closing_warnings`]).
     pub warnings: Vec<String>,
+    /// The tone curve the last frames were read through, and how it was found.
+    pub tone: ToneRecord,
 }
 
 /// What a run tracks with, resolved from the options.
@@ -233,6 +237,7 @@ fn tracker_config(o: &TrackOptions, readout_s: f64, exposure_s: Option<f64>) -> 
             quad_decimate: o.decimate,
             nthreads: o.threads,
             linear_edges: o.linear_edges,
+            tone: o.tone,
             ..DetectorConfig::default()
         },
         search: SearchConfig { region_search: o.region_search, ..SearchConfig::default() },
@@ -251,7 +256,8 @@ fn header(o: &TrackOptions, tracker: &Tracker, s: &Setup) -> RecordingHeader {
     header.exposure_s = s.exposure_s;
     header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
     header.settings = serde_json::json!({
-        "decimate": o.decimate, "threads": o.threads, "linear_edges": o.linear_edges, "region_search": o.region_search,
+        "decimate": o.decimate, "threads": o.threads, "linear_edges": o.linear_edges, "tone": o.tone.to_string(),
+        "region_search": o.region_search,
         "smooth": o.smooth, "registration": o.registration.as_ref().map(|p| p.display().to_string()),
         "refine_marker": o.refine_marker.as_ref().map(|p| p.display().to_string()),
     });
@@ -381,7 +387,7 @@ pub fn track(o: &TrackOptions, events: &mut dyn TrackEvents) -> Result<Tracked, 
         return Err(OfflineError::NothingTracked { frames: index, out: o.out.display().to_string() });
     }
     let warnings = closing_warnings(&summary, &views, &tracker);
-    Ok(Tracked { frames: index, summary, warnings })
+    Ok(Tracked { frames: index, summary, warnings, tone: jawtrack_tracker::tone_record(&tracker.tone()) })
 }
 
 #[cfg(test)]

@@ -239,6 +239,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn zero_has_no_sign_and_everything_else_keeps_its_own() {
+        assert_eq!(
+            [fixed(-0.0, 2), fixed(-0.004, 2), fixed(-0.005, 3), fixed(1.5, 1)],
+            ["0.00", "0.00", "-0.005", "1.5"]
+        );
+    }
+
+    #[test]
     fn ticks_are_round_and_cover_the_range() {
         assert_eq!(ticks(0.0, 10.0), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
         let t = ticks(-0.37, 0.81);

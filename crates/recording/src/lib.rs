@@ -40,7 +40,7 @@ pub use flag::Flag;
 pub use read::{MAX_TRANSLATION_MM, Recording, open, read_recording};
 pub use schema::{
     BiteRecord, BodyRecord, CaptureRecord, FrameRecord, RECORDING_FORMAT, RECORDING_VERSION, RecordingHeader,
-    SessionId, TimingsRecord,
+    SessionId, TimingsRecord, ToneFitRecord, ToneRecord,
 };
 pub use write::{Overwrite, RecordingWriter, create_file, write_file_atomic};
 

@@ -1,6 +1,7 @@
 //! The header and frame lines of a recording, as types (the crate's doc shows the JSON).
 
 use jawtrack_pose::{CameraIntrinsics, Pose};
+use jawtrack_tone::{ToneCurve, ToneSetting};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -236,6 +237,67 @@ pub struct FrameRecord {
     /// When the packet arrived (s since the Unix epoch), for frames received over the link.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub received_unix_s: Option<f64>,
+    /// The tone curve this frame and the ones after it were read through, on the first frame
+    /// and wherever it changed (the estimate settling over the first frames, or the phone's
+    /// curve adapting to the scene).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tone: Option<ToneRecord>,
+}
+
+/// The tone curve frames were read through, and how it was found.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ToneRecord {
+    /// What was asked for: `auto` (estimated from the tags) or a curve.
+    pub setting: ToneSetting,
+    /// The curve (`srgb`, `gamma:1.83`, …).
+    pub curve: ToneCurve,
+    /// Frames whose tags were fitted so far.
+    pub frames_fitted: usize,
+    /// With an estimate: the power law pooled over the recent fits, the spread of their
+    /// exponents, their tag sides, and how lopsided the edges are read through it and through
+    /// sRGB.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<ToneFitRecord>,
+}
+
+impl ToneRecord {
+    /// The curve and how it was found, in a line: what `jawtrack track` prints and the report
+    /// states. The misfits are the edges' lopsidedness per pixel in units of their noise (1:
+    /// only noise is left).
+    pub fn describe(&self) -> String {
+        match (self.setting, &self.fit) {
+            (ToneSetting::Fixed(_), _) => format!("{} (as given)", self.curve),
+            (ToneSetting::Auto, None) => format!("{} (auto: no tag edge has told the curve yet)", self.curve),
+            (ToneSetting::Auto, Some(f)) => {
+                let evidence = format!(
+                    "power law {:.2} ± {:.2} from {} frames' {} tag sides, misfit {:.3} against sRGB's {:.3}",
+                    f.gamma, f.gamma_spread, self.frames_fitted, f.sides, f.misfit, f.srgb_misfit
+                );
+                match self.curve {
+                    ToneCurve::Srgb => format!("srgb (auto: kept; the {evidence})"),
+                    c => format!("{c} (auto: estimated, {evidence})"),
+                }
+            }
+        }
+    }
+}
+
+/// The fits behind an estimated curve ([`ToneRecord::fit`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ToneFitRecord {
+    /// The pooled exponent.
+    pub gamma: f64,
+    /// Median absolute deviation of the pooled fits' exponents.
+    pub gamma_spread: f64,
+    /// Fits pooled.
+    pub fits: usize,
+    /// Tag sides in them.
+    pub sides: usize,
+    /// How lopsided the tags' edges are read through the fits' own best power laws, per pixel
+    /// in units of the noise (1: only noise is left)…
+    pub misfit: f64,
+    /// … and through sRGB.
+    pub srgb_misfit: f64,
 }
 
 /// The rest position the maximal-intercuspation step accepted, `{"bite": {…}}`: every clinical
@@ -286,6 +348,7 @@ impl FrameRecord {
             timings_s: None,
             seq: None,
             received_unix_s: None,
+            tone: None,
         }
     }
 

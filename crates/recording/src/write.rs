@@ -188,6 +188,7 @@ mod tests {
             timings_s: None,
             seq: None,
             received_unix_s: None,
+            tone: None,
         }
     }
 

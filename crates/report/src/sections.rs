@@ -286,6 +286,7 @@ fn quality(inputs: &Inputs, with_pose: usize, warnings: &[String]) -> String {
         ("Reprojection error, maxilla", rms(|f| f.maxilla.as_ref().map(|b| b.rms_px))),
         ("Reprojection error, mandible", rms(|f| f.mandible.as_ref().map(|b| b.rms_px))),
         ("Lines skipped", rec.skipped.len().to_string()),
+        ("Tone curve the tags were read through", esc(&tone_line(rec))),
     ]);
     if flags.is_empty() {
         s += "<p>No frame carries a quality flag.</p>";
@@ -295,6 +296,15 @@ fn quality(inputs: &Inputs, with_pose: usize, warnings: &[String]) -> String {
         s += &table(&["flag", "frames"], &rows);
     }
     s
+}
+
+/// The curve the last frames were read through and how it was found: the last frame that
+/// says so (a frame does where the curve changed).
+fn tone_line(rec: &jawtrack_recording::Recording) -> String {
+    rec.frames.iter().rev().find_map(|f| f.tone.as_ref()).map_or_else(
+        || "not recorded (tracked before JawTrack estimated it: read as sRGB)".into(),
+        jawtrack_recording::ToneRecord::describe,
+    )
 }
 
 fn incisor_section(m: &Metrics, path: &[Sample]) -> String {

@@ -144,12 +144,17 @@ fn quality_numbers_are_the_recording_s() {
         let (t, pose) = session.poses[k];
         let body = json!({"camera_from_body": pose, "tags": [0, 1], "rms_px": 0.01 * (k + 1) as f64});
         let lost = (8..=18).contains(&k);
-        lines.push(
-            json!({"frame": k, "t": t, "maxilla": body, "mandible": if lost { Value::Null } else { body.clone() },
-                "maxilla_from_mandible": if lost { Value::Null } else { json!(pose) },
-                "flags": if lost { vec!["mandible:lost"] } else { vec![] }})
-            .to_string(),
-        );
+        let mut line = json!({"frame": k, "t": t, "maxilla": body, "mandible": if lost { Value::Null } else { body.clone() },
+            "maxilla_from_mandible": if lost { Value::Null } else { json!(pose) },
+            "flags": if lost { vec!["mandible:lost"] } else { vec![] }});
+        // The tone curve: sRGB on the first frame, the estimate from frame 5 on.
+        if k == 0 {
+            line["tone"] = json!({"setting": "auto", "curve": "srgb", "frames_fitted": 0});
+        } else if k == 5 {
+            line["tone"] = json!({"setting": "auto", "curve": "gamma:1.84", "frames_fitted": 5, "fit": {"gamma": 1.842,
+                "gamma_spread": 0.06, "fits": 5, "sides": 80, "misfit": 1.003, "srgb_misfit": 1.034}});
+        }
+        lines.push(line.to_string());
     }
     let rec = read_recording((lines.join("\n") + "\n").as_bytes()).expect("a recording");
     let rest = session.poses[0].1;
@@ -169,6 +174,13 @@ fn quality_numbers_are_the_recording_s() {
     assert!(r.html.contains("<td>median 0.050 px, 95th percentile 0.200 px</td>"));
     assert!(r.html.contains("<td>mandible:lost</td><td>11</td>"));
     assert!(r.html.contains("nominal (the ideal solid"), "the marker named");
+    assert!(
+        r.html.contains(
+            "<th>Tone curve the tags were read through</th><td>gamma:1.84 (auto: estimated, power law 1.84 \
+             ± 0.06 from 5 frames&#39; 80 tag sides, misfit 1.003 against sRGB&#39;s 1.034)</td>"
+        ),
+        "the last curve and how it was found"
+    );
 }
 
 #[test]
@@ -194,6 +206,7 @@ fn frames_out_of_focus_are_counted_and_explained() {
     assert_eq!(focus.len(), 1, "{:?}", r.warnings);
     assert!(focus[0].starts_with("3 of 10 frames had a marker out of focus") && focus[0].contains("jawtrack plan"));
     assert!(r.html.contains("<td>maxilla:defocused</td><td>3</td>"), "the flag's count in the table");
+    assert!(r.html.contains("not recorded (tracked before JawTrack estimated it: read as sRGB)"), "an older recording");
 }
 
 #[test]

@@ -282,3 +282,13 @@ fn csv(rec: &Recording, incisor: &Incisor, rest: Option<Pose>, out: &mut dyn Wri
     w.flush()?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::full;
+
+    #[test]
+    fn full_numbers_drop_trailing_zeros_and_zero_s_sign() {
+        assert_eq!([full(-0.0), full(-0.001), full(2.5), full(1.8e-16)], ["0", "-0.001", "2.5", "0"]);
+    }
+}

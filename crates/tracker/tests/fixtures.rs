@@ -29,7 +29,7 @@ fn run(oracle: bool) -> Vec<SetErrors> {
         config.detector.linear_edges = gt.realism.gamma;
         let mut tracker = Tracker::new(marker, config).expect("tracker");
         let (mut errors, mut tracked) = (Vec::new(), 0);
-        for f in &gt.frames {
+        for (i, f) in gt.frames.iter().enumerate() {
             let img = image::open(set.join(&f.file)).expect("png").to_luma8();
             let (w, h) = (img.width() as usize, img.height() as usize);
             let r = tracker
@@ -42,8 +42,19 @@ fn run(oracle: bool) -> Vec<SetErrors> {
             } else {
                 assert!(r.flags.iter().any(|f| matches!(f, Flag::Lost(_) | Flag::NoTags)), "no pose and no flag");
             }
+            // The first frame says which tone curve it was read through; a later one only
+            // where the curve changed.
+            assert_eq!(r.tone.is_some(), i == 0 || r.tone.is_some_and(|t| t.frames_fitted > 0), "frame {i}");
             tracked += 1;
         }
+        // sRGB renders are read as sRGB: the estimate never leaves it on them.
+        assert_eq!(
+            tracker.tone().curve,
+            jawtrack_apriltag::ToneCurve::Srgb,
+            "{}: {:?}",
+            set_name(&set),
+            tracker.tone()
+        );
         out.push((set_name(&set), errors, tracked));
     }
     out

@@ -339,6 +339,7 @@ impl PosePacket {
             timings_s: None,
             seq: Some(header.seq),
             received_unix_s: Some(received_unix_s),
+            tone: None,
         }
     }
 }

@@ -45,7 +45,7 @@ const STEP_PX: f64 = 0.5;
 const ALONG: [f64; 8] = [1.25, 2.0, 2.75, 3.5, 4.5, 5.25, 6.0, 6.75];
 /// … or at six of those places, to measure the side's blur alone. Both are for an 8-cell
 /// square; other widths place them alike between one cell in from either end ([`along`]).
-const ALONG_BLUR: [f64; 6] = [1.75, 2.75, 3.75, 4.25, 5.25, 6.25];
+pub(super) const ALONG_BLUR: [f64; 6] = [1.75, 2.75, 3.75, 4.25, 5.25, 6.25];
 /// A window reaches this many σ (plus [`REACH_PX`]) either side of the side's edge.
 const REACH_SIGMAS: f64 = 4.0;
 const REACH_PX: f64 = 2.0;
@@ -74,7 +74,7 @@ enum Print {
 /// the Gaussian's mass between its boundaries across the side (`bands`) times that between its
 /// boundaries along it (`columns`), exact for a square grid seen straight and close to it for
 /// the few cells around the profile under perspective.
-struct Profile {
+pub(super) struct Profile {
     /// The point on the side's current line (px, C's convention) and the unit normal inward.
     origin: [f64; 2],
     normal: [f64; 2],
@@ -151,7 +151,7 @@ fn print(bitmap: &TagBitmap, side: usize, c: i32, j: i32) -> Print {
 
 /// The places along a side of an `n`-cell square that `places` name on an 8-cell one, mapped
 /// so that one cell in from either end stays one cell in.
-fn along(n: usize, places: &[f64]) -> Vec<f64> {
+pub(super) fn along(n: usize, places: &[f64]) -> Vec<f64> {
     let scale = (n as f64 - 2.0) / (MAX_CELLS as f64 - 2.0);
     places.iter().map(|&u| 1.0 + (u - 1.0) * scale).collect()
 }
@@ -161,7 +161,7 @@ fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// The profiles of side `side` of the tag `h` maps, across it at each of `along` (cells).
-fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f64]) -> Option<Vec<Profile>> {
+pub(super) fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f64]) -> Option<Vec<Profile>> {
     let n = bitmap.width();
     if !(4..=MAX_CELLS).contains(&n) {
         return None;
@@ -317,8 +317,9 @@ fn model(p: &Profile, rows: &Rows, t: f64, q: &Params) -> (f64, Params) {
     (value, g)
 }
 
-/// Bilinear sample of the linear-light image at `p` (C's convention: pixel centres at +0.5).
-fn sample(im: &ImageView<'_>, lut: &[f64; 256], p: [f64; 2]) -> Option<f64> {
+/// The four pixels around `p` (C's convention: pixel centres at +0.5) and their bilinear
+/// weights; `None` outside the image.
+fn taps(im: &ImageView<'_>, p: [f64; 2]) -> Option<Taps> {
     let (x, y) = (p[0] - 0.5, p[1] - 0.5);
     let (x0, y0) = (x.floor(), y.floor());
     if x0 < 0.0 || y0 < 0.0 || x0 + 1.0 >= im.width() as f64 || y0 + 1.0 >= im.height() as f64 {
@@ -326,13 +327,21 @@ fn sample(im: &ImageView<'_>, lut: &[f64; 256], p: [f64; 2]) -> Option<f64> {
     }
     let (fx, fy) = (x - x0, y - y0);
     let (xi, yi) = (x0 as usize, y0 as usize);
-    let v = |x: usize, y: usize| lut[usize::from(im.row(y)[x])];
-    Some(
-        (1.0 - fx) * (1.0 - fy) * v(xi, yi)
-            + fx * (1.0 - fy) * v(xi + 1, yi)
-            + (1.0 - fx) * fy * v(xi, yi + 1)
-            + fx * fy * v(xi + 1, yi + 1),
-    )
+    let (top, bottom) = (im.row(yi), im.row(yi + 1));
+    Some([
+        (top[xi], (1.0 - fx) * (1.0 - fy)),
+        (top[xi + 1], fx * (1.0 - fy)),
+        (bottom[xi], (1.0 - fx) * fy),
+        (bottom[xi + 1], fx * fy),
+    ])
+}
+
+/// Four pixel values and their weights.
+type Taps = [(u8, f64); 4];
+
+/// The linear-light value the taps interpolate, read through `lut`.
+fn through(lut: &[f64; 256], taps: &Taps) -> f64 {
+    taps.iter().map(|&(v, w)| w * lut[usize::from(v)]).sum()
 }
 
 /// Reads each profile's samples (profile, t, value) over its window: from just inside the quiet
@@ -345,6 +354,11 @@ fn read(
     q: &Params,
     reach: f64,
 ) -> Option<Vec<(usize, f64, f64)>> {
+    Some(read_taps(im, profiles, q, reach)?.iter().map(|(pi, t, taps)| (*pi, *t, through(lut, taps))).collect())
+}
+
+/// As [`read`], each sample's pixels and weights rather than its value.
+fn read_taps(im: &ImageView<'_>, profiles: &[Profile], q: &Params, reach: f64) -> Option<Vec<(usize, f64, Taps)>> {
     let mut data = Vec::new();
     for (pi, p) in profiles.iter().enumerate() {
         let e = q[0] + q[1] * p.along;
@@ -355,7 +369,7 @@ fn read(
         for k in 0..=n {
             let t = lo + k as f64 * step;
             let at = [p.origin[0] + t * p.normal[0], p.origin[1] + t * p.normal[1]];
-            data.push((pi, t, sample(im, lut, at)?));
+            data.push((pi, t, taps(im, at)?));
         }
     }
     Some(data)
@@ -379,7 +393,28 @@ fn blur_guess(data: &[(usize, f64, f64)], contrast: f64) -> Option<f64> {
 /// Fits one side; `None` when its profiles leave the image, the fit does not converge, or what
 /// it finds cannot be a border (no contrast, a blur wider than the cells). The windows are sized
 /// by a first guess of the blur, and sized again when the fit finds it a third different.
-fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Option<SideFit> {
+pub(super) fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Option<SideFit> {
+    let (q, data, cell) = fit_side_params(im, lut, profiles)?;
+    let point = |along: f64| {
+        // The profile nearest `along` carries its normal; the line runs through the fitted
+        // points of the first and last profiles.
+        let p = if along < 0.0 { &profiles[0] } else { &profiles[profiles.len() - 1] };
+        let e = q[0] + q[1] * p.along;
+        [p.origin[0] + e * p.normal[0], p.origin[1] + e * p.normal[1]]
+    };
+    let misfit = misfit_of(profiles, &data, &q);
+    Some(SideFit { line: [point(-1.0), point(1.0)], sigma_px: q[2], cell_px: cell, misfit })
+}
+
+/// Samples along profiles: (profile, distance along its normal (px), value).
+type Samples = Vec<(usize, f64, f64)>;
+
+/// The fit behind [`fit_side`]: the parameters, the samples they were fitted to, the cell (px).
+fn fit_side_params(
+    im: &ImageView<'_>,
+    lut: &[f64; 256],
+    profiles: &[Profile],
+) -> Option<(Params, Samples, f64)> {
     let cell = profiles.iter().map(|p| p.across[2] - p.across[1]).fold(f64::INFINITY, f64::min);
     if !(cell.is_finite() && cell > 1.0) {
         return None;
@@ -387,13 +422,7 @@ fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Optio
     let mut q = Params::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.2]);
     // A first look, half a cell either way (at most 10 px): the levels and a guess of the blur.
     let first = read(im, lut, profiles, &q, (0.5 * cell).clamp(3.0, 10.0))?;
-    let mut v: Vec<f64> = first.iter().map(|d| d.2).collect();
-    v.sort_by(f64::total_cmp);
-    // Paper: the brightest eighth of the samples; ink: the darkest.
-    let (ink, paper) = (v[v.len() / 8], v[v.len() - 1 - v.len() / 8]);
-    if paper - ink < 1.0 {
-        return None;
-    }
+    let (ink, paper) = levels(&first)?;
     (q[3], q[4], q[5]) = (paper, ink, paper);
     q[2] = blur_guess(&first, paper - ink)?.clamp(0.3, cell);
     let mut data = Vec::new();
@@ -405,20 +434,125 @@ fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Optio
             break;
         }
     }
-    if !(q[3] - q[4] > 1.0 && q.iter().all(|v| v.is_finite())) {
-        return None;
+    (q[3] - q[4] > 1.0 && q.iter().all(|v| v.is_finite())).then_some((q, data, cell))
+}
+
+/// Ink and paper: the darkest and the brightest eighth of the samples; `None` without
+/// contrast.
+fn levels(data: &[(usize, f64, f64)]) -> Option<(f64, f64)> {
+    let mut v: Vec<f64> = data.iter().map(|d| d.2).collect();
+    v.sort_by(f64::total_cmp);
+    let (ink, paper) = (v[v.len() / 8], v[v.len() - 1 - v.len() / 8]);
+    (paper - ink >= 1.0).then_some((ink, paper))
+}
+
+/// How far the model `q` misses `data`: the RMS residual over the paper–ink contrast.
+fn misfit_of(profiles: &[Profile], data: &[(usize, f64, f64)], q: &Params) -> f64 {
+    let rs: Vec<Rows> = profiles.iter().map(|p| rows(p, q)).collect();
+    let sum: f64 = data.iter().map(|&(pi, t, v)| (model(&profiles[pi], &rs[pi], t, q).0 - v).powi(2)).sum();
+    (sum / data.len() as f64).sqrt() / (q[3] - q[4])
+}
+
+/// A side fitted once and its pixels kept, each at its centre's distance from the fitted edge:
+/// what the tone fit ([`super::tone_fit`]) reads the curve from. Pixels as they are, not
+/// interpolated: interpolating between pixels read through a curve bends a ramp by the curve's
+/// own curvature, and the exponent that best straightens it back is 20–30 % low at blurs under
+/// 1.5 px.
+pub(super) struct FixedSide {
+    profiles: Vec<Profile>,
+    start: Params,
+    /// (profile, distance along its normal (px), pixel value).
+    pixels: Vec<(usize, f64, u8)>,
+    /// The fit's blur σ (px, the pixel's own spread included) and misfit (RMS residual over
+    /// the paper–ink contrast).
+    pub sigma_px: f64,
+    pub misfit: f64,
+    /// The cell's width (px) across the side, at its narrowest.
+    pub cell_px: f64,
+}
+
+/// Pixels kept per side at most (taken evenly along it): enough to sample every phase of the
+/// edge, few enough that a large tag costs no more than a small one.
+const MAX_SIDE_PIXELS: usize = 800;
+/// A side tells a curve only when its pixels' centres fall at this many of eight phases across
+/// the edge (a side along the pixel grid samples its ramp at one phase, which any curve fits).
+const MIN_PHASES: usize = 6;
+
+impl FixedSide {
+    /// Fits the side through `lut` ([`fit_side`]) and keeps the pixels of its windows: the
+    /// strip each profile stands for along the side (to halfway to its neighbours, half a cell
+    /// at the ends). `None` when the fit fails, a window leaves the image, or the pixels sample
+    /// the edge at too few phases ([`MIN_PHASES`]).
+    pub(super) fn new(im: &ImageView<'_>, lut: &[f64; 256], profiles: Vec<Profile>) -> Option<Self> {
+        let (q, data, cell) = fit_side_params(im, lut, &profiles)?;
+        let misfit = misfit_of(&profiles, &data, &q);
+        let reach = REACH_SIGMAS * q[2] + REACH_PX;
+        let n = profiles.len();
+        let gap = |a: &Profile, b: &Profile| (b.origin[0] - a.origin[0]).hypot(b.origin[1] - a.origin[1]);
+        // Pixels per unit of a profile's `along`; and how far along the side (px) each strip
+        // reaches back and forth from its profile.
+        let px_per_along = gap(&profiles[0], &profiles[n - 1]) / (profiles[n - 1].along - profiles[0].along);
+        let cell_along = px_per_along * (profiles[1].along - profiles[0].along);
+        let reaches: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let back = if k == 0 { cell_along * 0.5 } else { gap(&profiles[k - 1], &profiles[k]) / 2.0 };
+                let forth = if k == n - 1 { cell_along * 0.5 } else { gap(&profiles[k], &profiles[k + 1]) / 2.0 };
+                (back, forth)
+            })
+            .collect();
+        let mut pixels = Vec::new();
+        for (pi, p) in profiles.iter().enumerate() {
+            let e = q[0] + q[1] * p.along;
+            let (lo, hi) = ((0.8 * p.across[0]).max(-reach) + e, p.across[3].min(reach) + e);
+            let tangent = [-p.normal[1], p.normal[0]];
+            let (back, forth) = reaches[pi];
+            let corners = [(lo, -back), (lo, forth), (hi, -back), (hi, forth)].map(|(t, u)| {
+                [p.origin[0] + t * p.normal[0] + u * tangent[0], p.origin[1] + t * p.normal[1] + u * tangent[1]]
+            });
+            let span = |k: usize| {
+                let (a, b) =
+                    corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| (a.min(c[k]), b.max(c[k])));
+                ((a - 1.0).floor().max(0.0) as usize, (b + 1.0).ceil().max(0.0) as usize)
+            };
+            let ((x0, x1), (y0, y1)) = (span(0), span(1));
+            if x1 >= im.width() || y1 >= im.height() {
+                return None;
+            }
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    // C's convention: the pixel's centre is at +0.5.
+                    let d = [x as f64 + 0.5 - p.origin[0], y as f64 + 0.5 - p.origin[1]];
+                    let (t, u) = (d[0] * p.normal[0] + d[1] * p.normal[1], d[0] * tangent[0] + d[1] * tangent[1]);
+                    if (-back..forth).contains(&u) && (lo..=hi).contains(&t) {
+                        // The side's tilt (its fitted slope) carried from the profile to the pixel.
+                        pixels.push((pi, t - q[1] * u / px_per_along, im.row(y)[x]));
+                    }
+                }
+            }
+        }
+        if pixels.len() > MAX_SIDE_PIXELS {
+            let stride = pixels.len().div_ceil(MAX_SIDE_PIXELS);
+            pixels = pixels.into_iter().step_by(stride).collect();
+        }
+        let mut phases = [false; 8];
+        for &(pi, t, _) in &pixels {
+            let from_edge = t - (q[0] + q[1] * profiles[pi].along);
+            if from_edge.abs() < 2.0 * q[2] {
+                phases[(from_edge.rem_euclid(1.0) * 8.0) as usize % 8] = true;
+            }
+        }
+        if phases.iter().filter(|&&b| b).count() < MIN_PHASES {
+            return None;
+        }
+        Some(FixedSide { profiles, start: q, pixels, sigma_px: q[2], misfit, cell_px: cell })
     }
-    let point = |along: f64| {
-        // The profile nearest `along` carries its normal; the line runs through the fitted
-        // points of the first and last profiles.
-        let p = if along < 0.0 { &profiles[0] } else { &profiles[profiles.len() - 1] };
-        let e = q[0] + q[1] * p.along;
-        [p.origin[0] + e * p.normal[0], p.origin[1] + e * p.normal[1]]
-    };
-    let rs: Vec<Rows> = profiles.iter().map(|p| rows(p, &q)).collect();
-    let sum: f64 = data.iter().map(|&(pi, t, v)| (model(&profiles[pi], &rs[pi], t, &q).0 - v).powi(2)).sum();
-    let misfit = (sum / data.len() as f64).sqrt() / (q[3] - q[4]);
-    Some(SideFit { line: [point(-1.0), point(1.0)], sigma_px: q[2], cell_px: cell, misfit })
+
+    /// The kept pixels as (the profile whose strip they are in; distance from the fitted edge
+    /// along the normal, px, positive inward; pixel value).
+    pub(super) fn edge_pixels(&self) -> Vec<(usize, f64, u8)> {
+        let q = self.start;
+        self.pixels.iter().map(|&(pi, t, v)| (pi, t - (q[0] + q[1] * self.profiles[pi].along), v)).collect()
+    }
 }
 
 /// Levenberg–Marquardt on the squared residuals of `data` (profile, t, value); the blur is kept
@@ -533,18 +667,26 @@ pub(super) fn fit_border(
 }
 
 #[cfg(test)]
-mod tests {
-    use crate::{Detection, Detector, DetectorConfig, ImageView, TagFamily};
-
-    fn srgb(v: f64) -> u8 {
-        let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-        (255.0 * e).round().clamp(0.0, 255.0) as u8
-    }
+pub(super) mod tests {
+    use crate::{Detection, Detector, DetectorConfig, ImageView, TagFamily, ToneCurve};
 
     /// Tag `id` drawn flat with `cell` px cells, turned `deg`, its quiet zone `margin` cells
     /// wide on a background of reflectance `beyond`, blurred by a Gaussian of σ `blur` px (in
     /// linear light, exact pixel coverage), encoded as sRGB; and its true corners.
     fn drawn(id: u32, cell: f64, deg: f64, margin: f64, beyond: f64, blur: f64) -> (Vec<u8>, usize, [[f64; 2]; 4]) {
+        drawn_through(id, cell, deg, margin, beyond, blur, ToneCurve::Srgb)
+    }
+
+    /// As [`drawn`], encoded through `curve`.
+    pub(in crate::detector) fn drawn_through(
+        id: u32,
+        cell: f64,
+        deg: f64,
+        margin: f64,
+        beyond: f64,
+        blur: f64,
+        curve: ToneCurve,
+    ) -> (Vec<u8>, usize, [[f64; 2]; 4]) {
         let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
         let n = (cell * (8.0 + 2.0 * margin) * 1.5 + 12.0 * blur + 40.0) as usize;
         let centre = [n as f64 / 2.0 + 0.31, n as f64 / 2.0 - 0.17];
@@ -597,7 +739,7 @@ mod tests {
             [centre[0] + cell * (c * du - s * dv), centre[1] + cell * (s * du + c * dv)]
         };
         let corners = [to_px(0.0, 8.0), to_px(8.0, 8.0), to_px(8.0, 0.0), to_px(0.0, 0.0)];
-        (lin.iter().map(|&v| srgb(v)).collect(), n, corners)
+        (lin.iter().map(|&v| (255.0 * curve.encode(v)).round() as u8).collect(), n, corners)
     }
 
     fn detect(img: &[u8], n: usize, border: bool) -> Vec<Detection> {

@@ -14,6 +14,7 @@ use crate::image::ImageView;
 use crate::preprocess::{blur_or_sharpen, decimate_into};
 use crate::quads::{Quad, fit_quads};
 use crate::threshold::threshold_into;
+use crate::tone::{ToneSession, ToneSummary};
 use crate::workers::Workers;
 use edges::refine_edges;
 use jawtrack_tag_family::TagFamily;
@@ -21,6 +22,7 @@ use std::sync::{Arc, Mutex, TryLockError};
 
 mod border;
 mod edges;
+mod tone_fit;
 
 pub use border::PIXEL_SIGMA_PX;
 
@@ -53,6 +55,8 @@ pub struct Detection {
 pub struct Detector {
     config: DetectorConfig,
     table: CodeTable,
+    /// The tone curve frames are read through now, and how it was found.
+    tone: Mutex<ToneState>,
     /// Shared by clones: a pool of `nthreads` threads.
     workers: Arc<Workers>,
     /// Frame-sized buffers kept between frames: allocating them afresh costs a page fault
@@ -65,6 +69,7 @@ impl Clone for Detector {
         Detector {
             config: self.config,
             table: self.table.clone(),
+            tone: Mutex::new(self.tone_state().clone()),
             workers: Arc::clone(&self.workers),
             scratch: Mutex::new(Scratch::default()),
         }
@@ -88,6 +93,7 @@ impl Detector {
         Ok(Detector {
             config,
             table,
+            tone: Mutex::new(ToneState::new(&config)),
             workers: Arc::new(Workers::new(config.nthreads)),
             scratch: Mutex::new(Scratch::default()),
         })
@@ -96,6 +102,16 @@ impl Detector {
     /// The settings.
     pub fn config(&self) -> &DetectorConfig {
         &self.config
+    }
+
+    /// The tone curve frames are read through now ([`DetectorConfig::tone`]) and how it was
+    /// found: with `Auto`, from the tags of the frames detected so far.
+    pub fn tone(&self) -> ToneSummary {
+        self.tone_state().session.summary()
+    }
+
+    fn tone_state(&self) -> std::sync::MutexGuard<'_, ToneState> {
+        self.tone.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// Detects tags, sorted by id. With a region of interest in the settings, only tags inside
@@ -112,11 +128,44 @@ impl Detector {
 
     /// As [`Detector::detect_in`], with the smeared-edge fit on or off for this frame
     /// ([`DetectorConfig::smeared_edges`]): a tracker knows which frames move.
+    ///
+    /// With [`DetectorConfig::tone`] `Auto`, the frame's tags also feed the estimate of the
+    /// camera's tone curve when a fit is due ([`crate::tone`]); when that changes the curve,
+    /// the frame is detected again through the new one, so no frame is read through a curve
+    /// its own tags refuted.
     pub fn detect_in_with(
         &self,
         frame: &ImageView<'_>,
         roi: Option<Roi>,
         smeared: bool,
+    ) -> Result<Vec<Detection>, DetectError> {
+        let lut = self.tone_state().lut.clone();
+        let dets = self.detect_through(frame, roi, smeared, &lut)?;
+        if !(self.config.linear_edges && self.tone_state().session.due()) {
+            self.tone_state().session.skip();
+            return Ok(dets);
+        }
+        let fit = self.fit_tone_through(frame, &dets, &lut);
+        let changed = {
+            let mut state = self.tone_state();
+            let changed = state.session.record(fit);
+            if let Some(curve) = changed {
+                state.lut = Arc::new(curve.decode_table());
+            }
+            changed
+        };
+        match changed {
+            Some(curve) => self.detect_through(frame, roi, smeared, &curve.decode_table()),
+            None => Ok(dets),
+        }
+    }
+
+    fn detect_through(
+        &self,
+        frame: &ImageView<'_>,
+        roi: Option<Roi>,
+        smeared: bool,
+        lut: &[f64; 256],
     ) -> Result<Vec<Detection>, DetectError> {
         let (view, ox, oy) = match roi {
             None => (*frame, 0.0, 0.0),
@@ -135,7 +184,7 @@ impl Detector {
                 (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
             }
         };
-        let mut dets = self.detect_view(&view, smeared);
+        let mut dets = self.detect_view(&view, smeared, lut);
         for d in &mut dets {
             d.center[0] += ox;
             d.center[1] += oy;
@@ -160,7 +209,7 @@ impl Detector {
         Ok(dets)
     }
 
-    fn detect_view(&self, im: &ImageView<'_>, smeared: bool) -> Vec<Detection> {
+    fn detect_view(&self, im: &ImageView<'_>, smeared: bool, lut: &[f64; 256]) -> Vec<Detection> {
         let c = &self.config;
         // Another thread detecting with this detector has the buffers: use fresh ones.
         let (mut guard, mut own);
@@ -214,7 +263,6 @@ impl Detector {
                 }
             }
         }
-        let lut = if c.linear_edges { &*SRGB_TO_LINEAR } else { &IDENTITY };
         let cells = c.family.width_at_border as f64;
         let decode = |q: &Quad| decode_quad(im, &homography(q)?, &c.family, &self.table, c.decode_sharpening);
         let dets = self.workers.filter_map(&quads, |q0| {
@@ -337,13 +385,21 @@ static IDENTITY: [f64; 256] = {
     t
 };
 
-/// sRGB-encoded values to linear light, on the same 0–255 scale.
-static SRGB_TO_LINEAR: std::sync::LazyLock<[f64; 256]> = std::sync::LazyLock::new(|| {
-    std::array::from_fn(|i| {
-        let v = i as f64 / 255.0;
-        255.0 * if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
-    })
-});
+/// The tone curve of a detector's frames, and the table it is read through.
+#[derive(Debug, Clone)]
+struct ToneState {
+    session: ToneSession,
+    /// Encoded values to linear light: the curve undone (identity for C's edge fit).
+    lut: Arc<[f64; 256]>,
+}
+
+impl ToneState {
+    fn new(c: &DetectorConfig) -> Self {
+        let session = ToneSession::new(c.tone);
+        let lut = if c.linear_edges { session.curve().decode_table() } else { IDENTITY };
+        ToneState { session, lut: Arc::new(lut) }
+    }
+}
 
 /// C's `homography_compute2`: the homography taking tag coordinates (−1,−1), (1,−1), (1,1),
 /// (−1,1) to the quad's corners, by Gaussian elimination with partial pivoting. `None` when
