@@ -46,7 +46,7 @@ pub use detector::{Detection, Detector};
 pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra, luma_from_bgra_into};
 pub use jawtrack_tag_family::{self as family, TagBitmap, TagFamily};
-pub use jawtrack_tone::{ToneCurve, ToneSetting};
+pub use jawtrack_tone::{ToneCurve, ToneReason, ToneSetting};
 
 /// Why detection could not run.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

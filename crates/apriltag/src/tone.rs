@@ -28,14 +28,16 @@
 
 #[cfg(doc)]
 use crate::Detector;
-use jawtrack_tone::{ToneCurve, ToneSetting};
+use jawtrack_tone::{ToneCurve, ToneReason, ToneSetting};
 use std::collections::VecDeque;
 
 /// The exponents searched: every camera curve we know of lies well inside (phones' video:
 /// 1.8–2.6; sRGB is close to 2.2).
 pub const GAMMA_SEARCH: std::ops::RangeInclusive<f64> = 1.2..=3.6;
-/// Frames fitted one after another at the start, before the curve is taken as settled.
-pub const SETTLING_FRAMES: usize = 5;
+/// Frames fitted one after another at the start, before the curve is taken as settled: three
+/// frames' tags (some 50 sides) pin a power law to ±0.05, and each fit costs about five
+/// detections (BENCHMARKS).
+pub const SETTLING_FRAMES: usize = 3;
 /// Once settled, a frame is fitted every this many (2 s at 60 fps): a phone's curve adapts to
 /// the scene over seconds, and a fit costs three to five detections' time (BENCHMARKS).
 pub const REFIT_EVERY_FRAMES: usize = 120;
@@ -51,6 +53,12 @@ const SRGB_MARGIN_CHI2: f64 = 50.0;
 /// sides, each a few hundred pixels, can favour a curve by a per cent through what the blurred
 /// step's terms miss of its profile rather than through the curve.
 pub const MIN_POOLED_SIDES: usize = 24;
+/// … and unless the edges fit a blurred step at all: their lopsidedness per pixel, with the
+/// best power law, within this many times their noise. Sharpened frames miss it (1.9–2.1
+/// with an unsharp mask of amount 1, 1 px; 0.97–1.06 without): a phone sharpens after its
+/// curve, so its halos are symmetric in the encoded values, and the search then drifts toward
+/// a linear curve, which reads the edges worse than sRGB does.
+pub const MAX_MISFIT: f64 = 1.3;
 /// A curve differing from the one in use by less than this in exponent is not worth a change
 /// (it moves an edge by under a thousandth of its blur).
 const MIN_CHANGE: f64 = 0.02;
@@ -80,6 +88,8 @@ pub struct ToneSummary {
     pub setting: ToneSetting,
     /// The curve frames are being read through.
     pub curve: ToneCurve,
+    /// Why.
+    pub reason: ToneReason,
     /// Frames whose tags were fitted, in all.
     pub frames_fitted: usize,
     /// Of the pooled fits: their tag sides in all, the side-weighted mean misfit of the
@@ -111,6 +121,7 @@ pub struct PooledFit {
 pub struct ToneSession {
     setting: ToneSetting,
     curve: ToneCurve,
+    reason: ToneReason,
     recent: VecDeque<FrameToneFit>,
     frames_fitted: usize,
     since_fit: usize,
@@ -120,11 +131,11 @@ impl ToneSession {
     /// A session reading frames as `setting` says: a fixed curve, or (`Auto`) sRGB until the
     /// tags have told their curve.
     pub fn new(setting: ToneSetting) -> Self {
-        let curve = match setting {
-            ToneSetting::Auto => ToneCurve::Srgb,
-            ToneSetting::Fixed(c) => c,
+        let (curve, reason) = match setting {
+            ToneSetting::Auto => (ToneCurve::Srgb, ToneReason::NotYetTold),
+            ToneSetting::Fixed(c) => (c, ToneReason::Given),
         };
-        ToneSession { setting, curve, recent: VecDeque::new(), frames_fitted: 0, since_fit: 0 }
+        ToneSession { setting, curve, reason, recent: VecDeque::new(), frames_fitted: 0, since_fit: 0 }
     }
 
     /// The curve frames are to be read through now.
@@ -164,12 +175,20 @@ impl ToneSession {
         self.recent.push_back(fit);
         let pooled = self.pooled()?;
         let (chi2, srgb_chi2) = self.recent.iter().fold((0.0, 0.0), |(a, b), f| (a + f.chi2, b + f.srgb_chi2));
-        let next =
-            if pooled.sides < MIN_POOLED_SIDES || srgb_chi2 - chi2 <= SRGB_MARGIN_CHI2.max(SRGB_MARGIN * srgb_chi2) {
-                ToneCurve::Srgb
-            } else {
-                ToneCurve::Gamma { gamma: pooled.gamma }
-            };
+        self.reason = if pooled.sides < MIN_POOLED_SIDES {
+            ToneReason::TooFewSides
+        } else if pooled.misfit > MAX_MISFIT {
+            ToneReason::NotBlurredSteps
+        } else if srgb_chi2 - chi2 <= SRGB_MARGIN_CHI2.max(SRGB_MARGIN * srgb_chi2) {
+            ToneReason::SrgbFitsAsWell
+        } else {
+            ToneReason::Estimated
+        };
+        let next = if self.reason == ToneReason::Estimated {
+            ToneCurve::Gamma { gamma: pooled.gamma }
+        } else {
+            ToneCurve::Srgb
+        };
         let changed = match (self.curve, next) {
             (ToneCurve::Gamma { gamma: a }, ToneCurve::Gamma { gamma: b }) => (a - b).abs() >= MIN_CHANGE,
             (a, b) => a != b,
@@ -215,6 +234,7 @@ impl ToneSession {
         ToneSummary {
             setting: self.setting,
             curve: self.curve,
+            reason: self.reason,
             frames_fitted: self.frames_fitted,
             pooled: self.pooled(),
         }
@@ -252,10 +272,9 @@ mod tests {
         assert_eq!(s.record(fit(1.8, 0.3, 0.5, 24)), Some(ToneCurve::Gamma { gamma: 1.8 }));
         // An outlier (a glare) is outvoted by the side-weighted median.
         assert_eq!(s.record(fit(2.9, 0.3, 0.5, 2)), None);
-        assert_eq!(s.record(fit(1.81, 0.3, 0.5, 8)), None, "a change under 0.02 is not made");
-        assert!(s.due());
-        s.record(fit(1.79, 0.3, 0.5, 8));
         assert!(!s.due(), "settled after {SETTLING_FRAMES} fits: not every frame");
+        // A refit.
+        assert_eq!(s.record(fit(1.81, 0.3, 0.5, 8)), None, "a change under 0.02 is not made");
         for _ in 0..REFIT_EVERY_FRAMES - 2 {
             s.skip();
         }
@@ -263,9 +282,9 @@ mod tests {
         s.skip();
         assert!(s.due(), "the {REFIT_EVERY_FRAMES}th frame after a fit is fitted");
         let summary = s.summary();
-        assert_eq!(summary.frames_fitted, 5);
+        assert_eq!(summary.frames_fitted, 4);
         let pooled = summary.pooled.expect("pooled");
-        assert_eq!((pooled.fits, pooled.sides), (5, 50));
+        assert_eq!((pooled.fits, pooled.sides), (4, 42));
         assert!((pooled.gamma - 1.8).abs() < 0.011, "{pooled:?}");
         assert!((pooled.misfit - 0.3).abs() < 1e-12 && (pooled.srgb_misfit - 0.5).abs() < 1e-12, "{pooled:?}");
     }
@@ -279,5 +298,13 @@ mod tests {
         // 80 000 terms (pooled with the first): 80 000 against 80 634, within 1 %.
         assert_eq!(s.record(fit(2.2, 1.0, 1.004, 776)), None, "within 1 %: sRGB stays");
         assert_eq!(s.record(fit(2.2, 1.0, 1.1, 8)), Some(ToneCurve::Gamma { gamma: 2.2 }));
+    }
+
+    #[test]
+    fn edges_that_fit_no_blurred_step_leave_srgb() {
+        // Sharpened frames: the best power law still leaves twice the noise.
+        let mut s = ToneSession::new(ToneSetting::Auto);
+        assert_eq!(s.record(fit(1.2, 2.0, 2.3, 40)), None);
+        assert_eq!((s.curve(), s.summary().reason), (ToneCurve::Srgb, ToneReason::NotBlurredSteps));
     }
 }

@@ -1,7 +1,7 @@
 //! The header and frame lines of a recording, as types (the crate's doc shows the JSON).
 
 use jawtrack_pose::{CameraIntrinsics, Pose};
-use jawtrack_tone::{ToneCurve, ToneSetting};
+use jawtrack_tone::{ToneCurve, ToneReason, ToneSetting};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -251,6 +251,9 @@ pub struct ToneRecord {
     pub setting: ToneSetting,
     /// The curve (`srgb`, `gamma:1.83`, …).
     pub curve: ToneCurve,
+    /// Why (recordings from before it was recorded read as not yet told).
+    #[serde(default)]
+    pub reason: ToneReason,
     /// Frames whose tags were fitted so far.
     pub frames_fitted: usize,
     /// With an estimate: the power law pooled over the recent fits, the spread of their
@@ -265,19 +268,23 @@ impl ToneRecord {
     /// states. The misfits are the edges' lopsidedness per pixel in units of their noise (1:
     /// only noise is left).
     pub fn describe(&self) -> String {
-        match (self.setting, &self.fit) {
-            (ToneSetting::Fixed(_), _) => format!("{} (as given)", self.curve),
-            (ToneSetting::Auto, None) => format!("{} (auto: no tag edge has told the curve yet)", self.curve),
-            (ToneSetting::Auto, Some(f)) => {
-                let evidence = format!(
-                    "power law {:.2} ± {:.2} from {} frames' {} tag sides, misfit {:.3} against sRGB's {:.3}",
-                    f.gamma, f.gamma_spread, self.frames_fitted, f.sides, f.misfit, f.srgb_misfit
-                );
-                match self.curve {
-                    ToneCurve::Srgb => format!("srgb (auto: kept; the {evidence})"),
-                    c => format!("{c} (auto: estimated, {evidence})"),
-                }
-            }
+        let evidence = |f: &ToneFitRecord| {
+            format!(
+                "power law {:.2} ± {:.2} from {} frames' {} tag sides, misfit {:.3} against sRGB's {:.3}",
+                f.gamma, f.gamma_spread, self.frames_fitted, f.sides, f.misfit, f.srgb_misfit
+            )
+        };
+        let why = match self.reason {
+            ToneReason::Given => return format!("{} (as given)", self.curve),
+            ToneReason::NotYetTold => "auto: no tag edge has told the curve yet",
+            ToneReason::TooFewSides => "auto: kept, too few tag sides to leave sRGB",
+            ToneReason::NotBlurredSteps => "auto: kept, the tags' edges fit no blurred step (sharpened frames?)",
+            ToneReason::SrgbFitsAsWell => "auto: kept, sRGB fits the edges as well",
+            ToneReason::Estimated => "auto: estimated",
+        };
+        match &self.fit {
+            Some(f) => format!("{} ({why}; {})", self.curve, evidence(f)),
+            None => format!("{} ({why})", self.curve),
         }
     }
 }

@@ -151,7 +151,7 @@ fn quality_numbers_are_the_recording_s() {
         if k == 0 {
             line["tone"] = json!({"setting": "auto", "curve": "srgb", "frames_fitted": 0});
         } else if k == 5 {
-            line["tone"] = json!({"setting": "auto", "curve": "gamma:1.84", "frames_fitted": 5, "fit": {"gamma": 1.842,
+            line["tone"] = json!({"setting": "auto", "curve": "gamma:1.84", "reason": "estimated", "frames_fitted": 5, "fit": {"gamma": 1.842,
                 "gamma_spread": 0.06, "fits": 5, "sides": 80, "misfit": 1.003, "srgb_misfit": 1.034}});
         }
         lines.push(line.to_string());
@@ -176,7 +176,7 @@ fn quality_numbers_are_the_recording_s() {
     assert!(r.html.contains("nominal (the ideal solid"), "the marker named");
     assert!(
         r.html.contains(
-            "<th>Tone curve the tags were read through</th><td>gamma:1.84 (auto: estimated, power law 1.84 \
+            "<th>Tone curve the tags were read through</th><td>gamma:1.84 (auto: estimated; power law 1.84 \
              ± 0.06 from 5 frames&#39; 80 tag sides, misfit 1.003 against sRGB&#39;s 1.034)</td>"
         ),
         "the last curve and how it was found"

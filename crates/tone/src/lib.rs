@@ -257,6 +257,25 @@ impl<'de> Deserialize<'de> for ToneSetting {
     }
 }
 
+/// Why frames are read through the curve they are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToneReason {
+    /// The curve was given.
+    Given,
+    /// Auto, and no tag edge has told the curve yet: sRGB meanwhile.
+    #[default]
+    NotYetTold,
+    /// Auto, and too few tag sides have told it to leave sRGB.
+    TooFewSides,
+    /// Auto, and the tags' edges fit no blurred step (sharpened frames): sRGB kept.
+    NotBlurredSteps,
+    /// Auto, and sRGB fits the edges as well as the best power law: sRGB kept.
+    SrgbFitsAsWell,
+    /// Auto: the power law the edges told.
+    Estimated,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

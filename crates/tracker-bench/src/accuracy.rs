@@ -72,6 +72,12 @@ pub struct AccuracyArgs {
     /// at the rig's distances).
     #[arg(long, conflicts_with = "no_capture")]
     capture_only: bool,
+    #[command(flatten)]
+    tone: benchtop::tone::ToneArgs,
+    /// Run the tone section alone (the static grid at 100 mm developed through phones' tone
+    /// curves; nothing else).
+    #[arg(long, conflicts_with_all = ["no_tone", "capture_only"])]
+    tone_only: bool,
 }
 
 /// Runs the benchtop experiments and writes the report, tables, plots and calibrated marker
@@ -113,6 +119,23 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         }
         bar.set_position(done as u64);
     };
+    if a.tone_only {
+        let tones = benchtop::tone::run(&options, &a.tone, &mut progress)?;
+        bar.finish_and_clear();
+        let csv = benchtop::tone::write_csv(&tones, &a.out)?;
+        let path = a.out.join("report.md");
+        let text = format!(
+            "# JawTrack: tone curves\n\nReproduce: `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- --tone-only --tone-frames-per-view {}{}` (seed {}). Table: {}.\n{}",
+            a.tone.tone_frames_per_view,
+            if a.quick { " --quick" } else { "" },
+            a.seed,
+            csv.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+            benchtop::tone::markdown(&tones, a.tone.tone_frames_per_view)
+        );
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        crate::say(format_args!("report: {} ({:.0} s)", path.display(), started.elapsed().as_secs_f64()));
+        return Ok(());
+    }
     if a.capture_only {
         let Some(c) = &capture else { anyhow::bail!("--capture-only and --no-capture leave nothing to run") };
         let captures = benchtop::capture::run(&options, c, &mut progress)?;
@@ -130,6 +153,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         Some(c) => benchtop::capture::run(&options, c, &mut progress)?,
         None => Vec::new(),
     };
+    let tones = if a.tone.no_tone { Vec::new() } else { benchtop::tone::run(&options, &a.tone, &mut progress)? };
     bar.finish_and_clear();
 
     let marker = a.out.join("calibrated_marker.json");
@@ -147,6 +171,9 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     files.extend(write_plots(&run, &a.out)?);
     files.extend(crate::chew::plots(&chews, &a.out)?);
     files.extend(crate::capture::write(&captures, &a.out)?);
+    if !tones.is_empty() {
+        files.push(benchtop::tone::write_csv(&tones, &a.out)?);
+    }
     let mut report = report(&run, &options, &files, &a.out);
     // The chewing section goes with the other results, before the list of plots.
     let at = report.find("\n## Plots and tables").unwrap_or(report.len());
@@ -154,6 +181,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     if let Some(c) = &capture {
         let at = report.find("\n## Plots and tables").unwrap_or(report.len());
         report.insert_str(at, &crate::capture::markdown(&captures, c));
+    }
+    if !tones.is_empty() {
+        let at = report.find("\n## Plots and tables").unwrap_or(report.len());
+        report.insert_str(at, &benchtop::tone::markdown(&tones, a.tone.tone_frames_per_view));
     }
     let path = a.out.join("report.md");
     std::fs::write(&path, &report).with_context(|| format!("writing {}", path.display()))?;

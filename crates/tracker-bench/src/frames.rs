@@ -4,10 +4,12 @@
 
 use anyhow::{Context, Result};
 use jawtrack_marker::Marker;
+use jawtrack_synth::realism::Sharpen;
 use jawtrack_synth::scenes::{FrameSpec, scene_frames};
 use jawtrack_synth::{
     GroundTruth, Orientation, Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer,
 };
+use jawtrack_tone::ToneCurve;
 use std::path::{Path, PathBuf};
 
 /// A phone's camera filming from where it can focus ([`Realism::phone_wide`]): its format,
@@ -22,6 +24,32 @@ pub struct Phone {
     pub distance_mm: f64,
     /// Where its lens is locked (mm).
     pub focus_mm: f64,
+}
+
+/// How frames are developed when not as the default realism does (sRGB, no sharpening, no
+/// local tone map): a phone's own tone curve and sharpening.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Development {
+    /// The tone curve.
+    pub curve: ToneCurve,
+    /// The unsharp mask on the encoded values.
+    pub sharpen: Option<Sharpen>,
+    /// The strength of the scene-dependent local tone map (0: none).
+    pub local_tone_map: f64,
+}
+
+impl Development {
+    /// Its name in tables and folders: the curve, then `+sharpen A/R`, `+local T`.
+    pub fn name(&self) -> String {
+        let mut name = self.curve.to_string();
+        if let Some(s) = self.sharpen {
+            name += &format!("+sharpen {}/{} px", s.amount, s.radius_px);
+        }
+        if self.local_tone_map > 0.0 {
+            name += &format!("+local {}", self.local_tone_map);
+        }
+        name
+    }
 }
 
 /// What to render: one scene at 1080p, default realism (but for the exposure and shutter
@@ -48,6 +76,10 @@ pub struct Request {
     pub orientation: Orientation,
     /// A phone's optics instead of the default realism's lens, and its distance.
     pub phone: Option<Phone>,
+    /// The static grid at this one distance (mm), with the default realism's lens.
+    pub distance_mm: Option<f64>,
+    /// Developed otherwise than sRGB.
+    pub development: Option<Development>,
 }
 
 impl Request {
@@ -64,6 +96,8 @@ impl Request {
             readout_s: 0.0,
             orientation: Orientation::Upright,
             phone: None,
+            distance_mm: None,
+            development: None,
         }
     }
 
@@ -86,6 +120,14 @@ impl Request {
             };
             name += &format!("-phone-{size}-{}x-at{}mm-focus{}mm", p.zoom, p.distance_mm, p.focus_mm);
         }
+        if let Some(d) = self.distance_mm {
+            name += &format!("-at{d}mm");
+        }
+        if let Some(d) = self.development {
+            let safe: String =
+                d.name().chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect();
+            name += &format!("-tone-{safe}");
+        }
         name
     }
 
@@ -106,6 +148,9 @@ impl Request {
             realism: Realism {
                 exposure_s: self.exposure_s.unwrap_or(realism.exposure_s),
                 readout_s: self.readout_s,
+                tone: self.development.map_or(realism.tone, |d| d.curve),
+                sharpen: self.development.map_or(realism.sharpen, |d| d.sharpen),
+                local_tone_map: self.development.map_or(realism.local_tone_map, |d| d.local_tone_map),
                 ..realism
             },
             options: SceneOptions {
@@ -113,7 +158,7 @@ impl Request {
                 cycles: self.cycles,
                 fps: self.fps,
                 orientation: self.orientation,
-                distance_mm: self.phone.map(|p| p.distance_mm),
+                distance_mm: self.phone.map(|p| p.distance_mm).or(self.distance_mm),
             },
             marker: Marker::default(),
             max_frames: self.max_frames,

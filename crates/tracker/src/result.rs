@@ -120,6 +120,7 @@ pub fn tone_record(t: &ToneSummary) -> ToneRecord {
     ToneRecord {
         setting: t.setting,
         curve: t.curve,
+        reason: t.reason,
         frames_fitted: t.frames_fitted,
         fit: t.pooled.map(|p| ToneFitRecord {
             gamma: p.gamma,

@@ -410,11 +410,7 @@ pub(super) fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile
 type Samples = Vec<(usize, f64, f64)>;
 
 /// The fit behind [`fit_side`]: the parameters, the samples they were fitted to, the cell (px).
-fn fit_side_params(
-    im: &ImageView<'_>,
-    lut: &[f64; 256],
-    profiles: &[Profile],
-) -> Option<(Params, Samples, f64)> {
+fn fit_side_params(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Option<(Params, Samples, f64)> {
     let cell = profiles.iter().map(|p| p.across[2] - p.across[1]).fold(f64::INFINITY, f64::min);
     if !(cell.is_finite() && cell > 1.0) {
         return None;

@@ -24,6 +24,7 @@ pub mod hinge_axis;
 mod session;
 mod stages;
 mod tables;
+pub mod tone;
 
 pub use session::{SessionSummary, report as session_report};
 pub use tables::*;
