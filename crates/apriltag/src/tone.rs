@@ -45,9 +45,11 @@ pub const REFIT_EVERY_FRAMES: usize = 120;
 const POOLED_FITS: usize = 9;
 /// sRGB is kept unless the best power law leaves the pooled edges less lopsided by more than
 /// this share of sRGB's χ² (and by [`SRGB_MARGIN_CHI2`] at least, against noise): the two
-/// curves are close, and on sRGB frames the power law nearest it fits within 0.3 % of it
-/// (`jawtrack-bench accuracy --tone-only`); a phone's gamma 1.8 or 2.6 fits better by 1–6 %.
-const SRGB_MARGIN: f64 = 0.01;
+/// curves are close, and on sRGB frames the power law nearest it fits no better than sRGB
+/// (`jawtrack-bench accuracy --tone-only`); a phone's gamma 1.8 fits better by 4–10 %, 2.6 by
+/// 0.6–1.2 % (at 1 %, waved markers filmed at 2.6 were read as sRGB and their focal length
+/// came out 0.38 % short).
+const SRGB_MARGIN: f64 = 0.005;
 const SRGB_MARGIN_CHI2: f64 = 50.0;
 /// … and unless the pooled fits hold this many tag sides (six tags' worth): a single tag's
 /// sides, each a few hundred pixels, can favour a curve by a per cent through what the blurred
@@ -295,8 +297,8 @@ mod tests {
         // 2 400 terms: χ² 2 400 against 2 448, within the margin (50).
         assert_eq!(s.record(fit(2.2, 1.0, 1.01, 24)), None, "within the margin: sRGB stays");
         assert_eq!(s.curve(), ToneCurve::Srgb);
-        // 80 000 terms (pooled with the first): 80 000 against 80 634, within 1 %.
-        assert_eq!(s.record(fit(2.2, 1.0, 1.004, 776)), None, "within 1 %: sRGB stays");
+        // 80 000 terms (pooled with the first): 80 000 against 80 359, within 0.5 %.
+        assert_eq!(s.record(fit(2.2, 1.0, 1.002, 776)), None, "within 0.5 %: sRGB stays");
         assert_eq!(s.record(fit(2.2, 1.0, 1.1, 8)), Some(ToneCurve::Gamma { gamma: 2.2 }));
     }
 
