@@ -7,8 +7,9 @@
 //! real photos it returns exactly the C library's tags and corners (`tests/detector_vs_c.rs`).
 //!
 //! Where it departs from C on purpose (`DetectorConfig::reference()` undoes both):
-//! - edges are refined JawTrack's way (`linear_edges`): in linear light, reading phone frames
-//!   as sRGB, with unsquared gradient weights and a re-centred window. On our rendered frames
+//! - edges are refined JawTrack's way (`linear_edges`): in linear light, reading frames
+//!   through the camera's tone curve as estimated from the tags ([`tone`]; sRGB until they
+//!   tell), with unsquared gradient weights and a re-centred window. On our rendered frames
 //!   the median corner error goes from C's 0.5–0.8 px (1080p) and 1.04 px (4K) to 0.02–0.04
 //!   px (`tests/detector_accuracy.rs`); large drawn tags at any angle are within 0.011 px
 //!   (`tests/detector_geometry.rs`).

@@ -4,8 +4,8 @@
 //! Phones do not deliver sRGB: their video curves are steeper or flatter power laws, S-shaped,
 //! and adapt to the scene. Every tag shows ink and paper and, once blurred, the ramps between
 //! them, which are symmetric in linear light whatever the lens did; read through the wrong
-//! curve they are lopsided. [`Detector::fit_tone`] finds the power law that makes one frame's
-//! ramps symmetric (the border model's misfit, least over the exponent); a [`ToneSession`]
+//! curve they are lopsided. [`Detector::fit_tone`] finds the power law that leaves one frame's
+//! ramps least lopsided; a [`ToneSession`]
 //! pools those fits over frames — a robust, side-weighted median over the recent ones — and
 //! keeps the curve while the scene is steady, fitting each frame until it has settled and then
 //! only every [`REFIT_EVERY_FRAMES`] frames. Every [`Detector`] set to
@@ -36,10 +36,10 @@ use std::collections::VecDeque;
 pub const GAMMA_SEARCH: std::ops::RangeInclusive<f64> = 1.2..=3.6;
 /// Frames fitted one after another at the start, before the curve is taken as settled: three
 /// frames' tags (some 50 sides) pin a power law to ±0.05, and each fit costs about five
-/// detections (BENCHMARKS).
+/// detections (docs/accuracy.md, "Tone curves").
 pub const SETTLING_FRAMES: usize = 3;
 /// Once settled, a frame is fitted every this many (2 s at 60 fps): a phone's curve adapts to
-/// the scene over seconds, and a fit costs three to five detections' time (BENCHMARKS).
+/// the scene over seconds, and a fit costs about five detections' time.
 pub const REFIT_EVERY_FRAMES: usize = 120;
 /// Fits pooled: the most recent ones.
 const POOLED_FITS: usize = 9;

@@ -20,8 +20,8 @@ use jawtrack_tone::ToneCurve;
 use nalgebra::{SMatrix, SVector};
 
 /// Sides taken from one frame, those with the widest cells first (the most pixels, the best
-/// fitted): enough to average the noise, few enough that a frame's fit costs about a
-/// detection's time.
+/// fitted): enough to average the noise, few enough that a frame's fit costs about five
+/// detections' time.
 const MAX_SIDES: usize = 16;
 /// Cells narrower than this (px) leave no plateau between the border's ramp and the data
 /// cells' or the quiet zone's: their sides are left out.
@@ -383,7 +383,7 @@ mod tests {
         // pixels sample the curve at every share of ink and paper. Blurred by 1.3 px its ramp
         // is smooth and the odd terms take in more of a wrong curve's lopsidedness: the
         // estimate keeps to the right side of sRGB but falls short, by up to 0.5 at gamma 2.8
-        // (a frame's many tags and the session's pooling do better: BENCHMARKS, `tone`).
+        // (a frame's many tags and the session's pooling do better: docs/accuracy.md).
         let mut checked = 0;
         for (gamma, blur, within) in [
             (1.6, 0.3, 0.15),
