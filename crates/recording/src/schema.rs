@@ -237,9 +237,10 @@ pub struct FrameRecord {
     /// When the packet arrived (s since the Unix epoch), for frames received over the link.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub received_unix_s: Option<f64>,
-    /// The tone curve this frame and the ones after it were read through, on the first frame
-    /// and wherever it changed (the estimate settling over the first frames, or the phone's
-    /// curve adapting to the scene).
+    /// The tone curve this frame and the ones after it were read through, and how it was found:
+    /// on the first frame, and wherever it changed or a fit of the tags added to its evidence
+    /// (the estimate settling over the first frames, then a refit every few seconds), so the
+    /// last one is what the whole take ended with.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tone: Option<ToneRecord>,
 }

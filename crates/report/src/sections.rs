@@ -299,7 +299,7 @@ fn quality(inputs: &Inputs, with_pose: usize, warnings: &[String]) -> String {
 }
 
 /// The curve the last frames were read through and how it was found: the last frame that
-/// says so (a frame does where the curve changed).
+/// says so (a frame does where the curve changed or a fit added to its evidence).
 fn tone_line(rec: &jawtrack_recording::Recording) -> String {
     rec.frames.iter().rev().find_map(|f| f.tone.as_ref()).map_or_else(
         || "not recorded (tracked before JawTrack estimated it: read as sRGB)".into(),

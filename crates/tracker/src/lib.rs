@@ -168,9 +168,10 @@ pub struct Tracker {
     uncalibrated: Vec<u32>,
     /// Ids of the tags whose place was measured ([`Marker::measured_tags`]), ascending.
     measured: Vec<u32>,
-    /// The tone curve the last frame was read through (`None` before the first frame): a frame
-    /// read through another reports it ([`FrameResult::tone`]).
-    tone_reported: Option<jawtrack_apriltag::ToneCurve>,
+    /// The tone curve the last frame was read through and the fits behind it (`None` before the
+    /// first frame): a frame read through another, or after another fit, reports it
+    /// ([`FrameResult::tone`]).
+    tone_reported: Option<(jawtrack_apriltag::ToneCurve, usize)>,
 }
 
 fn slot(kind: BodyKind) -> usize {
@@ -360,8 +361,8 @@ impl Tracker {
         result.searched = searched;
         result.timings.detection_s = detection_s;
         let tone = self.detector.tone();
-        if self.tone_reported != Some(tone.curve) {
-            self.tone_reported = Some(tone.curve);
+        if self.tone_reported != Some((tone.curve, tone.frames_fitted)) {
+            self.tone_reported = Some((tone.curve, tone.frames_fitted));
             result.tone = Some(tone);
         }
         Ok(result)

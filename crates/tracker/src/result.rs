@@ -68,8 +68,9 @@ pub struct FrameResult {
     pub searched: Option<Roi>,
     /// Time per stage.
     pub timings: Timings,
-    /// The tone curve the frame was read through and how it was found, on the first frame and
-    /// wherever it changed ([`jawtrack_apriltag::DetectorConfig::tone`]); `None` otherwise.
+    /// The tone curve the frame was read through and how it was found, on the first frame, and
+    /// wherever it changed or a fit added to its evidence
+    /// ([`jawtrack_apriltag::DetectorConfig::tone`]); `None` otherwise.
     pub tone: Option<ToneSummary>,
 }
 

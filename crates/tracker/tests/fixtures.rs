@@ -43,7 +43,7 @@ fn run(oracle: bool) -> Vec<SetErrors> {
                 assert!(r.flags.iter().any(|f| matches!(f, Flag::Lost(_) | Flag::NoTags)), "no pose and no flag");
             }
             // The first frame says which tone curve it was read through; a later one only
-            // where the curve changed.
+            // after a fit.
             assert_eq!(r.tone.is_some(), i == 0 || r.tone.is_some_and(|t| t.frames_fitted > 0), "frame {i}");
             tracked += 1;
         }
