@@ -56,14 +56,14 @@ const ITERATIONS: usize = 10;
 pub(super) const MAX_CELLS: usize = 8;
 /// Bands across the side, going inward: beyond the quiet zone, the quiet zone, then the black
 /// border square's rows (a narrower square leaves bands of no width before its last row).
-const BANDS: usize = MAX_CELLS + 2;
+pub(super) const BANDS: usize = MAX_CELLS + 2;
 /// Columns along the side: the quiet zone before the first, the square's cells, the quiet
 /// zone after (a narrower square leaves columns of no width before the quiet zone).
-const COLUMNS: usize = MAX_CELLS + 2;
+pub(super) const COLUMNS: usize = MAX_CELLS + 2;
 
 /// What a cell prints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Print {
+pub(super) enum Print {
     Beyond,
     Paper,
     Ink,
@@ -75,19 +75,21 @@ enum Print {
 /// boundaries along it (`columns`), exact for a square grid seen straight and close to it for
 /// the few cells around the profile under perspective.
 pub(super) struct Profile {
-    /// The point on the side's current line (px, C's convention) and the unit normal inward.
+    /// The point on the side's current line (px, C's convention), the unit normal inward and
+    /// the unit tangent the columns run along.
     origin: [f64; 2],
     normal: [f64; 2],
+    pub(super) tangent: [f64; 2],
     /// Where along the side it sits, from −1 (a cell in from the first corner) to 1, for the slope.
     along: f64,
     /// Distance (px) along the normal from `origin` to each band boundary: the quiet zone's outer
     /// edge (one cell out, scaled by the fitted quiet-zone width), the border, and the rows
     /// inside it.
-    across: [f64; BANDS - 1],
+    pub(super) across: [f64; BANDS - 1],
     /// Distance (px) along the side from `origin` to each column boundary.
-    columns: [f64; COLUMNS - 1],
+    pub(super) columns: [f64; COLUMNS - 1],
     /// What each (band, column) prints.
-    print: [[Print; COLUMNS]; BANDS],
+    pub(super) print: [[Print; COLUMNS]; BANDS],
 }
 
 /// What the fit found for one side.
@@ -218,7 +220,15 @@ pub(super) fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f
         if !rising(&across) || !rising(&columns) {
             return None;
         }
-        out.push(Profile { origin, normal, along: (u - half) / (half - 1.25), across, columns, print: print_of });
+        out.push(Profile {
+            origin,
+            normal,
+            tangent,
+            along: (u - half) / (half - 1.25),
+            across,
+            columns,
+            print: print_of,
+        });
     }
     Some(out)
 }
@@ -455,10 +465,11 @@ fn misfit_of(profiles: &[Profile], data: &[(usize, f64, f64)], q: &Params) -> f6
 /// own curvature, and the exponent that best straightens it back is 20–30 % low at blurs under
 /// 1.5 px.
 pub(super) struct FixedSide {
-    profiles: Vec<Profile>,
-    start: Params,
-    /// (profile, distance along its normal (px), pixel value).
-    pixels: Vec<(usize, f64, u8)>,
+    pub(super) profiles: Vec<Profile>,
+    /// The fit: line, blur, levels, and (`start[6]`) the quiet zone's width in cells.
+    pub(super) start: Params,
+    /// (profile, distance along its normal (px), along its tangent (px), pixel value).
+    pixels: Vec<(usize, f64, f64, u8)>,
     /// The fit's blur σ (px, the pixel's own spread included) and misfit (RMS residual over
     /// the paper–ink contrast).
     pub sigma_px: f64,
@@ -521,7 +532,8 @@ impl FixedSide {
                     let (t, u) = (d[0] * p.normal[0] + d[1] * p.normal[1], d[0] * tangent[0] + d[1] * tangent[1]);
                     if (-back..forth).contains(&u) && (lo..=hi).contains(&t) {
                         // The side's tilt (its fitted slope) carried from the profile to the pixel.
-                        pixels.push((pi, t - q[1] * u / px_per_along, im.row(y)[x]));
+                        let along = d[0] * p.tangent[0] + d[1] * p.tangent[1];
+                        pixels.push((pi, t - q[1] * u / px_per_along, along, im.row(y)[x]));
                     }
                 }
             }
@@ -531,7 +543,7 @@ impl FixedSide {
             pixels = pixels.into_iter().step_by(stride).collect();
         }
         let mut phases = [false; 8];
-        for &(pi, t, _) in &pixels {
+        for &(pi, t, _, _) in &pixels {
             let from_edge = t - (q[0] + q[1] * profiles[pi].along);
             if from_edge.abs() < 2.0 * q[2] {
                 phases[(from_edge.rem_euclid(1.0) * 8.0) as usize % 8] = true;
@@ -544,10 +556,11 @@ impl FixedSide {
     }
 
     /// The kept pixels as (the profile whose strip they are in; distance from the fitted edge
-    /// along the normal, px, positive inward; pixel value).
-    pub(super) fn edge_pixels(&self) -> Vec<(usize, f64, u8)> {
+    /// along the normal, px, positive inward; along the profile's tangent from it, px, as its
+    /// `columns` are; pixel value).
+    pub(super) fn edge_pixels(&self) -> Vec<(usize, f64, f64, u8)> {
         let q = self.start;
-        self.pixels.iter().map(|&(pi, t, v)| (pi, t - (q[0] + q[1] * self.profiles[pi].along), v)).collect()
+        self.pixels.iter().map(|&(pi, t, u, v)| (pi, t - (q[0] + q[1] * self.profiles[pi].along), u, v)).collect()
     }
 }
 
