@@ -25,6 +25,8 @@ use crate::image::ImageView;
 use crate::tone::{FrameToneFit, GAMMA_SEARCH};
 use jawtrack_tone::ToneCurve;
 use nalgebra::{SMatrix, SVector};
+use std::cell::RefCell;
+use std::rc::Rc;
 
 /// Sides taken from one frame, those with the widest cells first (the most pixels, the best
 /// fitted): enough to average the noise, few enough that a frame's fit costs about five
@@ -202,6 +204,9 @@ struct Strip {
     distances: Vec<f64>,
     values: Vec<u8>,
     ink: Vec<InkSpans>,
+    /// The pixels' terms ([`step_terms`]) with the edge at each place tried: the search of
+    /// the curves comes back to the same few places, and only the data change with the curve.
+    terms: RefCell<Vec<(f64, Rc<Vec<StepVector>>)>>,
 }
 
 /// The stretches (px from the side's line, inward; open ends infinite) the tag prints ink
@@ -262,8 +267,9 @@ impl Edge {
         // 8-bit rounding alone: 1/12 level².
         let noise = (told.iter().sum::<f64>() / told.len() as f64).max(1.0 / 12.0);
         let strips_n = pixels.iter().map(|p| p.0 + 1).max().unwrap_or(0);
-        let mut strips: Vec<Strip> =
-            (0..strips_n).map(|_| Strip { distances: Vec::new(), values: Vec::new(), ink: Vec::new() }).collect();
+        let mut strips: Vec<Strip> = (0..strips_n)
+            .map(|_| Strip { distances: Vec::new(), values: Vec::new(), ink: Vec::new(), terms: RefCell::default() })
+            .collect();
         for (k, t, v, ink) in pixels {
             strips[k].distances.push(t);
             strips[k].values.push(v);
@@ -330,11 +336,10 @@ impl Strip {
     /// The least weighted squared misfit of `data` (value, weight, per pixel) to a blurred step
     /// whose edge is `d` px from the side's line ([`step_basis`]), by linear least squares.
     fn chi2(&self, data: &[(f64, f64)], d: f64, sigma_px: f64) -> f64 {
-        let terms: Vec<StepVector> =
-            self.distances.iter().zip(&self.ink).map(|(&x, ink)| step_terms(x - d, ink, sigma_px)).collect();
+        let terms = self.terms_at(d, sigma_px);
         let mut ata = StepMatrix::zeros();
         let mut atb = StepVector::zeros();
-        for (&(v, w), r) in data.iter().zip(&terms) {
+        for (&(v, w), r) in data.iter().zip(terms.iter()) {
             ata.syger(w, r, r, 1.0);
             atb.axpy(w * v, r, 1.0);
         }
@@ -342,7 +347,20 @@ impl Strip {
         let Some(x) = (ata + StepMatrix::identity() * 1e-9 * ata.trace()).cholesky().map(|c| c.solve(&atb)) else {
             return f64::INFINITY;
         };
-        data.iter().zip(&terms).map(|(&(v, w), r)| w * (r.dot(&x) - v).powi(2)).sum()
+        data.iter().zip(terms.iter()).map(|(&(v, w), r)| w * (r.dot(&x) - v).powi(2)).sum()
+    }
+
+    /// The pixels' terms with the edge `d` px from the side's line, from the cache when that
+    /// place (to a billionth of a pixel: places are reached by steps that round differently)
+    /// was tried before.
+    fn terms_at(&self, d: f64, sigma_px: f64) -> Rc<Vec<StepVector>> {
+        if let Some((_, t)) = self.terms.borrow().iter().find(|(at, _)| (at - d).abs() < 1e-9) {
+            return Rc::clone(t);
+        }
+        let t: Rc<Vec<StepVector>> =
+            Rc::new(self.distances.iter().zip(&self.ink).map(|(&x, ink)| step_terms(x - d, ink, sigma_px)).collect());
+        self.terms.borrow_mut().push((d, Rc::clone(&t)));
+        t
     }
 }
 
