@@ -102,7 +102,7 @@ impl Request {
     }
 
     /// The cache folder's name: the scene and seed, and what departs from the defaults.
-    fn folder(&self) -> String {
+    pub(crate) fn folder(&self) -> String {
         let mut name = format!("{}-{}", self.scene.name(), self.seed);
         if let Some(e) = self.exposure_s {
             name += &format!("-exposure{}ms", e * 1000.0);

@@ -5,18 +5,19 @@
 //! the detector assumed before it estimated). Per development: the jaw's error (the mandible in
 //! the maxilla's frame, mm) and the tags' corner error (px), with the curve estimated beside
 //! the true one. Tracked with the marker as printed, so the optics and the curve are all that
-//! is wrong.
+//! is wrong. Then the same grid through a phone's own optics ([`phone_cases`]): in focus, and
+//! nearer than the lens focuses, where the blur is widest and a wrong curve moves edges most.
 
 use super::{Options, read_luma};
 use crate::chew::PoseError;
-use crate::frames::{self, Development, Request};
+use crate::frames::{self, Development, Phone, Request};
 use anyhow::{Context, Result};
 use clap::Args;
 use jawtrack_apriltag::tone::{REFIT_EVERY_FRAMES, SETTLING_FRAMES};
 use jawtrack_apriltag::{Detector, DetectorConfig, ToneSetting};
 use jawtrack_marker::Marker;
-use jawtrack_synth::SceneKind;
 use jawtrack_synth::realism::Sharpen;
+use jawtrack_synth::{Resolution, SceneKind};
 use jawtrack_tone::ToneCurve;
 use jawtrack_tracker::{Tracker, TrackerConfig};
 use std::fmt::Write as _;
@@ -29,7 +30,7 @@ pub const DISTANCE_MM: f64 = 100.0;
 /// The tone flags of `jawtrack-bench accuracy`.
 #[derive(Args, Debug, Clone)]
 pub struct ToneArgs {
-    /// Frames per static view of the tone section (6 views at 100 mm).
+    /// Frames per static view of the tone section (6 views, at 100 mm and through a phone).
     #[arg(long, default_value_t = 2)]
     pub tone_frames_per_view: usize,
     /// Leave the tone section out.
@@ -89,9 +90,31 @@ pub fn developments() -> Vec<Development> {
     ]
 }
 
+/// Where a phone's wide camera (2× native crop, 1080p) films the grid through its own optics,
+/// focus locked at the nearest it reaches: nearer than it focuses, and in focus.
+pub const PHONE_DISTANCES_MM: [f64; 2] = [170.0, 220.0];
+/// Where its lens is locked (mm).
+pub const PHONE_FOCUS_MM: f64 = 200.0;
+
+/// The phone's cases: each distance with sRGB and a flat and a steep phone curve.
+pub fn phone_cases() -> Vec<(Phone, Development)> {
+    let plain = |curve| Development { curve, sharpen: None, local_tone_map: 0.0 };
+    let curves = [ToneCurve::Srgb, ToneCurve::Gamma { gamma: 1.8 }, ToneCurve::Gamma { gamma: 2.6 }];
+    PHONE_DISTANCES_MM
+        .iter()
+        .flat_map(|&distance_mm| {
+            let phone = Phone { resolution: Resolution::P1080, zoom: 2.0, distance_mm, focus_mm: PHONE_FOCUS_MM };
+            curves.map(|c| (phone, plain(c)))
+        })
+        .collect()
+}
+
 /// One development tracked one way.
 #[derive(Debug, Clone)]
 pub struct ToneResult {
+    /// Filmed through a phone's optics ([`phone_cases`]), else the default realism's lens at
+    /// [`DISTANCE_MM`].
+    pub phone: Option<Phone>,
     /// How the frames were developed.
     pub development: Development,
     /// How they were read.
@@ -135,14 +158,17 @@ pub fn run(
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<ToneResult>> {
     let mut results = Vec::new();
-    for development in developments() {
+    let cases =
+        developments().into_iter().map(|d| (None, d)).chain(phone_cases().into_iter().map(|(p, d)| (Some(p), d)));
+    for (phone, development) in cases {
         let req = Request {
             max_frames: options.max_frames,
-            distance_mm: Some(DISTANCE_MM),
+            distance_mm: phone.is_none().then_some(DISTANCE_MM),
+            phone,
             development: Some(development),
             ..Request::new(SceneKind::Static, options.seed, args.tone_frames_per_view.max(1), 1, 30.0)
         };
-        let stage = format!("tone, {}: rendering", development.name());
+        let stage = format!("tone, {}{}: rendering", development.name(), phone.map_or(String::new(), |p| at(&p)));
         let scene = frames::scene(&options.cache, &req, &mut |done, total| progress(&stage, done, total))?;
         let truth = &scene.truth;
         let printed = Marker::from_json(&truth.true_marker.to_string())
@@ -151,8 +177,14 @@ pub fn run(
             let detector = DetectorConfig { tone: reading.setting(&development), ..DetectorConfig::default() };
             let mut tracker = Tracker::new(printed.clone(), TrackerConfig { detector, ..TrackerConfig::default() })?;
             let corners = Detector::new(detector)?;
-            let stage = format!("tone, {}, {}: tracking", development.name(), reading.name());
+            let stage = format!(
+                "tone, {}{}, {}: tracking",
+                development.name(),
+                phone.map_or(String::new(), |p| at(&p)),
+                reading.name()
+            );
             let mut result = ToneResult {
+                phone,
                 development,
                 reading,
                 frames: truth.frames.len(),
@@ -213,24 +245,22 @@ pub fn markdown(results: &[ToneResult], frames_per_view: usize) -> String {
          maxilla's frame against the truth, over the frames with a jaw pose. Corners: every corner of every tag that \
          should be found, from a detector read the same way.\n"
     );
-    let _ = writeln!(s, "| development | read | jaw poses | jaw mean | jaw max | median corner | curve read through |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
-    for r in results {
-        let (mean, max) =
-            r.jaw_mm().map_or(("–".into(), "–".into()), |(m, x)| (format!("{m:.3} mm"), format!("{x:.3} mm")));
-        let corner = r.median_corner_px().map_or("–".into(), |c| format!("{c:.3} px"));
+    let grid: Vec<&ToneResult> = results.iter().filter(|r| r.phone.is_none()).collect();
+    let phone: Vec<&ToneResult> = results.iter().filter(|r| r.phone.is_some()).collect();
+    table(&mut s, &grid);
+    if !phone.is_empty() {
         let _ = writeln!(
             s,
-            "| {} | {} | {}/{} | {mean} | {max} | {corner} | {} |",
-            r.development.name(),
-            r.reading.name(),
-            r.errors.len(),
-            r.frames,
-            r.curve
+            "\n### Through a phone's optics\n\nThe same grid filmed by a Pro iPhone's wide camera (6.8 mm f/1.78: a disc \
+             pupil, focus breathing, the lens's own blur), its 2× native crop at 1080p, the focus locked at \
+             {PHONE_FOCUS_MM} mm, the nearest it reaches: from nearer than that, and from where it is in focus. A \
+             frame whose bodies the tracker flags `defocused` gives no jaw pose.\n"
         );
+        table(&mut s, &phone);
     }
-    let (detect, fit, share) = cost(results, TAKE_FRAMES);
-    let (_, _, short) = cost(results, 300);
+    let grid: Vec<ToneResult> = grid.into_iter().cloned().collect();
+    let (detect, fit, share) = cost(&grid, TAKE_FRAMES);
+    let (_, _, short) = cost(&grid, 300);
     let _ = writeln!(
         s,
         "\nCost: a frame's detection (read as sRGB) takes {:.1} ms (median), a tone fit of its tags {:.1} ms. With \
@@ -243,6 +273,32 @@ pub fn markdown(results: &[ToneResult], frames_per_view: usize) -> String {
         100.0 * short
     );
     s
+}
+
+/// Where a phone films from, for tables: ` at 170 mm (focus 200 mm)`.
+fn at(p: &Phone) -> String {
+    format!(" at {} mm (focus {} mm)", p.distance_mm, p.focus_mm)
+}
+
+/// One table of results, a row per development and reading.
+fn table(s: &mut String, results: &[&ToneResult]) {
+    let _ = writeln!(s, "| development | read | jaw poses | jaw mean | jaw max | median corner | curve read through |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for r in results {
+        let (mean, max) =
+            r.jaw_mm().map_or(("–".into(), "–".into()), |(m, x)| (format!("{m:.3} mm"), format!("{x:.3} mm")));
+        let corner = r.median_corner_px().map_or("–".into(), |c| format!("{c:.3} px"));
+        let _ = writeln!(
+            s,
+            "| {}{} | {} | {}/{} | {mean} | {max} | {corner} | {} |",
+            r.development.name(),
+            r.phone.map_or(String::new(), |p| at(&p)),
+            r.reading.name(),
+            r.errors.len(),
+            r.frames,
+            r.curve
+        );
+    }
 }
 
 /// A 30 s take at 60 frames/s.
@@ -271,14 +327,16 @@ pub fn cost(results: &[ToneResult], frames: usize) -> (f64, f64, f64) {
 /// The table as CSV, one row per development and reading.
 pub fn write_csv(results: &[ToneResult], out: &Path) -> Result<PathBuf> {
     let path = out.join("tone.csv");
-    let mut text = String::from("development,read,frames,jaw_poses,jaw_mean_mm,jaw_max_mm,median_corner_px,curve\n");
+    let mut text =
+        String::from("development,phone_at_mm,read,frames,jaw_poses,jaw_mean_mm,jaw_max_mm,median_corner_px,curve\n");
     for r in results {
         let (mean, max) =
             r.jaw_mm().map_or((String::new(), String::new()), |(m, x)| (format!("{m:.4}"), format!("{x:.4}")));
         let _ = writeln!(
             text,
-            "{},{},{},{},{mean},{max},{},\"{}\"",
+            "{},{},{},{},{},{mean},{max},{},\"{}\"",
             r.development.name(),
+            r.phone.map_or(String::new(), |p| p.distance_mm.to_string()),
             r.reading.name(),
             r.frames,
             r.errors.len(),
@@ -307,8 +365,28 @@ mod tests {
     }
 
     #[test]
+    fn the_phone_films_each_curve_from_each_distance_into_its_own_folder() {
+        let cases = phone_cases();
+        assert_eq!(cases.len(), PHONE_DISTANCES_MM.len() * 3);
+        let folders: std::collections::BTreeSet<String> = cases
+            .iter()
+            .map(|&(phone, development)| {
+                let req = Request {
+                    phone: Some(phone),
+                    development: Some(development),
+                    ..Request::new(SceneKind::Static, 1, 2, 1, 30.0)
+                };
+                req.folder()
+            })
+            .collect();
+        assert_eq!(folders.len(), cases.len(), "{folders:?}");
+        assert!(cases.iter().all(|(p, _)| p.focus_mm == PHONE_FOCUS_MM && p.zoom == 2.0));
+    }
+
+    #[test]
     fn the_cost_counts_the_settling_fits_the_refits_and_two_detections_again() {
         let result = |reading, detect_s: f64, fit_s: Vec<f64>| ToneResult {
+            phone: None,
             development: developments()[0],
             reading,
             frames: 3,
