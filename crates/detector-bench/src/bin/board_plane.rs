@@ -15,6 +15,7 @@
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use jawtrack_apriltag::{Detection, Detector, DetectorConfig, ImageView, ToneCurve, ToneSetting};
+use jawtrack_pose::lm::{self, Damping};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -43,6 +44,7 @@ type Corners = BTreeMap<u32, [[f64; 2]; 4]>;
 /// distortion k1, k2 on coordinates scaled by the half-diagonal.
 const PARAMS: usize = 11;
 
+#[derive(Debug, Clone, Copy)]
 struct Plane {
     p: [f64; PARAMS],
     centre: [f64; 2],
@@ -89,47 +91,33 @@ impl Plane {
     }
 }
 
-/// Levenberg–Marquardt on the parameters `moving`, the rest held.
+/// Levenberg–Marquardt (the loop PnP shares) on the parameters `moving`, the rest held, with
+/// a forward-difference Jacobian.
 fn refine(mut plane: Plane, corners: &Corners, free_places: bool, moving: &[usize]) -> Plane {
     let mut cost = plane.residuals(corners, free_places).norm_squared();
-    let mut lambda = 1e-3;
-    for _ in 0..200 {
+    let damping = Damping { initial: 1e-3, diagonal_floor: 0.0, relative_tolerance: 1e-12, max_iterations: 200 };
+    let linearise = |plane: &Plane| {
         let r = plane.residuals(corners, free_places);
         let mut j = DMatrix::zeros(r.len(), moving.len());
         for (col, &i) in moving.iter().enumerate() {
             let h = 1e-7 * plane.p[i].abs().max(1e-3);
-            let mut moved = Plane { p: plane.p, ..plane };
+            let mut moved = Plane { p: plane.p, ..*plane };
             moved.p[i] += h;
             j.set_column(col, &((moved.residuals(corners, free_places) - &r) / -h));
         }
-        let jtj = j.transpose() * &j;
-        let g = j.transpose() * &r;
-        let mut improved = false;
-        for _ in 0..20 {
-            let mut a = jtj.clone();
-            for i in 0..moving.len() {
-                a[(i, i)] *= 1.0 + lambda;
-            }
-            let Some(step) = a.lu().solve(&g) else { break };
-            let mut next = Plane { p: plane.p, ..plane };
-            for (col, &i) in moving.iter().enumerate() {
-                next.p[i] += step[col];
-            }
-            let c = next.residuals(corners, free_places).norm_squared();
-            if c < cost {
-                let done = (cost - c) < 1e-12 * cost;
-                plane = next;
-                cost = c;
-                lambda = (lambda / 10.0).max(1e-12);
-                improved = !done;
-                break;
-            }
-            lambda *= 10.0;
+        Some((j.transpose() * &j, j.transpose() * &r))
+    };
+    let step = |plane: &Plane, (jtj, g): &(DMatrix<f64>, DVector<f64>), lambda: f64| {
+        let delta = lm::damped(jtj, lambda, 0.0).lu().solve(g)?;
+        let mut next = Plane { p: plane.p, ..*plane };
+        for (col, &i) in moving.iter().enumerate() {
+            next.p[i] += delta[col];
         }
-        if !improved {
-            break;
-        }
-    }
+        Some(next)
+    };
+    let evaluate = |plane: &Plane| plane.residuals(corners, free_places).norm_squared();
+    // A failed linearisation cannot happen here; the plane is left at its best either way.
+    let _ = lm::minimise(&mut plane, &mut cost, &damping, linearise, step, evaluate);
     plane
 }
 
@@ -262,7 +250,15 @@ fn main() -> Result<()> {
         let detector = Detector::new(config)?;
         let dets = ours(&detector, &view)?;
         if name.contains("auto") {
-            eprintln!("auto tone: {:?}", detector.tone());
+            let tone = detector.tone();
+            match tone.pooled {
+                Some(p) => println!(
+                    "auto read the photo through {} ({:?}): pooled power law {:.2} from {} sides, misfit {:.2} against \
+                     sRGB's {:.2}\n",
+                    tone.curve, tone.reason, p.gamma, p.sides, p.misfit, p.srgb_misfit
+                ),
+                None => println!("auto read the photo through {} ({:?})\n", tone.curve, tone.reason),
+            }
             for d in &dets {
                 if let Some(b) = d.blur_px {
                     blur.insert(d.id, b);
