@@ -193,18 +193,26 @@ impl FromStr for ToneCurve {
     }
 }
 
-impl Serialize for ToneCurve {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
+/// Serialised as the names flags take ([`fmt::Display`] and [`FromStr`]), so a file says
+/// `"gamma:1.8"` as a user types it.
+macro_rules! serde_as_name {
+    ($($t:ty),*) => {$(
+        impl Serialize for $t {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.collect_str(self)
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $t {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let s = String::deserialize(d)?;
+                s.parse().map_err(serde::de::Error::custom)
+            }
+        }
+    )*};
 }
 
-impl<'de> Deserialize<'de> for ToneCurve {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        s.parse().map_err(serde::de::Error::custom)
-    }
-}
+serde_as_name!(ToneCurve, ToneSetting);
 
 /// Which curve the detector decodes frames with.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -241,19 +249,6 @@ impl FromStr for ToneSetting {
                 e
             }
         })
-    }
-}
-
-impl Serialize for ToneSetting {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
-}
-
-impl<'de> Deserialize<'de> for ToneSetting {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        s.parse().map_err(serde::de::Error::custom)
     }
 }
 

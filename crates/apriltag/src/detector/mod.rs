@@ -141,21 +141,23 @@ impl Detector {
     ) -> Result<Vec<Detection>, DetectError> {
         let lut = self.tone_state().lut.clone();
         let dets = self.detect_through(frame, roi, smeared, &lut)?;
-        if !(self.config.linear_edges && self.tone_state().session.due()) {
-            self.tone_state().session.skip();
-            return Ok(dets);
+        {
+            let mut state = self.tone_state();
+            if !(self.config.linear_edges && state.session.due()) {
+                state.session.skip();
+                return Ok(dets);
+            }
         }
         let fit = self.fit_tone_through(frame, &dets, &lut);
         let changed = {
             let mut state = self.tone_state();
-            let changed = state.session.record(fit);
-            if let Some(curve) = changed {
+            state.session.record(fit).map(|curve| {
                 state.lut = Arc::new(curve.decode_table());
-            }
-            changed
+                Arc::clone(&state.lut)
+            })
         };
         match changed {
-            Some(curve) => self.detect_through(frame, roi, smeared, &curve.decode_table()),
+            Some(lut) => self.detect_through(frame, roi, smeared, &lut),
             None => Ok(dets),
         }
     }
