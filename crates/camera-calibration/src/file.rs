@@ -131,8 +131,13 @@ impl CameraFile {
     pub fn load(path: &Path) -> Result<Self, CameraFileError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| CameraFileError::Io { path: path.display().to_string(), reason: e.to_string() })?;
-        let format = |reason: String| CameraFileError::Format { path: path.display().to_string(), reason };
-        let file: CameraFile = serde_json::from_str(&text).map_err(|e| format(e.to_string()))?;
+        CameraFile::from_json(&text, &path.display().to_string())
+    }
+
+    /// Parses and checks a camera file's text; errors name the file as `name`.
+    pub fn from_json(text: &str, name: &str) -> Result<Self, CameraFileError> {
+        let format = |reason: String| CameraFileError::Format { path: name.to_owned(), reason };
+        let file: CameraFile = serde_json::from_str(text).map_err(|e| format(e.to_string()))?;
         if file.version != VERSION {
             return Err(format(format!("version {} (this build reads {VERSION})", file.version)));
         }

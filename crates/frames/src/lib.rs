@@ -86,6 +86,26 @@ impl Luma {
     }
 }
 
+/// Decodes an image file's bytes (PNG or JPEG, told by their content) to luma, as every frame
+/// read from a file is. The `image` crate's default limits hold: an image that claims more
+/// than 512 MiB is refused, not allocated.
+///
+/// # Examples
+///
+/// ```
+/// let err = jawtrack_frames::decode_image(b"not an image").unwrap_err();
+/// assert!(err.contains("format"), "{err}");
+/// ```
+pub fn decode_image(bytes: &[u8]) -> std::result::Result<Luma, String> {
+    let img = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())?
+        .to_luma8();
+    Ok(Luma { width: img.width() as usize, height: img.height() as usize, pixels: img.into_raw() })
+}
+
 /// One readable frame's tags of the marker, as the detector saw them.
 pub struct TaggedFrame {
     /// As [`Frame::name`].
@@ -189,12 +209,7 @@ impl FrameSource for ImageFrames {
 
     fn next_frame(&mut self) -> Result<Option<Frame>> {
         let Some(path) = self.files.get(self.next) else { return Ok(None) };
-        let image = image::open(path)
-            .map(|img| {
-                let img = img.to_luma8();
-                Luma { width: img.width() as usize, height: img.height() as usize, pixels: img.into_raw() }
-            })
-            .map_err(|e| e.to_string());
+        let image = std::fs::read(path).map_err(|e| e.to_string()).and_then(|bytes| decode_image(&bytes));
         let frame = Frame { name: path.display().to_string(), t: self.next as f64 / self.fps, image };
         self.next += 1;
         Ok(Some(frame))
@@ -250,7 +265,10 @@ impl VideoFrames {
             return Err(path_error(path, "has no video stream"));
         };
         if let Some(degrees) = rotation(stream).filter(|d| d.rem_euclid(360.0) != 0.0) {
-            eprintln!(
+            // Not `eprintln!`, which panics when standard error is closed (`… 2>&1 | head -1`).
+            use std::io::Write as _;
+            let _ = writeln!(
+                std::io::stderr(),
                 "note: {} is flagged to be shown turned {degrees}°; its frames are tracked as stored \
                  ({width}×{height}), which is what --intrinsics must describe",
                 path.display()

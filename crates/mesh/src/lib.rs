@@ -24,6 +24,7 @@ mod write;
 
 pub use check::{DisjointSets, MeshReport, PLAUSIBLE_EXTENT_MM};
 pub use error::MeshError;
+pub use read::MeshFormat;
 
 use nalgebra::{Point3, Vector3};
 

@@ -6,20 +6,57 @@ use crate::{Mesh, MeshError};
 use nalgebra::Point3;
 use std::path::Path;
 
+/// A mesh file's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// STL, binary or ASCII.
+    Stl,
+    /// PLY, ASCII or binary.
+    Ply,
+    /// Wavefront OBJ (triangulated; materials ignored).
+    Obj,
+}
+
+impl MeshFormat {
+    /// The format a file's extension names (any case), if one we read.
+    pub fn from_path(path: &Path) -> Option<MeshFormat> {
+        match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+            "stl" => Some(MeshFormat::Stl),
+            "ply" => Some(MeshFormat::Ply),
+            "obj" => Some(MeshFormat::Obj),
+            _ => None,
+        }
+    }
+}
+
 impl Mesh {
     /// Reads a mesh by its extension (`.stl`, `.ply`, `.obj`) and checks it is usable in mm.
     pub fn load(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
-        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let format = MeshFormat::from_path(path).ok_or_else(|| MeshError::Format { path: name.clone() })?;
         let bytes = std::fs::read(path).map_err(|e| MeshError::Io { path: name.clone(), reason: e.to_string() })?;
-        let mesh = match ext.as_deref() {
-            Some("stl") => read_stl(&bytes),
-            Some("ply") => read_ply(&bytes),
-            Some("obj") => read_obj(&bytes),
-            _ => return Err(MeshError::Format { path: name }),
+        Mesh::from_bytes(&bytes, format, &name)
+    }
+
+    /// Reads a mesh from a file's bytes in `format`, checked as [`Mesh::load`] checks it;
+    /// errors name the file as `name`.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use jawtrack_mesh::{Mesh, MeshFormat};
+    /// let obj = b"v 0 0 0\nv 10 0 0\nv 0 10 0\nf 1 2 3\n";
+    /// let mesh = Mesh::from_bytes(obj, MeshFormat::Obj, "triangle.obj").unwrap();
+    /// assert_eq!(mesh.triangles.len(), 1);
+    /// ```
+    pub fn from_bytes(bytes: &[u8], format: MeshFormat, name: &str) -> Result<Mesh, MeshError> {
+        let mesh = match format {
+            MeshFormat::Stl => read_stl(bytes),
+            MeshFormat::Ply => read_ply(bytes),
+            MeshFormat::Obj => read_obj(bytes),
         }
-        .map_err(|(format, reason)| MeshError::Corrupt { path: name.clone(), format, reason })?;
-        mesh.validate(&name)?;
+        .map_err(|(format, reason)| MeshError::Corrupt { path: name.to_owned(), format, reason })?;
+        mesh.validate(name)?;
         Ok(mesh)
     }
 }

@@ -431,14 +431,18 @@ impl LiveServer {
         std::thread::Builder::new()
             .name("viewer".into())
             .spawn(move || {
+                // Not `eprintln!`: it panics when standard error is closed.
+                use std::io::Write as _;
                 runtime.block_on(async move {
                     match tokio::net::TcpListener::from_std(listener) {
                         Ok(l) => {
                             if let Err(e) = axum::serve(l, app).await {
-                                eprintln!("viewer server stopped: {e}");
+                                let _ = writeln!(std::io::stderr(), "viewer server stopped: {e}");
                             }
                         }
-                        Err(e) => eprintln!("viewer server could not start: {e}"),
+                        Err(e) => {
+                            let _ = writeln!(std::io::stderr(), "viewer server could not start: {e}");
+                        }
                     }
                 });
             })
