@@ -2,6 +2,10 @@
 
 use crate::DetectError;
 
+/// The longest side the detector reads (px): cluster points are kept at half-pixel precision
+/// in 16-bit signed arithmetic, as in the C library (a 48 MP phone frame is 8064 px wide).
+pub const MAX_SIDE: usize = 16383;
+
 /// A borrowed 8-bit gray image: `height` rows of `width` pixels, rows `stride` bytes apart.
 /// Pixel (x, y) is `data[y * stride + x]`; its centre is at coordinates (x, y).
 #[derive(Debug, Clone, Copy)]
@@ -18,6 +22,11 @@ impl<'a> ImageView<'a> {
     pub fn new(data: &'a [u8], width: usize, height: usize, stride: usize) -> Result<Self, DetectError> {
         if width == 0 || height == 0 {
             return Err(DetectError::BadImage(format!("the image is empty ({width}×{height})")));
+        }
+        if width > MAX_SIDE || height > MAX_SIDE {
+            return Err(DetectError::BadImage(format!(
+                "the image is {width}×{height} px; the detector reads images up to {MAX_SIDE} px a side"
+            )));
         }
         if stride < width {
             return Err(DetectError::BadImage(format!("stride {stride} is less than the width {width}")));
@@ -127,6 +136,20 @@ mod tests {
     use super::*;
 
     #[test]
+    fn an_image_wider_than_the_detector_reads_is_refused_not_wrapped() {
+        // Found by the `c-door` fuzz target: a 51912 px wide frame overflowed the clusters'
+        // 16-bit half-pixel coordinates (a panic in a debug build, wrapped points in release).
+        let data = vec![0u8; 2 * (MAX_SIDE + 1)];
+        let err = ImageView::new(&data, MAX_SIDE + 1, 2, MAX_SIDE + 1).expect_err("too wide").to_string();
+        assert!(err.contains("up to 16383 px a side"), "{err}");
+        assert!(ImageView::new(&data, 2, MAX_SIDE + 1, 2).is_err(), "too tall");
+        let view = ImageView::new(&data, MAX_SIDE, 2, MAX_SIDE).expect("the widest image read");
+        let detector =
+            crate::Detector::new(crate::DetectorConfig { quad_decimate: 1.0, ..Default::default() }).expect("settings");
+        assert_eq!(detector.detect(&view).expect("a blank frame").len(), 0);
+    }
+
+    #[test]
     fn views_check_their_layout() {
         let buf = vec![7u8; 10 * 4];
         let v = ImageView::new(&buf, 8, 4, 10).expect("fits");
@@ -135,9 +158,13 @@ mod tests {
         assert_eq!(v.get(8, 3), None);
         // The last row may stop right after its pixels.
         assert!(ImageView::new(&buf[..38], 8, 4, 10).is_ok());
-        for (w, h, s, why) in
-            [(0, 4, 10, "empty"), (8, 4, 7, "stride"), (8, 5, 10, "needs"), (usize::MAX, 3, usize::MAX, "overflows")]
-        {
+        for (w, h, s, why) in [
+            (0, 4, 10, "empty"),
+            (8, 4, 7, "stride"),
+            (8, 5, 10, "needs"),
+            (3, 3, usize::MAX, "overflows"),
+            (usize::MAX, 3, usize::MAX, "a side"),
+        ] {
             let e = ImageView::new(&buf, w, h, s).expect_err("bad layout").to_string();
             assert!(e.contains(why), "{e}");
         }

@@ -79,7 +79,11 @@ impl Mesh {
                 reason: format!("triangle {t} refers to a vertex past the {n} there are"),
             });
         }
-        let [lo, hi] = self.bounds();
+        // The surface's size, not the vertex list's: a vertex no triangle uses (a stray point
+        // in a scan file) must not make a microscopic surface look millimetre-sized.
+        let mut used = self.triangles.iter().flatten().map(|&i| self.vertices[i as usize].coords);
+        let first = used.next().unwrap_or_default();
+        let (lo, hi) = used.fold((first, first), |(lo, hi), p| (lo.inf(&p), hi.sup(&p)));
         let extent = (hi - lo).max();
         let guess = if extent < PLAUSIBLE_EXTENT_MM.0 {
             "metres"
@@ -192,6 +196,19 @@ mod tests {
         assert_eq!((r.boundary_edges, r.boundary_loops, r.components, r.non_manifold_edges), (4, 1, 1, 0));
         assert_eq!(r.degenerate_triangles, 0);
         assert!((r.area_mm2 - 100.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_microscopic_surface_is_refused_whatever_stray_vertex_the_file_holds() {
+        // Found by the `ply` fuzz target: a 10 mm vertex no triangle used made a surface
+        // 1e-40 mm across pass as millimetre-sized.
+        let mut tiny = square(1e-40);
+        tiny.vertices.push(Point3::new(10.0, 0.0, 0.0));
+        let err = tiny.validate("scan.ply").expect_err("the surface is not millimetre-sized").to_string();
+        assert!(err.contains("metres"), "{err}");
+        let mut fine = square(10.0);
+        fine.vertices.push(Point3::new(1e-40, 0.0, 0.0));
+        fine.validate("scan.ply").expect("a stray vertex does not spoil a good surface");
     }
 
     #[test]
