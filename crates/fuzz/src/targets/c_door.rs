@@ -82,10 +82,13 @@ pub fn seeds() -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// The shared tracker: default settings but for the edge model, whose cost would dominate
+/// and which `frame` and `image` fuzz through the detector; here the door is under test.
 fn fresh_tracker() -> Option<u64> {
     let mut handle = 0;
-    // SAFETY: null settings and marker mean the defaults; `handle` is writable.
-    let status = unsafe { jt_tracker_new(std::ptr::null(), std::ptr::null(), &mut handle) };
+    let settings = JtSettings { linear_edges: false, ..jt_settings_default() };
+    // SAFETY: valid settings; a null marker means the nominal one; `handle` is writable.
+    let status = unsafe { jt_tracker_new(&settings, std::ptr::null(), &mut handle) };
     let made = (status == JtStatus::Ok).then_some(handle);
     if let Ok(mut h) = HANDLE.lock() {
         if let Some(old) = h.take() {
