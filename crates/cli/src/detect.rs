@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use jawtrack_apriltag::{Detector, DetectorConfig, ImageView, QuadThreshold};
+use jawtrack_apriltag::{Detector, DetectorConfig, QuadThreshold};
 use std::path::PathBuf;
 
 /// Arguments of `jawtrack detect`.
@@ -55,9 +55,11 @@ pub(crate) fn run(a: &DetectArgs) -> Result<()> {
         ..DetectorConfig::default()
     })?;
     for path in &a.images {
-        let img = image::open(path).with_context(|| format!("reading {}", path.display()))?.to_luma8();
-        let (w, h) = (img.width() as usize, img.height() as usize);
-        let view = ImageView::new(img.as_raw(), w, h, w).with_context(|| format!("{}", path.display()))?;
+        let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+        let img =
+            jawtrack_frames::decode_image(&bytes).map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?;
+        let (w, h) = (img.width, img.height);
+        let view = img.view().with_context(|| format!("{}", path.display()))?;
         let mut times = Vec::with_capacity(a.repeat);
         let mut dets = Vec::new();
         for _ in 0..a.repeat {
