@@ -73,6 +73,7 @@ fn read_stl(bytes: &[u8]) -> ParseResult {
 fn read_obj(bytes: &[u8]) -> ParseResult {
     let options =
         tobj::LoadOptions { triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
+    let bytes = positions_only(bytes);
     let (models, _) =
         tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| Err(tobj::LoadError::MaterialParseError))
             .map_err(|e| ("OBJ", e.to_string()))?;
@@ -85,6 +86,30 @@ fn read_obj(bytes: &[u8]) -> ParseResult {
         parts.push(Mesh { vertices, triangles });
     }
     Ok(Mesh::concat(&parts).0)
+}
+
+/// The OBJ without its texture coordinates and normals (`vt`, `vn` lines, and the `/vt/vn` of
+/// each face corner), which a mesh here never uses: tobj 4.0.5 multiplies their indices
+/// unchecked, so a hostile index overflowed (found by the `obj` fuzz target).
+fn positions_only(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len());
+    for line in bytes.split_inclusive(|&b| b == b'\n') {
+        let text = line.trim_ascii_start();
+        if text.starts_with(b"vt") || text.starts_with(b"vn") {
+            continue;
+        }
+        if !text.starts_with(b"f ") && !text.starts_with(b"f\t") {
+            out.extend_from_slice(line);
+            continue;
+        }
+        out.push(b'f');
+        for token in text[1..].split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty()) {
+            out.push(b' ');
+            out.extend(token.iter().take_while(|&&b| b != b'/'));
+        }
+        out.push(b'\n');
+    }
+    out
 }
 
 /// A PLY vertex: any of float/double x, y, z; other properties ignored.
@@ -144,6 +169,17 @@ fn read_ply(bytes: &[u8]) -> ParseResult {
     let vertex_parser = Parser::<PlyVertex>::new();
     let face_parser = Parser::<PlyFace>::new();
     let header = vertex_parser.read_header(&mut reader).map_err(err)?;
+    // Every element takes at least a byte, in any encoding: a count the file cannot hold would
+    // have the parser loop that many times (a binary face count of 2⁶⁴ − 1 hung it; found by
+    // the `ply` fuzz target).
+    let end = bytes.windows(10).position(|w| w == b"end_header").unwrap_or(0);
+    let body = bytes[end..].iter().position(|&b| b == b'\n').map_or(0, |nl| bytes.len() - end - nl - 1);
+    if let Some(e) = header.elements.values().find(|e| e.count > body) {
+        return Err((
+            "PLY",
+            format!("element {} claims {} entries, but only {body} bytes follow the header", e.name, e.count),
+        ));
+    }
     let (mut vertices, mut faces) = (Vec::new(), Vec::new());
     for element in header.elements.values() {
         match element.name.as_str() {
@@ -161,4 +197,29 @@ fn read_ply(bytes: &[u8]) -> ParseResult {
         .flat_map(|f| (2..f.0.len()).map(move |k| [f.0[0], f.0[k - 1], f.0[k]]).collect::<Vec<_>>())
         .collect();
     Ok(Mesh { vertices, triangles })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_obj_with_a_hostile_normal_index_loads_its_triangles() {
+        // Found by the `obj` fuzz target: tobj multiplied the normal index -31 (relative, before
+        // any normal) unchecked, an overflow; normals are now never handed to it.
+        let obj = b"v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\nvn 0 0 1 1\nvt 0 0\nf 1/1 4/1 3/1\nf 1//1 2//1 4//-31\n";
+        let mesh = Mesh::from_bytes(obj, MeshFormat::Obj, "scan.obj").expect("two triangles");
+        assert_eq!(mesh.triangles.len(), 2);
+        assert_eq!(positions_only(b"vt 1 2\nf 3/1/2\t4//5 6\n"), b"f 3 4 6\n");
+    }
+
+    #[test]
+    fn a_ply_claiming_more_entries_than_it_holds_is_refused_at_once() {
+        // Found by the `ply` fuzz target: a binary face count of 2^64 - 1 had the parser loop.
+        let ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\nelement face 18446744073709551615\nproperty list uchar int vertex_indices\n\
+                    end_header\n\0\0\0\0\0\0\0\0\0\0\0\0";
+        let err = Mesh::from_bytes(ply, MeshFormat::Ply, "scan.ply").expect_err("a count it cannot hold").to_string();
+        assert!(err.contains("element face claims 18446744073709551615 entries, but only 12 bytes follow"), "{err}");
+    }
 }
