@@ -111,8 +111,8 @@ pub fn run(input: &[u8]) -> Result<Verdict, String> {
 
 /// One call; true when it returned `Ok`.
 fn one_call(k: usize, r: &mut Reader<'_>, pixels: &[u8]) -> Result<bool, String> {
-    // Frames mostly (a zero byte: luma); the rarer calls are the slow ones (a tracker made
-    // with the default settings builds its Hamming-2 decode table).
+    // Frames mostly (a zero byte: luma); trackers are made and freed rarely, each costing
+    // more than a frame.
     let op = match r.u8() {
         0..=111 => 0,
         112..=223 => 1,
@@ -158,8 +158,7 @@ fn new_tracker_call(r: &mut Reader<'_>) -> JtStatus {
     let mut s = jt_settings_default();
     s.decimate = r.pick(&[2.0, 0.0, -1.0, f32::NAN, 1e9, 1.5]);
     s.quad_sigma = r.pick(&[0.0, f32::NAN, -1e9, 0.8]);
-    // 0 is the one valid Hamming limit tried here: 1 and 2 build tables (slow), which the
-    // tracker made between runs already does.
+    // 0 is the only valid Hamming limit tried here: the shared tracker has the default, 2.
     s.max_hamming = r.pick(&[0, 3, 99, u32::MAX]);
     s.threads = r.pick(&[1, 0, 2, 9, u32::MAX]);
     s.readout_s = r.pick(&ODD);
