@@ -146,21 +146,8 @@ pub fn json_document(rng: &mut impl Rng, data: &mut Vec<u8>) -> bool {
 /// Changes one line of a JSON lines file: its JSON, or the line itself (deleted, doubled,
 /// moved, cut short); false when `data` is not text.
 pub fn json_lines(rng: &mut impl Rng, data: &mut Vec<u8>) -> bool {
-    let Ok(text) = std::str::from_utf8(data) else { return false };
-    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
-    if lines.is_empty() {
-        return false;
-    }
-    let at = rng.random_range(0..lines.len());
-    match rng.random_range(0..8) {
-        0 => {
-            lines.remove(at);
-        }
-        1 => lines.insert(at, lines[at].clone()),
-        2 => {
-            let to = rng.random_range(0..lines.len());
-            lines.swap(at, to);
-        }
+    with_lines(rng, data, |rng, lines, at| match rng.random_range(0..8) {
+        how @ 0..3 => rearrange(rng, lines, at, how, 1),
         3 => {
             let cut = rng.random_range(0..=lines[at].len());
             lines[at] = lines[at].char_indices().take_while(|(i, _)| *i < cut).map(|(_, c)| c).collect();
@@ -173,37 +160,18 @@ pub fn json_lines(rng: &mut impl Rng, data: &mut Vec<u8>) -> bool {
             // A mutated line must stay one line for the reader to see it as one.
             lines[at] = String::from_utf8_lossy(&line).replace('\n', " ");
         }
-    }
-    *data = (lines.join("\n") + "\n").into_bytes();
-    true
+    })
 }
 
 /// Changes one token or line of a whitespace-separated text file; false when `data` is not
 /// text.
 pub fn text_lines(rng: &mut impl Rng, data: &mut Vec<u8>) -> bool {
-    let Ok(text) = std::str::from_utf8(data) else { return false };
-    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
-    if lines.is_empty() {
-        return false;
-    }
-    let at = rng.random_range(0..lines.len());
-    match rng.random_range(0..6) {
-        0 => {
-            lines.remove(at);
-        }
-        1 => {
-            for _ in 0..rng.random_range(1..4) {
-                lines.insert(at, lines[at].clone());
-            }
-        }
-        2 => {
-            let to = rng.random_range(0..lines.len());
-            lines.swap(at, to);
-        }
+    with_lines(rng, data, |rng, lines, at| match rng.random_range(0..6) {
+        how @ 0..3 => rearrange(rng, lines, at, how, 3),
         _ => {
             let mut tokens: Vec<String> = lines[at].split_whitespace().map(str::to_owned).collect();
             if tokens.is_empty() {
-                return false;
+                return;
             }
             let k = rng.random_range(0..tokens.len());
             match rng.random_range(0..4) {
@@ -215,9 +183,39 @@ pub fn text_lines(rng: &mut impl Rng, data: &mut Vec<u8>) -> bool {
             }
             lines[at] = tokens.join(" ");
         }
+    })
+}
+
+/// Splits text `data` into lines, lets `edit` change them around a random line, and joins
+/// them back; false when `data` is not text or has no line.
+fn with_lines<R: Rng>(rng: &mut R, data: &mut Vec<u8>, edit: impl FnOnce(&mut R, &mut Vec<String>, usize)) -> bool {
+    let Ok(text) = std::str::from_utf8(data) else { return false };
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    if lines.is_empty() {
+        return false;
     }
+    let at = rng.random_range(0..lines.len());
+    edit(rng, &mut lines, at);
     *data = (lines.join("\n") + "\n").into_bytes();
     true
+}
+
+/// Deletes line `at` (`how` 0), repeats it up to `most` times (1), or swaps it with another (2).
+fn rearrange(rng: &mut impl Rng, lines: &mut Vec<String>, at: usize, how: u32, most: usize) {
+    match how {
+        0 => {
+            lines.remove(at);
+        }
+        1 => {
+            for _ in 0..rng.random_range(1..=most) {
+                lines.insert(at, lines[at].clone());
+            }
+        }
+        _ => {
+            let to = rng.random_range(0..lines.len());
+            lines.swap(at, to);
+        }
+    }
 }
 
 /// Mutates one node, chosen uniformly among the document's nodes.
