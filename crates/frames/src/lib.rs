@@ -97,7 +97,7 @@ pub const MAX_FRAME_SIDE: u32 = 8192;
 /// # Examples
 ///
 /// ```
-/// let err = jawtrack_frames::decode_image(b"not an image").unwrap_err();
+/// let err = jawtrack_frames::decode_image(b"not an image").err().expect("not an image");
 /// assert!(err.contains("format"), "{err}");
 /// ```
 pub fn decode_image(bytes: &[u8]) -> std::result::Result<Luma, String> {
