@@ -564,18 +564,22 @@ impl FixedSide {
     }
 }
 
+/// The model at `q` against every sample of `data`: the sum of squared residuals, and each
+/// sample's residual and gradient, kept so that an accepted step's normal equations are built
+/// from the evaluation that judged it rather than a second one.
+fn evaluate(profiles: &[Profile], data: &[(usize, f64, f64)], q: &Params, out: &mut Vec<(f64, Params)>) -> f64 {
+    let rs: Vec<Rows> = profiles.iter().map(|p| rows(p, q)).collect();
+    out.clear();
+    out.extend(data.iter().map(|&(pi, t, v)| {
+        let (m, g) = model(&profiles[pi], &rs[pi], t, q);
+        (m - v, g)
+    }));
+    out.iter().map(|(r, _)| r * r).sum()
+}
+
 /// Levenberg–Marquardt on the squared residuals of `data` (profile, t, value); the blur is kept
 /// within [0.2 px, a cell], the quiet zone from 1 to 3 cells wide.
 fn levenberg_marquardt(profiles: &[Profile], data: &[(usize, f64, f64)], start: Params, cell: f64) -> Option<Params> {
-    let cost = |q: &Params| -> f64 {
-        let rs: Vec<Rows> = profiles.iter().map(|p| rows(p, q)).collect();
-        data.iter()
-            .map(|&(pi, t, v)| {
-                let r = model(&profiles[pi], &rs[pi], t, q).0 - v;
-                r * r
-            })
-            .sum()
-    };
     let clamp = |mut q: Params| {
         q[2] = q[2].clamp(0.2, cell);
         q[5] = q[5].clamp(0.0, 1.5 * q[3].max(0.0));
@@ -583,16 +587,15 @@ fn levenberg_marquardt(profiles: &[Profile], data: &[(usize, f64, f64)], start: 
         q
     };
     let mut q = start;
-    let mut current = cost(&q);
+    let (mut here, mut trial) = (Vec::with_capacity(data.len()), Vec::with_capacity(data.len()));
+    let mut current = evaluate(profiles, data, &q, &mut here);
     let mut lambda = 1e-3;
     for _ in 0..ITERATIONS {
         let mut jtj = SMatrix::<f64, NP, NP>::zeros();
         let mut jtr = Params::zeros();
-        let rs: Vec<Rows> = profiles.iter().map(|p| rows(p, &q)).collect();
-        for &(pi, t, v) in data {
-            let (m, g) = model(&profiles[pi], &rs[pi], t, &q);
+        for (r, g) in &here {
             jtj += g * g.transpose();
-            jtr += g * (m - v);
+            jtr += g * *r;
         }
         let mut improved = false;
         for _ in 0..8 {
@@ -605,7 +608,7 @@ fn levenberg_marquardt(profiles: &[Profile], data: &[(usize, f64, f64)], start: 
                 continue;
             };
             let next = clamp(q - step);
-            let c = cost(&next);
+            let c = evaluate(profiles, data, &next, &mut trial);
             if c.is_finite() && c < current {
                 // Settled: the line moved under 0.001 px, the blur under 0.1 %, and the misfit
                 // fell by under a millionth.
@@ -613,6 +616,7 @@ fn levenberg_marquardt(profiles: &[Profile], data: &[(usize, f64, f64)], start: 
                 let settled = moved < 1e-3 && (next[2] - q[2]).abs() < 1e-3 * q[2] || current - c < 1e-6 * current;
                 q = next;
                 current = c;
+                std::mem::swap(&mut here, &mut trial);
                 lambda = (lambda / 3.0).max(1e-9);
                 improved = true;
                 if settled {
