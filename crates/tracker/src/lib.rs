@@ -343,6 +343,7 @@ impl Tracker {
         // Either body's recent motion predicts a smear of `roi::SMEAR_PX` or more.
         let smeared = self.smears(camera, t).iter().any(|&s| s >= roi::SMEAR_PX);
         let mut detections = self.detect(frame, expected, smeared)?;
+        let mut stages = self.detector.last_stages();
         // A body missing from its expected region, or a tag at the region's edge (the
         // prediction was off, and the edge fit there lacks its pixels): search everywhere.
         let missing = BodyKind::ALL.iter().any(|&k| !detections.iter().any(|d| self.body_of(d.id) == Some(k)));
@@ -353,6 +354,7 @@ impl Tracker {
         });
         if expected.is_some() && (missing || at_edge) {
             detections = self.detect(frame, None, smeared)?;
+            stages = stages + self.detector.last_stages();
             searched = None;
         }
         self.since_full = if searched.is_none() { 0 } else { self.since_full + 1 };
@@ -360,6 +362,7 @@ impl Tracker {
         let mut result = self.solve(detections, camera, t, frame.height());
         result.searched = searched;
         result.timings.detection_s = detection_s;
+        result.timings.stages = stages;
         let tone = self.detector.tone();
         if self.tone_reported != Some((tone.curve, tone.frames_fitted)) {
             self.tone_reported = Some((tone.curve, tone.frames_fitted));
@@ -511,7 +514,7 @@ impl Tracker {
             flags,
             detections,
             searched: None,
-            timings: Timings { detection_s: 0.0, pose_s: start.elapsed().as_secs_f64() },
+            timings: Timings { pose_s: start.elapsed().as_secs_f64(), ..Timings::default() },
             tone: None,
         }
     }

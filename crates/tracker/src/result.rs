@@ -44,6 +44,8 @@ pub struct Timings {
     pub detection_s: f64,
     /// Both bodies' PnP, ambiguity and flicker checks, composition.
     pub pose_s: f64,
+    /// Detection stage by stage, summed over the frame's searches.
+    pub stages: jawtrack_apriltag::StageTimes,
 }
 
 /// What the tracker made of one frame.
@@ -161,7 +163,7 @@ mod tests {
             flags: vec![Flag::Lost(BodyKind::Mandible)],
             detections: Vec::new(),
             searched: None,
-            timings: Timings { detection_s: 0.004, pose_s: 0.0001 },
+            timings: Timings { detection_s: 0.004, pose_s: 0.0001, ..Timings::default() },
             tone: None,
         };
         let v: serde_json::Value = serde_json::from_str(&r.to_record(3, Some("f.png")).to_line()).expect("JSON");

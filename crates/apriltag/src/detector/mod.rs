@@ -62,6 +62,67 @@ pub struct Detector {
     /// Frame-sized buffers kept between frames: allocating them afresh costs a page fault
     /// per 4 kB, as much time as the stage that fills them. Not shared by clones.
     scratch: Mutex<Scratch>,
+    /// Where the last detection's time went.
+    stages: Mutex<StageTimes>,
+}
+
+/// Where one detection's time went (s), stage by stage, and how much each stage passed on:
+/// what a profile needs, kept by the detector for its last detection
+/// ([`Detector::last_stages`]). Timing costs a clock read per stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Decimation (and `quad_sigma`'s blur).
+    pub decimate_s: f64,
+    /// The adaptive threshold.
+    pub threshold_s: f64,
+    /// Connected components.
+    pub components_s: f64,
+    /// Gradient clusters.
+    pub clusters_s: f64,
+    /// Quad fitting.
+    pub quads_s: f64,
+    /// Per quad at full resolution: edge refit, decoding, the border fit.
+    pub tags_s: f64,
+    /// Removing duplicates, sorting, moving to JawTrack's pixel convention.
+    pub finish_s: f64,
+    /// Clusters found.
+    pub clusters: usize,
+    /// Quads fitted.
+    pub quads: usize,
+    /// Tags decoded.
+    pub tags: usize,
+}
+
+impl std::ops::Add for StageTimes {
+    type Output = StageTimes;
+
+    fn add(self, o: StageTimes) -> StageTimes {
+        StageTimes {
+            decimate_s: self.decimate_s + o.decimate_s,
+            threshold_s: self.threshold_s + o.threshold_s,
+            components_s: self.components_s + o.components_s,
+            clusters_s: self.clusters_s + o.clusters_s,
+            quads_s: self.quads_s + o.quads_s,
+            tags_s: self.tags_s + o.tags_s,
+            finish_s: self.finish_s + o.finish_s,
+            clusters: self.clusters + o.clusters,
+            quads: self.quads + o.quads,
+            tags: self.tags + o.tags,
+        }
+    }
+}
+
+impl StageTimes {
+    /// All stages.
+    pub fn total_s(&self) -> f64 {
+        self.decimate_s
+            + self.threshold_s
+            + self.components_s
+            + self.clusters_s
+            + self.quads_s
+            + self.tags_s
+            + self.finish_s
+    }
 }
 
 impl Clone for Detector {
@@ -72,6 +133,7 @@ impl Clone for Detector {
             tone: Mutex::new(self.tone_state().clone()),
             workers: Arc::clone(&self.workers),
             scratch: Mutex::new(Scratch::default()),
+            stages: Mutex::new(StageTimes::default()),
         }
     }
 }
@@ -96,7 +158,14 @@ impl Detector {
             tone: Mutex::new(ToneState::new(&config)),
             workers: Arc::new(Workers::new(config.nthreads)),
             scratch: Mutex::new(Scratch::default()),
+            stages: Mutex::new(StageTimes::default()),
         })
+    }
+
+    /// Where the time of the last detection (of this detector, on any thread) went: a
+    /// detection through a region and a second one of the whole frame count as two.
+    pub fn last_stages(&self) -> StageTimes {
+        *self.stages.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// The settings.
@@ -229,6 +298,8 @@ impl Detector {
                 &mut own
             }
         };
+        let mut clock = Clock::start();
+        let mut st = StageTimes::default();
         let blur = c.quad_sigma != 0.0;
         if c.quad_decimate > 1.0 {
             decimate_into(im, c.quad_decimate, &mut s.decimated);
@@ -252,11 +323,18 @@ impl Detector {
         // Undecimated, C blurs the frame itself, so edges are refined and bits read on the
         // blurred frame too.
         let im = if c.quad_decimate > 1.0 { im } else { &quad_im };
+        st.decimate_s = clock.lap();
         threshold_into(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold);
+        st.threshold_s = clock.lap();
         let uf = s.regions.get_or_insert_with(|| UnionFind::new(0));
         connected_components_into(&s.threshold, uf);
+        st.components_s = clock.lap();
         let clusters = gradient_clusters_with(&s.threshold, uf, &mut s.pixel_region);
+        st.clusters_s = clock.lap();
         let mut quads = fit_quads(&clusters, &quad_im, &c.quad, c.quad_decimate, &self.workers);
+        st.quads_s = clock.lap();
+        st.clusters = clusters.len();
+        st.quads = quads.len();
         if c.quad_decimate > 1.0 {
             for q in &mut quads {
                 for p in &mut q.p {
@@ -289,6 +367,7 @@ impl Detector {
                 d
             })
         });
+        st.tags_s = clock.lap();
         let mut dets = reconcile(dets);
         // C sorts by id; ties keep a deterministic order here (by position).
         dets.sort_by(|a, b| {
@@ -314,7 +393,27 @@ impl Detector {
                 h[8],
             ];
         }
+        st.finish_s = clock.lap();
+        st.tags = dets.len();
+        *self.stages.lock().unwrap_or_else(|p| p.into_inner()) = st;
         dets
+    }
+}
+
+/// Lap times.
+struct Clock(std::time::Instant);
+
+impl Clock {
+    fn start() -> Self {
+        Clock(std::time::Instant::now())
+    }
+
+    /// Seconds since the last lap (or the start).
+    fn lap(&mut self) -> f64 {
+        let now = std::time::Instant::now();
+        let s = (now - self.0).as_secs_f64();
+        self.0 = now;
+        s
     }
 }
 
