@@ -6,7 +6,9 @@
 
 use crate::components::UnionFind;
 use crate::gray::Gray;
+use crate::workers::Workers;
 use rustc_hash::FxHashMap;
+use std::sync::{Mutex, PoisonError};
 
 /// Regions smaller than this take no part in clusters (hard-coded in C as well).
 const MIN_REGION_PIXELS: u32 = 25;
@@ -37,6 +39,13 @@ pub fn gradient_clusters(t: &Gray, uf: &mut UnionFind) -> Vec<Vec<Pt>> {
 
 /// [`gradient_clusters`] with a caller's buffer for each pixel's region.
 pub fn gradient_clusters_with(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>) -> Vec<Vec<Pt>> {
+    gradient_clusters_par(t, uf, region, &Workers::single())
+}
+
+/// [`gradient_clusters_with`] with the rows shared out over `workers` by bands: each band
+/// gathers its own clusters, and they are joined in band order, so every cluster holds the
+/// same points in the same order as from one scan.
+pub fn gradient_clusters_par(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>, workers: &Workers) -> Vec<Vec<Pt>> {
     let (w, h) = (t.width, t.height);
     if w < 3 || h < 3 {
         return Vec::new();
@@ -45,16 +54,67 @@ pub fn gradient_clusters_with(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32
     // are inside a region or unknown and never need one.
     region.clear();
     region.resize(w * h, UNSET);
-    let d = &t.data;
-    let mut region_of = |i: usize, region: &mut Vec<u32>| -> u32 {
-        if region[i] == UNSET {
-            let rep = uf.find(i as u32);
-            region[i] = if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep };
-        }
-        region[i]
-    };
+    let bands = workers.band_ranges(h);
+    if bands.len() == 1 {
+        let mut out = Clusters::default();
+        let mut lookup = |i: u32| {
+            let rep = uf.find(i);
+            (rep, uf.set_size(rep))
+        };
+        scan_band(t, 0..h, region, &mut lookup, &mut out);
+        return out.clusters;
+    }
+    let uf: &UnionFind = uf;
+    let outs: Vec<Mutex<Clusters>> = bands.iter().map(|_| Mutex::default()).collect();
+    let mut jobs = Vec::with_capacity(bands.len());
+    let mut rest = &mut region[..];
+    for (rows, out) in bands.iter().zip(&outs) {
+        let (piece, tail) = rest.split_at_mut(rows.len() * w);
+        jobs.push((rows.clone(), piece, out));
+        rest = tail;
+    }
+    workers.each(jobs, |(rows, piece, out)| {
+        // Shared by the threads, so looked up without shortening paths.
+        let mut lookup = |i: u32| {
+            let rep = uf.root(i);
+            (rep, uf.set_size(rep))
+        };
+        let mut clusters = Clusters::default();
+        scan_band(t, rows, piece, &mut lookup, &mut clusters);
+        *out.lock().unwrap_or_else(PoisonError::into_inner) = clusters;
+    });
+    let results = outs.into_iter().map(|m| m.into_inner().unwrap_or_else(PoisonError::into_inner));
     let mut out = Clusters::default();
-    for y in 1..h - 1 {
+    for band in results {
+        for (key, points) in band.keys.into_iter().zip(band.clusters) {
+            out.extend(key, points);
+        }
+    }
+    out.clusters
+}
+
+/// The scan of rows `rows` (those of them inside the border), `region` being their pixels'
+/// region cache and `lookup` a pixel's region and its size.
+fn scan_band(
+    t: &Gray,
+    rows: std::ops::Range<usize>,
+    region: &mut [u32],
+    lookup: &mut dyn FnMut(u32) -> (u32, u32),
+    out: &mut Clusters,
+) {
+    let (w, h) = (t.width, t.height);
+    let offset = rows.start * w;
+    let d = &t.data;
+    let mut region_of = |i: usize, region: &mut [u32]| -> u32 {
+        let from_rep = |(rep, size): (u32, u32)| if size < MIN_REGION_PIXELS { NO_REGION } else { rep };
+        // The row below a band belongs to the next band's cache.
+        let Some(cached) = region.get_mut(i.wrapping_sub(offset)) else { return from_rep(lookup(i as u32)) };
+        if *cached == UNSET {
+            *cached = from_rep(lookup(i as u32));
+        }
+        *cached
+    };
+    for y in rows.start.max(1)..rows.end.min(h - 1) {
         let mut connected_last = false;
         for x in 1..w - 1 {
             let i0 = y * w + x;
@@ -93,7 +153,6 @@ pub fn gradient_clusters_with(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32
             connected_last = conn(below + 1, 1, 1);
         }
     }
-    out.clusters
 }
 
 /// Clusters keyed by their pair of regions, in order of creation.
@@ -103,25 +162,43 @@ struct Clusters {
     /// The last key and its cluster: runs of points share one, so most lookups are skipped.
     last: Option<(u64, usize)>,
     clusters: Vec<Vec<Pt>>,
+    /// Each cluster's key.
+    keys: Vec<u64>,
 }
 
 impl Clusters {
-    #[inline(always)]
-    fn push(&mut self, rep0: u32, rep1: u32, p: Pt) {
-        let key = (u64::from(rep0.min(rep1)) << 32) | u64::from(rep0.max(rep1));
-        let i = match self.last {
+    /// The cluster of `key`, made if new.
+    fn slot(&mut self, key: u64) -> usize {
+        match self.last {
             Some((k, i)) if k == key => i,
             _ => {
                 let n = self.clusters.len();
                 let i = *self.index.entry(key).or_insert(n);
                 if i == n {
                     self.clusters.push(Vec::new());
+                    self.keys.push(key);
                 }
                 self.last = Some((key, i));
                 i
             }
-        };
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, rep0: u32, rep1: u32, p: Pt) {
+        let key = (u64::from(rep0.min(rep1)) << 32) | u64::from(rep0.max(rep1));
+        let i = self.slot(key);
         self.clusters[i].push(p);
+    }
+
+    /// Appends a later band's points of `key`.
+    fn extend(&mut self, key: u64, points: Vec<Pt>) {
+        let i = self.slot(key);
+        if self.clusters[i].is_empty() {
+            self.clusters[i] = points;
+        } else {
+            self.clusters[i].extend(points);
+        }
     }
 }
 

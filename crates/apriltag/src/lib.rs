@@ -19,8 +19,9 @@
 //! 1, 27.5 px at decimate 2 — the same as C (`tests/detector_geometry.rs`). Speed, recall,
 //! accuracy and memory against C: `crates/detector-bench/BENCHMARKS.md`.
 //!
-//! With `nthreads` > 1, quad fitting and decoding run on a thread pool ([`workers`]), with the
-//! same results as one thread.
+//! With `nthreads` > 1, the image stages (decimation, threshold, regions, clusters) run by bands
+//! of rows and quad fitting and decoding by cluster and quad on a thread pool ([`workers`]),
+//! with the same results as one thread.
 //!
 //! [`TagDetector`] is what any detector backend offers; ours and the C library's
 //! (`jawtrack-apriltag-reference`) implement it.

@@ -6,6 +6,7 @@
 
 use crate::gray::Gray;
 use crate::image::ImageView;
+use crate::workers::Workers;
 
 /// Decimates by 1.5, 2, 3 or 4 (any other factor is taken as its integer part, at least 1).
 pub fn decimate(im: &ImageView<'_>, factor: f32) -> Gray {
@@ -37,13 +38,43 @@ pub fn decimate_into(im: &ImageView<'_>, factor: f32, out: &mut Gray) {
         }
         return;
     }
+    decimate_with(im, factor, out, &Workers::single());
+}
+
+/// [`decimate_into`] with the rows shared out over `workers` (integer factors; 1.5 runs on one
+/// thread).
+pub fn decimate_with(im: &ImageView<'_>, factor: f32, out: &mut Gray, workers: &Workers) {
+    if factor == 1.5 {
+        return decimate_into(im, factor, out);
+    }
     let n = (factor as usize).max(1);
+    let (w, h) = (im.width(), im.height());
     let (sw, sh) = (1 + (w - 1) / n, 1 + (h - 1) / n);
+    // Every pixel is written below: the fill only sizes a buffer that is new or resized.
     out.width = sw;
     out.height = sh;
-    out.data.clear();
-    for y in (0..h).step_by(n) {
-        out.data.extend(im.row(y).iter().step_by(n));
+    out.data.resize(sw * sh, 0);
+    workers.rows_mut(&mut out.data, sw, |rows, piece| keep_every(im, n, piece, rows));
+}
+
+/// Output rows `rows` of decimating by `n` (every n-th pixel of every n-th row) into `out`.
+fn keep_every(im: &ImageView<'_>, n: usize, out: &mut [u8], rows: std::ops::Range<usize>) {
+    let sw = 1 + (im.width() - 1) / n;
+    for (y, dst) in rows.zip(out.chunks_exact_mut(sw)) {
+        let src = im.row(y * n);
+        if n == 2 {
+            // Pairs, so the loop vectorises; an odd width leaves its last pixel.
+            for (d, pair) in dst.iter_mut().zip(src.chunks_exact(2)) {
+                *d = pair[0];
+            }
+            if src.len() % 2 == 1 {
+                dst[sw - 1] = src[src.len() - 1];
+            }
+        } else {
+            for (d, &v) in dst.iter_mut().zip(src.iter().step_by(n)) {
+                *d = v;
+            }
+        }
     }
 }
 

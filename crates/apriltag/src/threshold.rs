@@ -7,6 +7,7 @@
 
 use crate::gray::Gray;
 use crate::image::ImageView;
+use crate::workers::Workers;
 
 const TILE: usize = 4;
 
@@ -19,35 +20,45 @@ pub fn threshold(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool) -
 
 /// [`threshold`] into `out`, reusing its allocation.
 pub fn threshold_into(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool, out: &mut Gray) {
+    threshold_with(im, min_white_black_diff, deglitch, out, &Workers::single());
+}
+
+/// [`threshold_into`] with the tiles' extremes and the pixels shared out over `workers` by
+/// bands of rows.
+pub fn threshold_with(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bool, out: &mut Gray, workers: &Workers) {
     let (w, h) = (im.width(), im.height());
     let (tw, th) = (w / TILE, h / TILE);
-    out.reset(w, h, 127);
     if tw == 0 || th == 0 {
         // Smaller than one tile: nothing can be told apart.
+        out.reset(w, h, 127);
         return;
     }
-    let mut tmax = vec![0u8; tw * th];
-    let mut tmin = vec![255u8; tw * th];
-    // Column-wise over the tile's 4 rows first (vectorises), then across each tile's 4 columns.
-    let (mut col_hi, mut col_lo) = (vec![0u8; tw * TILE], vec![255u8; tw * TILE]);
-    for ty in 0..th {
-        col_hi.fill(0);
-        col_lo.fill(255);
-        for dy in 0..TILE {
-            let row = &im.row(ty * TILE + dy)[..tw * TILE];
-            for ((&v, hi), lo) in row.iter().zip(col_hi.iter_mut()).zip(col_lo.iter_mut()) {
-                *hi = (*hi).max(v);
-                *lo = (*lo).min(v);
+    // Every pixel is written below: the fill only sizes a buffer that is new or resized.
+    out.width = w;
+    out.height = h;
+    out.data.resize(w * h, 127);
+    // Each tile's (max, min).
+    let mut extremes = vec![[0u8, 255u8]; tw * th];
+    workers.rows_mut(&mut extremes, tw, |tile_rows, piece| {
+        // Column-wise over the tile's 4 rows first (vectorises), then across each tile's 4 columns.
+        let (mut col_hi, mut col_lo) = (vec![0u8; tw * TILE], vec![255u8; tw * TILE]);
+        for (ty, tiles) in tile_rows.zip(piece.chunks_exact_mut(tw)) {
+            col_hi.fill(0);
+            col_lo.fill(255);
+            for dy in 0..TILE {
+                let row = &im.row(ty * TILE + dy)[..tw * TILE];
+                for ((&v, hi), lo) in row.iter().zip(col_hi.iter_mut()).zip(col_lo.iter_mut()) {
+                    *hi = (*hi).max(v);
+                    *lo = (*lo).min(v);
+                }
+            }
+            for ((t, hi), lo) in tiles.iter_mut().zip(col_hi.chunks_exact(TILE)).zip(col_lo.chunks_exact(TILE)) {
+                *t = [hi[0].max(hi[1]).max(hi[2].max(hi[3])), lo[0].min(lo[1]).min(lo[2].min(lo[3]))];
             }
         }
-        let (tmax, tmin) = (&mut tmax[ty * tw..][..tw], &mut tmin[ty * tw..][..tw]);
-        for (hi, c) in tmax.iter_mut().zip(col_hi.chunks_exact(TILE)) {
-            *hi = c[0].max(c[1]).max(c[2].max(c[3]));
-        }
-        for (lo, c) in tmin.iter_mut().zip(col_lo.chunks_exact(TILE)) {
-            *lo = c[0].min(c[1]).min(c[2].min(c[3]));
-        }
-    }
+    });
+    let tmax: Vec<u8> = extremes.iter().map(|e| e[0]).collect();
+    let tmin: Vec<u8> = extremes.iter().map(|e| e[1]).collect();
     // Spread over the 3×3 tile neighbourhood so thresholds do not jump between tiles (a
     // separable max and min: along rows, then down columns). Each tile's threshold is the
     // midpoint; `known` is 0 where the contrast is too low to tell.
@@ -83,27 +94,30 @@ pub fn threshold_into(im: &ImageView<'_>, min_white_black_diff: u8, deglitch: bo
     let known: Vec<u8> =
         hi.iter().zip(&lo).map(|(&hi, &lo)| if hi - lo >= min_white_black_diff { 0xff } else { 0 }).collect();
     let cut = |v: u8, t: u8| -> u8 { if v > t { 255 } else { 0 } };
-    // Per pixel of a tile row: its tile's threshold and whether it is known, so the pixel loop
-    // is branch-free and vectorises.
-    let (mut thr, mut mask) = (vec![0u8; tw * TILE], vec![0u8; tw * TILE]);
-    for y in 0..th * TILE {
-        if y % TILE == 0 {
-            let tiles = (y / TILE) * tw..(y / TILE + 1) * tw;
-            for ((t, m), (&c, &k)) in thr
-                .chunks_exact_mut(TILE)
-                .zip(mask.chunks_exact_mut(TILE))
-                .zip(cuts[tiles.clone()].iter().zip(&known[tiles]))
-            {
-                t.fill(c);
-                m.fill(k);
+    workers.rows_mut(&mut out.data[..th * TILE * w], w, |rows, piece| {
+        // Per pixel of a tile row: its tile's threshold and whether it is known, so the pixel
+        // loop is branch-free and vectorises.
+        let (mut thr, mut mask) = (vec![0u8; tw * TILE], vec![0u8; tw * TILE]);
+        let first = rows.start;
+        for (y, out_row) in rows.zip(piece.chunks_exact_mut(w)) {
+            if y % TILE == 0 || y == first {
+                let tiles = (y / TILE) * tw..(y / TILE + 1) * tw;
+                for ((t, m), (&c, &k)) in thr
+                    .chunks_exact_mut(TILE)
+                    .zip(mask.chunks_exact_mut(TILE))
+                    .zip(cuts[tiles.clone()].iter().zip(&known[tiles]))
+                {
+                    t.fill(c);
+                    m.fill(k);
+                }
+            }
+            let (row, out_row) = (&im.row(y)[..tw * TILE], &mut out_row[..tw * TILE]);
+            for (((o, &v), &t), &m) in out_row.iter_mut().zip(row).zip(&thr).zip(&mask) {
+                // Known: 0 or 255 by the threshold; unknown: 127.
+                *o = (cut(v, t) & m) | (127 & !m);
             }
         }
-        let (row, out_row) = (&im.row(y)[..tw * TILE], &mut out.data[y * w..][..tw * TILE]);
-        for (((o, &v), &t), &m) in out_row.iter_mut().zip(row).zip(&thr).zip(&mask) {
-            // Known: 0 or 255 by the threshold; unknown: 127.
-            *o = (cut(v, t) & m) | (127 & !m);
-        }
-    }
+    });
     // Right of and below the last whole tile: the nearest tile, without the contrast test.
     for y in 0..h {
         let x0 = if y >= th * TILE { 0 } else { tw * TILE };

@@ -61,6 +61,7 @@ fn decimation_threshold_regions_clusters_and_quads_match_c() {
             let ours_thr = threshold::threshold(&ours_pre.view().expect("non-empty"), diff as u8, deglitch);
             let differing = ours_thr.data.iter().zip(c_thr.as_raw()).filter(|(a, b)| a != b).count();
             assert_eq!(differing, 0, "{label}: {differing} threshold pixels differ");
+            bands_match_one_thread(&view, &ours_pre, &ours_thr, (decimate, deglitch, diff as u8), &label);
             compare_segmentation(&ours_thr, &dir.join("debug_segmentation.pnm"), &label);
             compare_clusters(&ours_thr, &dir.join("debug_clusters.pnm"), &label);
             total_quads += compare_quads(&ours_pre, &ours_thr, &dir.join("debug_lines.ps"), decimate, diff, &label);
@@ -75,6 +76,41 @@ fn decimation_threshold_regions_clusters_and_quads_match_c() {
     );
     assert_eq!(compared, settings.len() * want.len(), "every setting on every frame");
     assert!(total_quads > 100, "too few quads compared: {total_quads}");
+}
+
+/// The stages split into bands of rows over three threads give what one thread gives: the
+/// same decimated and threshold images, the same regions (their representatives may differ),
+/// the same clusters point for point.
+fn bands_match_one_thread(
+    view: &ImageView<'_>,
+    pre: &jawtrack_apriltag::Gray,
+    thr: &jawtrack_apriltag::Gray,
+    (decimate, deglitch, diff): (f32, bool, u8),
+    label: &str,
+) {
+    let many = Workers::new(3);
+    assert!(many.band_ranges(thr.height).len() > 4, "{label}: too few bands to test the seams");
+    if decimate != 1.0 {
+        let mut banded = jawtrack_apriltag::Gray::default();
+        preprocess::decimate_with(view, decimate, &mut banded, &many);
+        assert!(banded == *pre, "{label}: decimation in bands differs");
+    }
+    let mut banded = jawtrack_apriltag::Gray::default();
+    threshold::threshold_with(&pre.view().expect("non-empty"), diff, deglitch, &mut banded, &many);
+    assert!(banded == *thr, "{label}: threshold in bands differs");
+    let mut one = components::connected_components(thr);
+    let mut split = components::UnionFind::new(0);
+    components::connected_components_with(thr, &mut split, &many);
+    let (mut to_split, mut to_one) = (HashMap::new(), HashMap::new());
+    for i in 0..(thr.width * thr.height) as u32 {
+        let (a, b) = (one.find(i), split.find(i));
+        assert_eq!(*to_split.entry(a).or_insert(b), b, "{label}: pixel {i}: one region becomes two");
+        assert_eq!(*to_one.entry(b).or_insert(a), a, "{label}: pixel {i}: two regions become one");
+        assert_eq!(one.set_size(a), split.set_size(b), "{label}: pixel {i}: region sizes differ");
+    }
+    let want = clusters::gradient_clusters(thr, &mut one);
+    let got = clusters::gradient_clusters_par(thr, &mut split, &mut Vec::new(), &many);
+    assert!(got == want, "{label}: clusters in bands differ ({} vs {} clusters)", got.len(), want.len());
 }
 
 /// C colours every region of at least 5 pixels (`min_cluster_pixels`) with a random colour

@@ -5,15 +5,15 @@
 //! modules); this one adds only the bookkeeping and JawTrack's pixel convention.
 
 use crate::DetectError;
-use crate::clusters::gradient_clusters_with;
-use crate::components::{UnionFind, connected_components_into};
+use crate::clusters::gradient_clusters_par;
+use crate::components::{UnionFind, connected_components_with};
 use crate::config::{DetectorConfig, Roi};
 use crate::decode::CodeTable;
 use crate::gray::Gray;
 use crate::image::ImageView;
-use crate::preprocess::{blur_or_sharpen, decimate_into};
+use crate::preprocess::{blur_or_sharpen, decimate_with};
 use crate::quads::{Quad, fit_quads};
-use crate::threshold::threshold_into;
+use crate::threshold::threshold_with;
 use crate::tone::{ToneSession, ToneSummary};
 use crate::workers::Workers;
 use edges::refine_edges;
@@ -302,7 +302,7 @@ impl Detector {
         let mut st = StageTimes::default();
         let blur = c.quad_sigma != 0.0;
         if c.quad_decimate > 1.0 {
-            decimate_into(im, c.quad_decimate, &mut s.decimated);
+            decimate_with(im, c.quad_decimate, &mut s.decimated, &self.workers);
         } else if blur {
             s.decimated.reset(im.width(), im.height(), 0);
             for (y, row) in s.decimated.data.chunks_exact_mut(im.width()).enumerate() {
@@ -324,12 +324,12 @@ impl Detector {
         // blurred frame too.
         let im = if c.quad_decimate > 1.0 { im } else { &quad_im };
         st.decimate_s = clock.lap();
-        threshold_into(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold);
+        threshold_with(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold, &self.workers);
         st.threshold_s = clock.lap();
         let uf = s.regions.get_or_insert_with(|| UnionFind::new(0));
-        connected_components_into(&s.threshold, uf);
+        connected_components_with(&s.threshold, uf, &self.workers);
         st.components_s = clock.lap();
-        let clusters = gradient_clusters_with(&s.threshold, uf, &mut s.pixel_region);
+        let clusters = gradient_clusters_par(&s.threshold, uf, &mut s.pixel_region, &self.workers);
         st.clusters_s = clock.lap();
         let mut quads = fit_quads(&clusters, &quad_im, &c.quad, c.quad_decimate, &self.workers);
         st.quads_s = clock.lap();
