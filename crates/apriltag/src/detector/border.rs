@@ -21,6 +21,7 @@
 //! side along the motion is not smeared, so a tag's blur is the second-sharpest of its sides:
 //! what the lens did, which is what [`crate::Detection::blur_px`] reports.
 
+use super::gauss::cdf_pdf;
 use crate::image::ImageView;
 use jawtrack_tag_family::TagBitmap;
 use nalgebra::{SMatrix, SVector};
@@ -233,15 +234,6 @@ pub(super) fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f
     Some(out)
 }
 
-/// The standard normal CDF and density.
-fn cdf(z: f64) -> f64 {
-    0.5 * (1.0 + libm::erf(z * std::f64::consts::FRAC_1_SQRT_2))
-}
-
-fn pdf(z: f64) -> f64 {
-    (-0.5 * z * z).exp() * 0.398_942_280_401_432_7
-}
-
 /// A profile's columns under the current blur: each band's value (the columns' prints weighed
 /// by the Gaussian's mass over each column), and its derivatives in paper, ink, beyond and σ.
 struct Rows {
@@ -258,8 +250,9 @@ fn rows(p: &Profile, q: &Params) -> Rows {
     below[COLUMNS] = 1.0;
     for (k, &t) in p.columns.iter().enumerate() {
         let z = t / s;
-        below[k + 1] = cdf(z);
-        d_below[k + 1] = -pdf(z) * z / s;
+        let (cdf, pdf) = cdf_pdf(z);
+        below[k + 1] = cdf;
+        d_below[k + 1] = -pdf * z / s;
     }
     let mut r = Rows { value: [0.0; BANDS], d_levels: [[0.0; 3]; BANDS], d_sigma: [0.0; BANDS] };
     let levels = [q[3], q[4], q[5]];
@@ -295,13 +288,7 @@ fn model(p: &Profile, rows: &Rows, t: f64, q: &Params) -> (f64, Params) {
         let pos = if k == 0 { e + margin * p.across[0] } else { e + p.across[k] };
         let z = (t - pos) / s;
         // The share of the blur (centred at t) lying inward of the boundary: Φ(z).
-        let (phi, dens) = if z > 8.0 {
-            (1.0, 0.0)
-        } else if z < -8.0 {
-            (0.0, 0.0)
-        } else {
-            (cdf(z), pdf(z))
-        };
+        let (phi, dens) = cdf_pdf(z);
         above[k + 1] = phi;
         d_e[k + 1] = -dens / s;
         d_s[k + 1] = -dens * z / s;

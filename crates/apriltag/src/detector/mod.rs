@@ -22,6 +22,7 @@ use std::sync::{Arc, Mutex, TryLockError};
 
 mod border;
 mod edges;
+mod gauss;
 mod tone_fit;
 
 pub use border::PIXEL_SIGMA_PX;
