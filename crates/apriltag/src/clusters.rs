@@ -114,19 +114,39 @@ fn scan_band(
         }
         *cached
     };
+    // Per row, whether each pixel can start a point: not unknown (127), with an opposite
+    // neighbour to the right or below (values summing to 255, i.e. differing in every bit).
+    // Computed for the whole row at once, so it vectorises, leaving the scan to the few
+    // pixels on a boundary.
+    let mut starts = vec![0u8; w];
     for y in rows.start.max(1)..rows.end.min(h - 1) {
+        let (row, next) = (&d[y * w..(y + 1) * w], &d[(y + 1) * w..(y + 2) * w]);
+        for (x, s) in starts.iter_mut().enumerate().take(w - 1).skip(1) {
+            let v = row[x];
+            let any = ((v ^ row[x + 1]) == 255)
+                | ((v ^ next[x - 1]) == 255)
+                | ((v ^ next[x]) == 255)
+                | ((v ^ next[x + 1]) == 255);
+            *s = u8::from(any & (v != 127));
+        }
         let mut connected_last = false;
-        for x in 1..w - 1 {
-            let i0 = y * w + x;
-            let v0 = d[i0];
-            let below = i0 + w;
-            // Opposite values sum to 255 (an unknown 127 never does): without an opposite
-            // neighbour to the right or below, no point starts here.
-            let opposite = |i: usize| u16::from(v0) + u16::from(d[i]) == 255;
-            if v0 == 127 || !(opposite(i0 + 1) || opposite(below - 1) || opposite(below) || opposite(below + 1)) {
+        let mut next_x = 1;
+        while next_x < w - 1 {
+            let x = next_x;
+            if x + 8 <= w - 1 && starts[x..x + 8] == [0; 8] {
+                connected_last = false;
+                next_x += 8;
+                continue;
+            }
+            next_x += 1;
+            if starts[x] == 0 {
                 connected_last = false;
                 continue;
             }
+            let i0 = y * w + x;
+            let v0 = d[i0];
+            let below = i0 + w;
+            let opposite = |i: usize| (v0 ^ d[i]) == 255;
             let rep0 = region_of(i0, region);
             if rep0 == NO_REGION {
                 connected_last = false;

@@ -141,6 +141,13 @@ pub fn connected_components_with(t: &Gray, uf: &mut UnionFind, workers: &Workers
     }
 }
 
+/// The eight bytes of `a` from `i` as one word.
+fn word(a: &[u8], i: usize) -> u64 {
+    let mut b = [0u8; 8];
+    b.copy_from_slice(&a[i..i + 8]);
+    u64::from_le_bytes(b)
+}
+
 /// Which of a row's joins to make: along the row, and to the row above.
 #[derive(Clone, Copy)]
 struct Joins {
@@ -150,46 +157,74 @@ struct Joins {
 
 /// C's scan of row `y`: each pixel joins its left neighbour, and (not in the first row) the
 /// ones above it that C's shortcuts leave.
+///
+/// The joins along the row are made first, run by run: every pixel of a run of equal values
+/// that C's scan would join one by one (from column 1 to `w` − 2, each to its left neighbour)
+/// points straight at the run's first pixel. Each is still alone when this is done (only its
+/// own row's joins reach it before), so no set is searched; then come the joins upward, which
+/// inside a region C's shortcuts keep to about one per run.
 fn scan_row(t: &Gray, y: usize, sets: &mut Sets<'_>, joins: Joins) {
     let w = t.width;
-    let px = |x: usize, y: usize| t.data[y * w + x];
+    let row = &t.data[y * w..(y + 1) * w];
     let idx = |x: usize, y: usize| (y * w + x) as u32;
+    if joins.left {
+        let o = sets.offset;
+        let mut x = 1;
+        while x < w - 1 {
+            let v = row[x];
+            if v == 127 || row[x - 1] != v {
+                x += 1;
+                continue;
+            }
+            // Columns x..end join x − 1, the run's head.
+            let head = x - 1;
+            let mut end = x + 1;
+            while end < w - 1 && row[end] == v {
+                end += 1;
+            }
+            let h = idx(head, y);
+            for i in x..end {
+                sets.parent[(idx(i, y) - o) as usize] = h;
+            }
+            sets.size[(h - o) as usize] += (end - x) as u32;
+            x = end;
+        }
+    }
     if y == 0 || !joins.up {
-        if joins.left {
-            for x in 1..w - 1 {
-                let v = px(x, y);
-                if v != 127 && px(x - 1, y) == v {
-                    sets.union(idx(x, y), idx(x - 1, y));
+        return;
+    }
+    let above = &t.data[(y - 1) * w..y * w];
+    let mut x = 1;
+    while x < w - 1 {
+        // Eight pixels that join nothing upward are passed over at once: unknown ones, or ones
+        // inside a region that fills both rows (the shortcuts skip all their joins).
+        if x > 1 && x + 9 <= w {
+            let all_v = u64::from(row[x]) * 0x0101_0101_0101_0101;
+            if word(row, x) == all_v
+                && (row[x] == 127
+                    || (row[x - 1] == row[x] && word(above, x - 1) == all_v && word(above, x + 1) == all_v))
+            {
+                x += 8;
+                continue;
+            }
+        }
+        let (up_left, up, up_right) = (above[x - 1], above[x], above[x + 1]);
+        let (left, v) = (row[x - 1], row[x]);
+        if v != 127 {
+            // The shortcuts skip unions that earlier ones already imply.
+            if (x == 1 || !(left == up_left && up_left == up)) && up == v {
+                sets.union(idx(x, y), idx(x, y - 1));
+            }
+            if v == 255 {
+                if (x == 1 || !(left == up_left || up == up_left)) && up_left == v {
+                    sets.union(idx(x, y), idx(x - 1, y - 1));
+                }
+                if up != up_right && up_right == v {
+                    sets.union(idx(x, y), idx(x + 1, y - 1));
                 }
             }
         }
-        return;
-    }
-    let (mut up, mut up_right, mut v) = (px(0, y - 1), px(1, y - 1), px(0, y));
-    for x in 1..w - 1 {
-        let up_left = up;
-        up = up_right;
-        up_right = px(x + 1, y - 1);
-        let left = v;
-        v = px(x, y);
-        if v == 127 {
-            continue;
-        }
-        if joins.left && left == v {
-            sets.union(idx(x, y), idx(x - 1, y));
-        }
-        // The shortcuts skip unions that earlier ones already imply.
-        if (x == 1 || !(left == up_left && up_left == up)) && up == v {
-            sets.union(idx(x, y), idx(x, y - 1));
-        }
-        if v == 255 {
-            if (x == 1 || !(left == up_left || up == up_left)) && up_left == v {
-                sets.union(idx(x, y), idx(x - 1, y - 1));
-            }
-            if up != up_right && up_right == v {
-                sets.union(idx(x, y), idx(x + 1, y - 1));
-            }
-        }
+        x += 1;
     }
 }
 
@@ -227,5 +262,112 @@ mod tests {
         // The unknown pixel stays alone.
         let r = uf.find(at(3, 1));
         assert_eq!(uf.set_size(r), 1);
+    }
+
+    /// The regions by a plain flood fill over C's joins: along rows and columns between equal
+    /// known pixels, diagonally upward between light ones, each from a pixel in columns
+    /// 1..w − 1 (the shortcuts skip only joins already implied, but for one case below).
+    fn flood(t: &Gray) -> Vec<usize> {
+        let (w, h) = (t.width, t.height);
+        let mut edges: Vec<Vec<usize>> = vec![Vec::new(); w * h];
+        let mut join = |a: usize, b: usize| {
+            edges[a].push(b);
+            edges[b].push(a);
+        };
+        for y in 0..h {
+            for x in 1..w - 1 {
+                let (i, v) = (y * w + x, t.data[y * w + x]);
+                if v == 127 {
+                    continue;
+                }
+                if t.data[i - 1] == v {
+                    join(i, i - 1);
+                }
+                if y > 0 {
+                    let up = i - w;
+                    if t.data[up] == v {
+                        join(i, up);
+                    }
+                    if v == 255 && t.data[up - 1] == v {
+                        join(i, up - 1);
+                    }
+                    // C joins up and to the right only where the pixel above differs: elsewhere
+                    // the join is implied, except next to the last column, which C never
+                    // joins to its left (so a region can end there).
+                    if v == 255 && t.data[up + 1] == v && t.data[up] != v {
+                        join(i, up + 1);
+                    }
+                }
+            }
+        }
+        let mut label = vec![usize::MAX; w * h];
+        for start in 0..w * h {
+            if label[start] != usize::MAX {
+                continue;
+            }
+            let mut stack = vec![start];
+            label[start] = start;
+            while let Some(i) = stack.pop() {
+                for &j in &edges[i] {
+                    if label[j] == usize::MAX {
+                        label[j] = start;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        label
+    }
+
+    #[test]
+    fn runs_skips_and_bands_give_the_regions_of_a_flood_fill() {
+        // A small generator, so the test needs no dependency: blobs of each value on a field
+        // that is flat in places (the skips) and noisy in others (short runs).
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move |n: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state % n
+        };
+        let mut checked = 0;
+        for case in 0..60 {
+            let (w, h) = (3 + next(61) as usize, 1 + next(150) as usize);
+            let mut data = vec![[0u8, 127, 255][next(3) as usize]; w * h];
+            for _ in 0..next(12) {
+                let (x0, y0, x1, y1) = (next(w as u64), next(h as u64), next(w as u64), next(h as u64));
+                let v = [0u8, 127, 255][next(3) as usize];
+                for y in y0.min(y1)..=y0.max(y1) {
+                    for x in x0.min(x1)..=x0.max(x1) {
+                        data[y as usize * w + x as usize] = v;
+                    }
+                }
+            }
+            if case % 3 == 0 {
+                for p in data.iter_mut() {
+                    if next(4) == 0 {
+                        *p = [0u8, 127, 255][next(3) as usize];
+                    }
+                }
+            }
+            let t = Gray { width: w, height: h, data };
+            let want = flood(&t);
+            for threads in [1, 3] {
+                let mut uf = UnionFind::new(0);
+                connected_components_with(&t, &mut uf, &Workers::new(threads));
+                let (mut to_ours, mut to_flood) = (std::collections::HashMap::new(), std::collections::HashMap::new());
+                for (i, &f) in want.iter().enumerate() {
+                    let r = uf.find(i as u32);
+                    assert_eq!(*to_ours.entry(f).or_insert(r), r, "case {case}, {threads} threads: a region split");
+                    assert_eq!(*to_flood.entry(r).or_insert(f), f, "case {case}, {threads} threads: regions merged");
+                }
+                let size = |f: usize| want.iter().filter(|&&g| g == f).count() as u32;
+                for (&f, &r) in &to_ours {
+                    assert_eq!(uf.set_size(r), size(f), "case {case}, {threads} threads: a region's size");
+                }
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 120);
     }
 }
