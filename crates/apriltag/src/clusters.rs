@@ -133,7 +133,7 @@ fn scan_band(
         let mut next_x = 1;
         while next_x < w - 1 {
             let x = next_x;
-            if x + 8 <= w - 1 && starts[x..x + 8] == [0; 8] {
+            if x + 8 < w && starts[x..x + 8] == [0; 8] {
                 connected_last = false;
                 next_x += 8;
                 continue;
