@@ -36,7 +36,7 @@ pub use result::{BodyResult, FrameResult, Timings, tone_record};
 pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX, THIN_RATIO};
 pub use smoothing::{Smoother, SmootherConfig};
 
-use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi};
+use jawtrack_apriltag::{DetectError, Detection, Detector, DetectorConfig, ImageView, Roi, Search};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::motion::to_frame_time;
 use jawtrack_pose::{
@@ -60,11 +60,15 @@ pub struct SearchConfig {
     pub margin: f64,
     /// … and by at least this many pixels.
     pub min_margin_px: f64,
+    /// Find quads in the expected region on a coarser image (decimated by 4) when every tag
+    /// is predicted large enough to be found there with room to spare; a tag it misses sends
+    /// the region to the settings' decimation again.
+    pub pyramid: bool,
 }
 
 impl Default for SearchConfig {
     fn default() -> Self {
-        SearchConfig { region_search: true, full_frame_every: 30, margin: 0.1, min_margin_px: 32.0 }
+        SearchConfig { region_search: true, full_frame_every: 30, margin: 0.1, min_margin_px: 32.0, pyramid: true }
     }
 }
 
@@ -342,8 +346,14 @@ impl Tracker {
         let mut searched = expected;
         // Either body's recent motion predicts a smear of `roi::SMEAR_PX` or more.
         let smeared = self.smears(camera, t).iter().any(|&s| s >= roi::SMEAR_PX);
-        let mut detections = self.detect(frame, expected, smeared)?;
+        let coarse = expected.is_some().then(|| self.coarse_decimation(camera, t)).flatten();
+        let mut detections = self.detect(frame, expected, smeared, coarse)?;
         let mut stages = self.detector.last_stages();
+        if coarse.is_some() && self.lost_a_tag(&detections) {
+            // A tag the coarse image missed: search the region again at the settings' decimation.
+            detections = self.detect(frame, expected, smeared, None)?;
+            stages = stages + self.detector.last_stages();
+        }
         // A body missing from its expected region, or a tag at the region's edge (the
         // prediction was off, and the edge fit there lacks its pixels): search everywhere.
         let missing = BodyKind::ALL.iter().any(|&k| !detections.iter().any(|d| self.body_of(d.id) == Some(k)));
@@ -353,7 +363,7 @@ impl Tracker {
                 .any(|d| roi::near_inner_edge(&d.corners, &r, frame, self.config.search.min_margin_px / 2.0))
         });
         if expected.is_some() && (missing || at_edge) {
-            detections = self.detect(frame, None, smeared)?;
+            detections = self.detect(frame, None, smeared, None)?;
             stages = stages + self.detector.last_stages();
             searched = None;
         }
@@ -371,10 +381,46 @@ impl Tracker {
         Ok(result)
     }
 
-    fn detect(&self, frame: &ImageView<'_>, roi: Option<Roi>, smeared: bool) -> Result<Vec<Detection>, TrackError> {
-        let mut d = self.detector.detect_in_with(frame, roi, smeared || self.config.detector.smeared_edges)?;
+    /// Detects the marker's tags in `roi`, finding quads at `decimate` (the settings' for `None`).
+    fn detect(
+        &self,
+        frame: &ImageView<'_>,
+        roi: Option<Roi>,
+        smeared: bool,
+        decimate: Option<f32>,
+    ) -> Result<Vec<Detection>, TrackError> {
+        let search = Search {
+            roi,
+            smeared: smeared || self.config.detector.smeared_edges,
+            quad_decimate: decimate.unwrap_or(self.config.detector.quad_decimate),
+        };
+        let mut d = self.detector.search(frame, &search)?;
         d.retain(|d| self.marker.find_tag(d.id).is_some());
         Ok(d)
+    }
+
+    /// The coarser decimation ([`roi::COARSE_DECIMATION`]) a region search may find quads at:
+    /// when every tag the bodies were solved from in the last frame is predicted at `t` with
+    /// its shortest side at least [`roi::COARSE_MIN_SIDE_PX`]. `None` when the settings'
+    /// decimation is as coarse, or a tag is smaller or cannot be predicted.
+    fn coarse_decimation(&self, camera: &CameraIntrinsics, t: f64) -> Option<f32> {
+        if !self.config.search.pyramid || self.config.detector.quad_decimate >= roi::COARSE_DECIMATION {
+            return None;
+        }
+        let mut smallest = f64::INFINITY;
+        for b in &self.bodies {
+            let pose = b.predict(t)?;
+            for &id in &b.tags {
+                let (_, tag) = self.marker.find_tag(id)?;
+                smallest = smallest.min(roi::shortest_side_px(&pose, &tag.corners, camera)?);
+            }
+        }
+        (smallest >= roi::COARSE_MIN_SIDE_PX).then_some(roi::COARSE_DECIMATION)
+    }
+
+    /// Whether a tag either body was solved from in the last frame is missing from `detections`.
+    fn lost_a_tag(&self, detections: &[Detection]) -> bool {
+        self.bodies.iter().flat_map(|b| &b.tags).any(|id| !detections.iter().any(|d| d.id == *id))
     }
 
     fn body_of(&self, id: u32) -> Option<BodyKind> {

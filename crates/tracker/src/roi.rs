@@ -12,6 +12,29 @@ pub type Timed = (f64, Pose);
 /// (`DetectorConfig::smeared_edges`): below it an edge stays within the fit's usual window.
 pub(crate) const SMEAR_PX: f64 = 3.0;
 
+/// The decimation a region search finds quads at when every tag is predicted large: a quarter
+/// of the image stages' pixels of decimating by 2 (on the detector benchmark's 4K frames it is
+/// as accurate, `crates/detector-bench/BENCHMARKS.md`).
+pub(crate) const COARSE_DECIMATION: f32 = 4.0;
+/// … when every tag's shortest side is predicted at least this long (px): twice the smallest
+/// tag found at that decimation (about 14 px per unit of decimation, 27.5 px at 2), room for
+/// the prediction's error and the tag's turn.
+pub(crate) const COARSE_MIN_SIDE_PX: f64 = 110.0;
+
+/// The shortest side (px) of the tag whose corners (body frame) are `corners`, seen through
+/// `camera_from_body`; `None` when a corner does not project.
+pub(crate) fn shortest_side_px(
+    camera_from_body: &Pose,
+    corners: &[nalgebra::Vector3<f64>; 4],
+    camera: &CameraIntrinsics,
+) -> Option<f64> {
+    let mut px = [nalgebra::Point2::origin(); 4];
+    for (p, c) in px.iter_mut().zip(corners) {
+        *p = camera.project(&camera_from_body.transform_point(&Point3::from(*c)))?;
+    }
+    Some((0..4).map(|i| (px[(i + 1) % 4] - px[i]).norm()).fold(f64::INFINITY, f64::min))
+}
+
 /// `last` moved on to time `t` with the velocity it had since `previous`: the body's origin
 /// at constant linear velocity, its orientation at constant angular velocity. `last` itself
 /// when the times do not allow it.

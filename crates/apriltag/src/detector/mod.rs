@@ -27,6 +27,17 @@ mod tone_fit;
 
 pub use border::PIXEL_SIGMA_PX;
 
+/// How to search one frame ([`Detector::search`]): what a tracker knows of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Search {
+    /// Only inside this region, in full-frame coordinates (the whole frame for `None`).
+    pub roi: Option<Roi>,
+    /// Fit edges as motion ramps ([`DetectorConfig::smeared_edges`]).
+    pub smeared: bool,
+    /// The decimation quads are found at, in place of the settings' (1, 1.5, 2, 3 or 4).
+    pub quad_decimate: f32,
+}
+
 /// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
 /// (0, 0); the C library reports 0.5 more).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,6 +103,8 @@ pub struct StageTimes {
     pub quads: usize,
     /// Tags decoded.
     pub tags: usize,
+    /// The decimation quads were found at (of the later search, summed).
+    pub quad_decimate: f32,
 }
 
 impl std::ops::Add for StageTimes {
@@ -109,6 +122,7 @@ impl std::ops::Add for StageTimes {
             clusters: self.clusters + o.clusters,
             quads: self.quads + o.quads,
             tags: self.tags + o.tags,
+            quad_decimate: o.quad_decimate,
         }
     }
 }
@@ -209,8 +223,30 @@ impl Detector {
         roi: Option<Roi>,
         smeared: bool,
     ) -> Result<Vec<Detection>, DetectError> {
+        self.search(frame, &Search { roi, smeared, quad_decimate: self.config.quad_decimate })
+    }
+
+    /// Detects tags as `search` says: where, whether edges are smeared, and on how coarse an
+    /// image quads are found (a tracker that expects large tags searches a coarser one). The
+    /// tone curve is estimated as in [`Detector::detect_in_with`].
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use jawtrack_apriltag::{Detector, DetectorConfig, ImageView, Search};
+    ///
+    /// let detector = Detector::new(DetectorConfig::default()).expect("valid settings");
+    /// let frame = vec![128u8; 640 * 480];
+    /// let view = ImageView::new(&frame, 640, 480, 640).expect("a frame");
+    /// let search = Search { roi: None, smeared: false, quad_decimate: 4.0 };
+    /// assert!(detector.search(&view, &search).expect("searched").is_empty());
+    /// ```
+    pub fn search(&self, frame: &ImageView<'_>, search: &Search) -> Result<Vec<Detection>, DetectError> {
+        if search.quad_decimate != self.config.quad_decimate {
+            DetectorConfig { quad_decimate: search.quad_decimate, ..self.config }.validate()?;
+        }
         let lut = self.tone_state().lut.clone();
-        let dets = self.detect_through(frame, roi, smeared, &lut)?;
+        let dets = self.detect_through(frame, search, &lut)?;
         {
             let mut state = self.tone_state();
             if !(self.config.linear_edges && state.session.due()) {
@@ -227,7 +263,7 @@ impl Detector {
             })
         };
         match changed {
-            Some(lut) => self.detect_through(frame, roi, smeared, &lut),
+            Some(lut) => self.detect_through(frame, search, &lut),
             None => Ok(dets),
         }
     }
@@ -235,11 +271,10 @@ impl Detector {
     fn detect_through(
         &self,
         frame: &ImageView<'_>,
-        roi: Option<Roi>,
-        smeared: bool,
+        search: &Search,
         lut: &[f64; 256],
     ) -> Result<Vec<Detection>, DetectError> {
-        let (view, ox, oy) = match roi {
+        let (view, ox, oy) = match search.roi {
             None => (*frame, 0.0, 0.0),
             Some(r) => {
                 if r.x + r.width > frame.width() || r.y + r.height > frame.height() {
@@ -256,7 +291,7 @@ impl Detector {
                 (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
             }
         };
-        let mut dets = self.detect_view(&view, smeared, lut);
+        let mut dets = self.detect_view(&view, search.smeared, lut, search.quad_decimate);
         for d in &mut dets {
             d.center[0] += ox;
             d.center[1] += oy;
@@ -281,7 +316,7 @@ impl Detector {
         Ok(dets)
     }
 
-    fn detect_view(&self, im: &ImageView<'_>, smeared: bool, lut: &[f64; 256]) -> Vec<Detection> {
+    fn detect_view(&self, im: &ImageView<'_>, smeared: bool, lut: &[f64; 256], decimate: f32) -> Vec<Detection> {
         let c = &self.config;
         // Another thread detecting with this detector has the buffers: use fresh ones.
         let (mut guard, mut own);
@@ -302,8 +337,8 @@ impl Detector {
         let mut clock = Clock::start();
         let mut st = StageTimes::default();
         let blur = c.quad_sigma != 0.0;
-        if c.quad_decimate > 1.0 {
-            decimate_with(im, c.quad_decimate, &mut s.decimated, &self.workers);
+        if decimate > 1.0 {
+            decimate_with(im, decimate, &mut s.decimated, &self.workers);
         } else if blur {
             s.decimated.reset(im.width(), im.height(), 0);
             for (y, row) in s.decimated.data.chunks_exact_mut(im.width()).enumerate() {
@@ -313,7 +348,7 @@ impl Detector {
         if blur {
             blur_or_sharpen(&mut s.decimated, c.quad_sigma);
         }
-        let quad_im = if c.quad_decimate > 1.0 || blur {
+        let quad_im = if decimate > 1.0 || blur {
             match s.decimated.view() {
                 Ok(v) => v,
                 Err(_) => return Vec::new(), // too small to hold a tag
@@ -323,7 +358,7 @@ impl Detector {
         };
         // Undecimated, C blurs the frame itself, so edges are refined and bits read on the
         // blurred frame too.
-        let im = if c.quad_decimate > 1.0 { im } else { &quad_im };
+        let im = if decimate > 1.0 { im } else { &quad_im };
         st.decimate_s = clock.lap();
         threshold_with(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold, &self.workers);
         st.threshold_s = clock.lap();
@@ -332,15 +367,15 @@ impl Detector {
         st.components_s = clock.lap();
         let clusters = gradient_clusters_par(&s.threshold, uf, &mut s.pixel_region, &self.workers);
         st.clusters_s = clock.lap();
-        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, c.quad_decimate, &self.workers);
+        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, decimate, &self.workers);
         st.quads_s = clock.lap();
         st.clusters = clusters.len();
         st.quads = quads.len();
-        if c.quad_decimate > 1.0 {
+        if decimate > 1.0 {
             for q in &mut quads {
                 for p in &mut q.p {
-                    p[0] *= c.quad_decimate;
-                    p[1] *= c.quad_decimate;
+                    p[0] *= decimate;
+                    p[1] *= decimate;
                 }
             }
         }
@@ -349,7 +384,7 @@ impl Detector {
         let dets = self.workers.filter_map(&quads, |q0| {
             let mut q = *q0;
             if c.refine_edges {
-                refine_edges(im, &mut q, c.quad_decimate, lut, c.linear_edges, c.linear_edges && smeared, cells);
+                refine_edges(im, &mut q, decimate, lut, c.linear_edges, c.linear_edges && smeared, cells);
             }
             let d = decode(&q).or_else(|| {
                 // Our fit can be pulled off by a bright edge near a small tag (linear light
@@ -359,7 +394,7 @@ impl Detector {
                     return None;
                 }
                 let mut q = *q0;
-                refine_edges(im, &mut q, c.quad_decimate, &IDENTITY, false, false, cells);
+                refine_edges(im, &mut q, decimate, &IDENTITY, false, false, cells);
                 decode(&q)
             })?;
             Some(if c.linear_edges && c.blur_aware_edges {
@@ -396,6 +431,7 @@ impl Detector {
         }
         st.finish_s = clock.lap();
         st.tags = dets.len();
+        st.quad_decimate = decimate;
         *self.stages.lock().unwrap_or_else(|p| p.into_inner()) = st;
         dets
     }
