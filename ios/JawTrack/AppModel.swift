@@ -16,7 +16,9 @@ final class AppModel: ObservableObject {
     init() {
         let camera = CameraController()
         let controller = AppController(
-            settings: SettingsStore(values: UserDefaultsStore(), secrets: KeychainStore()),
+            settings: SettingsStore(
+                values: UserDefaultsStore(), secrets: KeychainStore(), performanceCores: Self.performanceCores()
+            ),
             camera: camera,
             documents: FileManager.default.urls(for: .documentDirectory, in: .userDomainMask).first,
             makeTransport: { host, port in try UDPTransport(host: host, port: port) }
@@ -27,6 +29,17 @@ final class AppModel: ObservableObject {
         calibration = controller.markerCalibration.state
         controller.onChange = { [weak self] in self?.state = $0 }
         controller.markerCalibration.onChange = { [weak self] in self?.calibration = $0 }
+    }
+
+    /// The phone's performance cores (`hw.perflevel0.physicalcpu`, iOS 15 and later), 0 when the
+    /// system does not say.
+    private static func performanceCores() -> UInt32 {
+        var cores: Int32 = 0
+        var size = MemoryLayout<Int32>.size
+        guard sysctlbyname("hw.perflevel0.physicalcpu", &cores, &size, nil, 0) == 0, cores > 0 else {
+            return 0
+        }
+        return UInt32(cores)
     }
 
     /// First appearance: the screen stays on; the camera permission (asked the first time,

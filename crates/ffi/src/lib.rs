@@ -38,7 +38,7 @@ pub use engine::{
 pub use error::JawTrackError;
 pub use plan::{CaptureFormat, CaptureGuidance, CapturePlanner, GuidanceKind, PlanChoice};
 pub use settings::{
-    AppSettings, Camera, FocusMode, Resolution, Settings, default_app_settings, default_settings,
+    AppSettings, Camera, FocusMode, Resolution, Settings, default_app_settings, default_settings, detector_threads,
     validate_app_settings, validate_settings,
 };
 

@@ -166,6 +166,16 @@ pub struct AppSettings {
     pub record_video: bool,
 }
 
+/// How many detector threads a phone with `performance_cores` performance cores should run
+/// (the app reads the count from the system, `hw.perflevel0.physicalcpu` on iOS): one per
+/// performance core, leaving the efficiency cores to the camera, the screen and the stream;
+/// within 1–8 ([`Settings::threads`]), and 1 when the count is unknown (0). The detector splits
+/// its image stages and its tags over them (`crates/detector-bench/BENCHMARKS.md`).
+#[uniffi::export]
+pub fn detector_threads(performance_cores: u32) -> u32 {
+    performance_cores.clamp(1, 8)
+}
+
 /// The settings a fresh install starts with.
 #[uniffi::export]
 pub fn default_app_settings() -> AppSettings {
@@ -241,6 +251,17 @@ pub fn validate_settings(settings: Settings) -> Result<(), JawTrackError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_phone_runs_a_detector_thread_per_performance_core() {
+        assert_eq!(detector_threads(0), 1, "unknown");
+        assert_eq!(detector_threads(2), 2, "an iPhone's A-series chip");
+        assert_eq!(detector_threads(64), 8, "at most the settings' limit");
+        for cores in 0..20 {
+            let s = Settings { threads: detector_threads(cores), ..default_settings() };
+            assert!(s.validate().is_ok(), "{cores} cores");
+        }
+    }
 
     #[test]
     fn defaults_are_valid_and_each_range_names_its_setting() {

@@ -64,10 +64,13 @@ public final class SettingsStore {
     private let values: KeyValueStore
     private let secrets: SecretStore
 
-    public init(values: KeyValueStore, secrets: SecretStore) {
+    /// `performanceCores`: the phone's performance cores (0 when the system does not say); a
+    /// fresh install runs a detector thread on each (`detectorThreads`).
+    public init(values: KeyValueStore, secrets: SecretStore, performanceCores: UInt32 = 0) {
         self.values = values
         self.secrets = secrets
         var loaded = defaultAppSettings()
+        loaded.tracker.threads = detectorThreads(performanceCores: performanceCores)
         var problems: [String] = []
         if let data = values.data(forKey: Self.key) {
             do {

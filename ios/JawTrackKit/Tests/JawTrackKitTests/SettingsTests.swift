@@ -33,6 +33,19 @@ final class SettingsTests: XCTestCase {
         XCTAssertEqual(reloaded.settings, changed)
     }
 
+    func testAFreshInstallRunsADetectorThreadPerPerformanceCoreAndSavedSettingsWin() throws {
+        let values = MemoryKeyValueStore()
+        let twoCores = SettingsStore(values: values, secrets: MemorySecretStore(), performanceCores: 2)
+        XCTAssertEqual(twoCores.settings.tracker.threads, 2)
+        XCTAssertEqual(SettingsStore(values: values, secrets: MemorySecretStore()).settings.tracker.threads, 1,
+                       "unknown cores: one thread")
+        var one = twoCores.settings
+        one.tracker.threads = 1
+        try twoCores.save(one)
+        let reloaded = SettingsStore(values: values, secrets: MemorySecretStore(), performanceCores: 2)
+        XCTAssertEqual(reloaded.settings.tracker.threads, 1, "the user's saved choice stands")
+    }
+
     func testThePlannedFocusModeRoundTripsAndSettingsStoredBeforeItStillLoad() throws {
         let values = MemoryKeyValueStore()
         let store = SettingsStore(values: values, secrets: MemorySecretStore())
