@@ -41,6 +41,10 @@ pub const SETTLING_FRAMES: usize = 3;
 /// Once settled, a frame is fitted every this many (2 s at 60 fps): a phone's curve adapts to
 /// the scene over seconds, and a fit costs about five detections' time.
 pub const REFIT_EVERY_FRAMES: usize = 120;
+/// After a frame whose tags told nothing (too few, or too few phases across their edges), this
+/// many frames pass before the next fit: a scene whose tags never tell (held square to the
+/// pixel grid, say) would otherwise pay a fit, about five detections, on every frame.
+pub const RETRY_AFTER_FRAMES: usize = 30;
 /// Fits pooled: the most recent ones.
 const POOLED_FITS: usize = 9;
 /// sRGB is kept unless the best power law leaves the pooled edges less lopsided by more than
@@ -127,6 +131,8 @@ pub struct ToneSession {
     recent: VecDeque<FrameToneFit>,
     frames_fitted: usize,
     since_fit: usize,
+    /// Frames to pass before fitting again, after a frame whose tags told nothing.
+    retry_in: usize,
 }
 
 impl ToneSession {
@@ -137,7 +143,7 @@ impl ToneSession {
             ToneSetting::Auto => (ToneCurve::Srgb, ToneReason::NotYetTold),
             ToneSetting::Fixed(c) => (c, ToneReason::Given),
         };
-        ToneSession { setting, curve, reason, recent: VecDeque::new(), frames_fitted: 0, since_fit: 0 }
+        ToneSession { setting, curve, reason, recent: VecDeque::new(), frames_fitted: 0, since_fit: 0, retry_in: 0 }
     }
 
     /// The curve frames are to be read through now.
@@ -151,15 +157,18 @@ impl ToneSession {
     }
 
     /// Whether the next frame is to be fitted: always while settling, then every
-    /// [`REFIT_EVERY_FRAMES`]; never with a fixed curve.
+    /// [`REFIT_EVERY_FRAMES`]; never with a fixed curve; and not within
+    /// [`RETRY_AFTER_FRAMES`] of a frame whose tags told nothing.
     pub fn due(&self) -> bool {
         self.setting == ToneSetting::Auto
+            && self.retry_in == 0
             && (self.frames_fitted < SETTLING_FRAMES || self.since_fit + 1 >= REFIT_EVERY_FRAMES)
     }
 
     /// Counts a frame that was not fitted.
     pub fn skip(&mut self) {
         self.since_fit += 1;
+        self.retry_in = self.retry_in.saturating_sub(1);
     }
 
     /// Takes a frame's fit (`None`: its tags told nothing) into the estimate. Returns the new
@@ -167,6 +176,7 @@ impl ToneSession {
     pub fn record(&mut self, fit: Option<FrameToneFit>) -> Option<ToneCurve> {
         let Some(fit) = fit else {
             self.skip();
+            self.retry_in = RETRY_AFTER_FRAMES;
             return None;
         };
         self.since_fit = 0;
@@ -267,8 +277,12 @@ mod tests {
     fn auto_settles_on_the_pooled_exponent_and_then_refits_now_and_then() {
         let mut s = ToneSession::new(ToneSetting::Auto);
         assert_eq!(s.curve(), ToneCurve::Srgb, "sRGB until the tags tell");
-        // A frame that told nothing does not count toward settling.
+        // A frame that told nothing does not count toward settling, and the next fit waits.
         assert_eq!(s.record(None), None);
+        for _ in 0..RETRY_AFTER_FRAMES {
+            assert!(!s.due(), "no fit on every frame of a scene whose tags tell nothing");
+            s.skip();
+        }
         assert!(s.due());
         assert_eq!(s.record(fit(1.8, 0.3, 0.5, 8)), None, "8 sides are too few to leave sRGB");
         assert_eq!(s.record(fit(1.8, 0.3, 0.5, 24)), Some(ToneCurve::Gamma { gamma: 1.8 }));
