@@ -57,11 +57,7 @@ pub fn gradient_clusters_par(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>
     let bands = workers.band_ranges(h);
     if bands.len() == 1 {
         let mut out = Clusters::default();
-        let mut lookup = |i: u32| {
-            let rep = uf.find(i);
-            (rep, uf.set_size(rep))
-        };
-        scan_band(t, 0..h, region, &mut lookup, &mut out);
+        scan_band(t, 0..h, region, &mut Regions::Own(uf), &mut out);
         return out.clusters;
     }
     let uf: &UnionFind = uf;
@@ -74,13 +70,8 @@ pub fn gradient_clusters_par(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>
         rest = tail;
     }
     workers.each(jobs, |(rows, piece, out)| {
-        // Shared by the threads, so looked up without shortening paths.
-        let mut lookup = |i: u32| {
-            let rep = uf.root(i);
-            (rep, uf.set_size(rep))
-        };
         let mut clusters = Clusters::default();
-        scan_band(t, rows, piece, &mut lookup, &mut clusters);
+        scan_band(t, rows, piece, &mut Regions::Shared(uf, Vec::new()), &mut clusters);
         *out.lock().unwrap_or_else(PoisonError::into_inner) = clusters;
     });
     let results = outs.into_iter().map(|m| m.into_inner().unwrap_or_else(PoisonError::into_inner));
@@ -93,27 +84,69 @@ pub fn gradient_clusters_par(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>
     out.clusters
 }
 
+/// How a band finds a pixel's region.
+enum Regions<'a> {
+    /// The band is the whole image: finding shortens the paths.
+    Own(&'a mut UnionFind),
+    /// The sets are shared by the bands' threads, so their paths stay as they are; instead the
+    /// band remembers the region of every pixel of its own that a search passes (the trail).
+    Shared(&'a UnionFind, Vec<usize>),
+}
+
+impl Regions<'_> {
+    /// The region of pixel `i` (or [`NO_REGION`]), `region` caching the pixels from `offset`.
+    fn of(&mut self, i: usize, region: &mut [u32], offset: usize) -> u32 {
+        let cached = |j: usize, region: &[u32]| region.get(j.wrapping_sub(offset)).copied().filter(|&c| c != UNSET);
+        if let Some(c) = cached(i, region) {
+            return c;
+        }
+        let value = match self {
+            Regions::Own(uf) => {
+                let rep = uf.find(i as u32);
+                if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep }
+            }
+            Regions::Shared(uf, trail) => {
+                let mut j = i;
+                let value = loop {
+                    if let Some(c) = cached(j, region) {
+                        break c;
+                    }
+                    if j.wrapping_sub(offset) < region.len() {
+                        trail.push(j);
+                    }
+                    let p = uf.parent_of(j as u32) as usize;
+                    if p == j {
+                        break if uf.set_size(p as u32) < MIN_REGION_PIXELS { NO_REGION } else { p as u32 };
+                    }
+                    j = p;
+                };
+                for k in trail.drain(..) {
+                    region[k - offset] = value;
+                }
+                return value;
+            }
+        };
+        // The row below a band belongs to the next band's cache.
+        if let Some(c) = region.get_mut(i.wrapping_sub(offset)) {
+            *c = value;
+        }
+        value
+    }
+}
+
 /// The scan of rows `rows` (those of them inside the border), `region` being their pixels'
-/// region cache and `lookup` a pixel's region and its size.
+/// region cache.
 fn scan_band(
     t: &Gray,
     rows: std::ops::Range<usize>,
     region: &mut [u32],
-    lookup: &mut dyn FnMut(u32) -> (u32, u32),
+    regions: &mut Regions<'_>,
     out: &mut Clusters,
 ) {
     let (w, h) = (t.width, t.height);
     let offset = rows.start * w;
     let d = &t.data;
-    let mut region_of = |i: usize, region: &mut [u32]| -> u32 {
-        let from_rep = |(rep, size): (u32, u32)| if size < MIN_REGION_PIXELS { NO_REGION } else { rep };
-        // The row below a band belongs to the next band's cache.
-        let Some(cached) = region.get_mut(i.wrapping_sub(offset)) else { return from_rep(lookup(i as u32)) };
-        if *cached == UNSET {
-            *cached = from_rep(lookup(i as u32));
-        }
-        *cached
-    };
+    let mut region_of = |i: usize, region: &mut [u32]| regions.of(i, region, offset);
     // Per row, whether each pixel can start a point: not unknown (127), with an opposite
     // neighbour to the right or below (values summing to 255, i.e. differing in every bit).
     // Computed for the whole row at once, so it vectorises, leaving the scan to the few

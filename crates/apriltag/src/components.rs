@@ -41,12 +41,9 @@ impl UnionFind {
         self.sets().find(i)
     }
 
-    /// The representative of `i`'s set, leaving the sets as they are (so threads can share them).
-    pub fn root(&self, mut i: u32) -> u32 {
-        while self.parent[i as usize] != i {
-            i = self.parent[i as usize];
-        }
-        i
+    /// The element `i` points to (itself for a representative).
+    pub fn parent_of(&self, i: u32) -> u32 {
+        self.parent[i as usize]
     }
 
     /// Joins the sets of `a` and `b`.
