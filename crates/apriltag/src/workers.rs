@@ -48,8 +48,8 @@ impl Workers {
         }
     }
 
-    /// The bands `rows` rows are split into: one without a pool, else up to
-    /// [`BANDS_PER_THREAD`] per thread of at least [`MIN_BAND_ROWS`] rows, top to bottom.
+    /// The bands `rows` rows are split into: one without a pool, else up to four per thread
+    /// of at least 32 rows each, top to bottom.
     pub fn band_ranges(&self, rows: usize) -> Vec<Range<usize>> {
         let n = match self.pool {
             None => 1,

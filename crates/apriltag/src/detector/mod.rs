@@ -23,9 +23,12 @@ use std::sync::{Arc, Mutex, TryLockError};
 mod border;
 mod edges;
 mod gauss;
+mod stages;
 mod tone_fit;
 
 pub use border::PIXEL_SIGMA_PX;
+use stages::Clock;
+pub use stages::StageTimes;
 
 /// How to search one frame ([`Detector::search`]): what a tracker knows of it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,68 +79,6 @@ pub struct Detector {
     scratch: Mutex<Scratch>,
     /// Where the last detection's time went.
     stages: Mutex<StageTimes>,
-}
-
-/// Where one detection's time went (s), stage by stage, and how much each stage passed on:
-/// what a profile needs, kept by the detector for its last detection
-/// ([`Detector::last_stages`]). Timing costs a clock read per stage.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StageTimes {
-    /// Decimation (and `quad_sigma`'s blur).
-    pub decimate_s: f64,
-    /// The adaptive threshold.
-    pub threshold_s: f64,
-    /// Connected components.
-    pub components_s: f64,
-    /// Gradient clusters.
-    pub clusters_s: f64,
-    /// Quad fitting.
-    pub quads_s: f64,
-    /// Per quad at full resolution: edge refit, decoding, the border fit.
-    pub tags_s: f64,
-    /// Removing duplicates, sorting, moving to JawTrack's pixel convention.
-    pub finish_s: f64,
-    /// Clusters found.
-    pub clusters: usize,
-    /// Quads fitted.
-    pub quads: usize,
-    /// Tags decoded.
-    pub tags: usize,
-    /// The decimation quads were found at (of the later search, summed).
-    pub quad_decimate: f32,
-}
-
-impl std::ops::Add for StageTimes {
-    type Output = StageTimes;
-
-    fn add(self, o: StageTimes) -> StageTimes {
-        StageTimes {
-            decimate_s: self.decimate_s + o.decimate_s,
-            threshold_s: self.threshold_s + o.threshold_s,
-            components_s: self.components_s + o.components_s,
-            clusters_s: self.clusters_s + o.clusters_s,
-            quads_s: self.quads_s + o.quads_s,
-            tags_s: self.tags_s + o.tags_s,
-            finish_s: self.finish_s + o.finish_s,
-            clusters: self.clusters + o.clusters,
-            quads: self.quads + o.quads,
-            tags: self.tags + o.tags,
-            quad_decimate: o.quad_decimate,
-        }
-    }
-}
-
-impl StageTimes {
-    /// All stages.
-    pub fn total_s(&self) -> f64 {
-        self.decimate_s
-            + self.threshold_s
-            + self.components_s
-            + self.clusters_s
-            + self.quads_s
-            + self.tags_s
-            + self.finish_s
-    }
 }
 
 impl Clone for Detector {
@@ -434,23 +375,6 @@ impl Detector {
         st.quad_decimate = decimate;
         *self.stages.lock().unwrap_or_else(|p| p.into_inner()) = st;
         dets
-    }
-}
-
-/// Lap times.
-struct Clock(std::time::Instant);
-
-impl Clock {
-    fn start() -> Self {
-        Clock(std::time::Instant::now())
-    }
-
-    /// Seconds since the last lap (or the start).
-    fn lap(&mut self) -> f64 {
-        let now = std::time::Instant::now();
-        let s = (now - self.0).as_secs_f64();
-        self.0 = now;
-        s
     }
 }
 
