@@ -415,7 +415,7 @@ impl Tracker {
                 smallest = smallest.min(roi::shortest_side_px(&pose, &tag.corners, camera)?);
             }
         }
-        (smallest >= roi::COARSE_MIN_SIDE_PX).then_some(roi::COARSE_DECIMATION)
+        (smallest.is_finite() && smallest >= roi::COARSE_MIN_SIDE_PX).then_some(roi::COARSE_DECIMATION)
     }
 
     /// Whether a tag either body was solved from in the last frame is missing from `detections`.
