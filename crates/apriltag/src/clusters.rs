@@ -8,7 +8,6 @@ use crate::components::UnionFind;
 use crate::gray::Gray;
 use crate::workers::Workers;
 use rustc_hash::FxHashMap;
-use std::sync::{Mutex, PoisonError};
 
 /// Regions smaller than this take no part in clusters (hard-coded in C as well).
 const MIN_REGION_PIXELS: u32 = 25;
@@ -61,20 +60,18 @@ pub fn gradient_clusters_par(t: &Gray, uf: &mut UnionFind, region: &mut Vec<u32>
         return out.clusters;
     }
     let uf: &UnionFind = uf;
-    let outs: Vec<Mutex<Clusters>> = bands.iter().map(|_| Mutex::default()).collect();
     let mut jobs = Vec::with_capacity(bands.len());
     let mut rest = &mut region[..];
-    for (rows, out) in bands.iter().zip(&outs) {
+    for rows in &bands {
         let (piece, tail) = rest.split_at_mut(rows.len() * w);
-        jobs.push((rows.clone(), piece, out));
+        jobs.push((rows.clone(), piece));
         rest = tail;
     }
-    workers.each(jobs, |(rows, piece, out)| {
+    let results = workers.map(jobs, |(rows, piece)| {
         let mut clusters = Clusters::default();
         scan_band(t, rows, piece, &mut Regions::Shared(uf, Vec::new()), &mut clusters);
-        *out.lock().unwrap_or_else(PoisonError::into_inner) = clusters;
+        clusters
     });
-    let results = outs.into_iter().map(|m| m.into_inner().unwrap_or_else(PoisonError::into_inner));
     let mut out = Clusters::default();
     for band in results {
         for (key, points) in band.keys.into_iter().zip(band.clusters) {
@@ -103,7 +100,7 @@ impl Regions<'_> {
         let value = match self {
             Regions::Own(uf) => {
                 let rep = uf.find(i as u32);
-                if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep }
+                region_or_none(uf, rep)
             }
             Regions::Shared(uf, trail) => {
                 let mut j = i;
@@ -116,7 +113,7 @@ impl Regions<'_> {
                     }
                     let p = uf.parent_of(j as u32) as usize;
                     if p == j {
-                        break if uf.set_size(p as u32) < MIN_REGION_PIXELS { NO_REGION } else { p as u32 };
+                        break region_or_none(uf, p as u32);
                     }
                     j = p;
                 };
@@ -132,6 +129,11 @@ impl Regions<'_> {
         }
         value
     }
+}
+
+/// The region whose representative is `rep`, or [`NO_REGION`] when it is too small.
+fn region_or_none(uf: &UnionFind, rep: u32) -> u32 {
+    if uf.set_size(rep) < MIN_REGION_PIXELS { NO_REGION } else { rep }
 }
 
 /// The scan of rows `rows` (those of them inside the border), `region` being their pixels'

@@ -120,7 +120,7 @@ pub fn connected_components_with(t: &Gray, uf: &mut UnionFind, workers: &Workers
         pieces.push((rows.clone(), p, s));
         (parent, size) = (p_rest, s_rest);
     }
-    workers.each(pieces, |(rows, parent, size)| {
+    workers.map(pieces, |(rows, parent, size)| {
         let offset = (rows.start * w) as u32;
         for (i, p) in parent.iter_mut().enumerate() {
             *p = offset + i as u32;

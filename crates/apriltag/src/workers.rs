@@ -1,7 +1,7 @@
 //! The detector's worker threads. Two kinds of work are shared out over a thread pool when
 //! `nthreads` > 1:
 //! - the image stages (decimation, threshold, regions, clusters) by bands of rows, each band
-//!   writing only its own rows ([`Workers::bands`], [`Workers::rows_mut`]);
+//!   writing only its own rows ([`Workers::rows_mut`], [`Workers::map`]);
 //! - per-cluster quad fitting and per-quad decoding, which are independent
 //!   ([`Workers::filter_map`]).
 //!
@@ -58,15 +58,6 @@ impl Workers {
         (0..n).map(|k| k * rows / n..(k + 1) * rows / n).collect()
     }
 
-    /// `f` over each band of `rows` rows ([`Workers::band_ranges`]), results in band order.
-    pub fn bands<R: Send>(&self, rows: usize, f: impl Fn(Range<usize>) -> R + Sync + Send) -> Vec<R> {
-        let ranges = self.band_ranges(rows);
-        match &self.pool {
-            None => ranges.into_iter().map(f).collect(),
-            Some(pool) => pool.install(|| ranges.into_par_iter().with_max_len(1).map(f).collect()),
-        }
-    }
-
     /// `f(rows, their data)` over bands of `data`'s rows of `row_len` items each, every band
     /// writing only its own rows.
     pub fn rows_mut<T: Send>(&self, data: &mut [T], row_len: usize, f: impl Fn(Range<usize>, &mut [T]) + Sync + Send) {
@@ -79,14 +70,14 @@ impl Workers {
             pieces.push((r.clone(), piece));
             rest = tail;
         }
-        self.each(pieces, |(r, p)| f(r, p));
+        self.map(pieces, |(r, p)| f(r, p));
     }
 
-    /// `f` on each of `items`, one item a task.
-    pub fn each<T: Send>(&self, items: Vec<T>, f: impl Fn(T) + Sync + Send) {
+    /// `f` on each of `items`, one item a task; the results in the items' order.
+    pub fn map<T: Send, R: Send>(&self, items: Vec<T>, f: impl Fn(T) -> R + Sync + Send) -> Vec<R> {
         match &self.pool {
-            None => items.into_iter().for_each(f),
-            Some(pool) => pool.install(|| items.into_par_iter().with_max_len(1).for_each(f)),
+            None => items.into_iter().map(f).collect(),
+            Some(pool) => pool.install(|| items.into_par_iter().with_max_len(1).map(f).collect()),
         }
     }
 }
