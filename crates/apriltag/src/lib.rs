@@ -33,6 +33,7 @@ pub mod components;
 pub mod config;
 pub mod decode;
 pub mod detector;
+pub mod gauss;
 pub mod gray;
 pub mod image;
 pub mod preprocess;

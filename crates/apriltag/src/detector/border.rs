@@ -21,7 +21,7 @@
 //! side along the motion is not smeared, so a tag's blur is the second-sharpest of its sides:
 //! what the lens did, which is what [`crate::Detection::blur_px`] reports.
 
-use super::gauss::cdf_pdf;
+use crate::gauss::cdf_pdf;
 use crate::image::ImageView;
 use jawtrack_tag_family::TagBitmap;
 use nalgebra::{SMatrix, SVector};

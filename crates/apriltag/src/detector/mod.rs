@@ -22,7 +22,6 @@ use std::sync::{Arc, Mutex, TryLockError};
 
 mod border;
 mod edges;
-mod gauss;
 mod stages;
 mod tone_fit;
 

@@ -1,5 +1,6 @@
-//! The standard normal distribution's CDF Φ and density φ for the border fit ([`super::border`]),
-//! which evaluates them some 10⁶ times per frame: from a table at every 1/32 between −8 and 8,
+//! The standard normal distribution's CDF Φ and density φ for the border fit
+//! ([`crate::detector`]) and the photometric refinement (`jawtrack-photometric`), which
+//! evaluate them some 10⁶ times per frame: from a table at every 1/32 between −8 and 8,
 //! interpolated by cubic Hermite polynomials (the table holds Φ and its slope φ at each node).
 //! Φ is within 5·10⁻⁹ of `erf`'s value, a fraction of a grey level 10⁶ times finer than sensor
 //! noise; φ is the interpolant's own slope, so the fit's gradient is exactly that of the model
@@ -25,17 +26,17 @@ static TABLE: LazyLock<Vec<[f64; 2]>> = LazyLock::new(|| {
 });
 
 /// Φ(z) by the error function.
-pub(super) fn exact_cdf(z: f64) -> f64 {
+pub fn exact_cdf(z: f64) -> f64 {
     0.5 * (1.0 + libm::erf(z * std::f64::consts::FRAC_1_SQRT_2))
 }
 
 /// φ(z).
-pub(super) fn exact_pdf(z: f64) -> f64 {
+pub fn exact_pdf(z: f64) -> f64 {
     (-0.5 * z * z).exp() * 0.398_942_280_401_432_7
 }
 
 /// (Φ(z), φ(z)) from the table; NaN for NaN.
-pub(super) fn cdf_pdf(z: f64) -> (f64, f64) {
+pub fn cdf_pdf(z: f64) -> (f64, f64) {
     if z >= LIMIT {
         return (1.0, 0.0);
     }
