@@ -1,0 +1,178 @@
+//! What a tag prints, seen through a Gaussian blur: the fraction of paper at a point of the tag
+//! plane, with its slope.
+//!
+//! A tag's square is `n` × `n` cells (tag36h11: 8, the black border included) inside a quiet
+//! zone of paper. Cell coordinates (u, v) run from 0 to `n` across the square, u along its rows
+//! and v down its columns, as the tag's upright image is drawn. A Gaussian blur whose spread is
+//! `su` cells along u and `sv` along v (the image's blur carried onto the tag plane, where a
+//! straight edge stays straight) turns each cell into the product of two differences of Φ,
+//! so the paper seen at (u, v) is one minus the sum of the ink cells' weights; only the cells
+//! within a few spreads of the point are summed.
+
+use jawtrack_apriltag::gauss::cdf_pdf;
+use jawtrack_tag_family::TagBitmap;
+
+/// Cells farther than this many spreads from a point add nothing measurable to it
+/// (Φ(−5) = 3·10⁻⁷ of the contrast).
+const REACH: f64 = 5.0;
+/// The narrowest spread (cells) the model evaluates: a sharper edge is a step at this scale.
+const MIN_SPREAD: f64 = 1e-3;
+/// The most cells one point can sum along each axis: a square of up to 16 cells.
+const MAX_CELLS: usize = 16;
+
+/// The ink of one tag's square: the cells that print black.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pattern {
+    n: usize,
+    ink: Vec<bool>,
+}
+
+impl Pattern {
+    /// The pattern of `bitmap`; `None` for a square wider than the model holds.
+    pub fn new(bitmap: &TagBitmap) -> Option<Self> {
+        let n = bitmap.width();
+        if n == 0 || n > MAX_CELLS {
+            return None;
+        }
+        let ink = (0..n * n).map(|i| !bitmap.is_white(i % n, i / n)).collect();
+        Some(Pattern { n, ink })
+    }
+
+    /// Cells across the square.
+    pub fn cells(&self) -> usize {
+        self.n
+    }
+
+    /// The paper seen at (u, v) under the blur (`su`, `sv`), from 0 (ink) to 1 (paper), with
+    /// its derivatives.
+    pub fn paper(&self, u: f64, v: f64, su: f64, sv: f64) -> Paper {
+        let (su, sv) = (su.max(MIN_SPREAD), sv.max(MIN_SPREAD));
+        let mut a = Axis::default();
+        let mut b = Axis::default();
+        let white = Paper { value: 1.0, du: 0.0, dv: 0.0, dsu: 0.0, dsv: 0.0 };
+        let Some((i0, i1)) = a.fill(u, su, self.n) else { return white };
+        let Some((j0, j1)) = b.fill(v, sv, self.n) else { return white };
+        let (mut ink, mut ink_u, mut ink_v, mut ink_su, mut ink_sv) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for j in j0..=j1 {
+            let row = &self.ink[j * self.n + i0..=j * self.n + i1];
+            let (mut w, mut w_x, mut w_s) = (0.0, 0.0, 0.0);
+            for (c, _) in row.iter().enumerate().filter(|(_, ink)| **ink) {
+                w += a.w[c];
+                w_x += a.dx[c];
+                w_s += a.ds[c];
+            }
+            let k = j - j0;
+            ink += w * b.w[k];
+            ink_u += w_x * b.w[k];
+            ink_su += w_s * b.w[k];
+            ink_v += w * b.dx[k];
+            ink_sv += w * b.ds[k];
+        }
+        Paper { value: 1.0 - ink, du: -ink_u, dv: -ink_v, dsu: -ink_su, dsv: -ink_sv }
+    }
+}
+
+/// The paper a point sees, and its derivatives by the point's cell coordinates and by the
+/// blur's spreads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Paper {
+    /// 0 (ink) to 1 (paper).
+    pub value: f64,
+    /// ∂/∂u.
+    pub du: f64,
+    /// ∂/∂v.
+    pub dv: f64,
+    /// ∂/∂su.
+    pub dsu: f64,
+    /// ∂/∂sv.
+    pub dsv: f64,
+}
+
+/// The cells' weights along one axis, with their derivatives by the point and by the spread.
+#[derive(Default)]
+struct Axis {
+    w: [f64; MAX_CELLS],
+    dx: [f64; MAX_CELLS],
+    ds: [f64; MAX_CELLS],
+}
+
+impl Axis {
+    /// The weight of each cell `i0..=i1` at `x` under the spread `s`: the Gaussian's mass over
+    /// [i, i + 1). `None` when no cell of the square is within reach.
+    fn fill(&mut self, x: f64, s: f64, n: usize) -> Option<(usize, usize)> {
+        let lo = (x - REACH * s).floor().max(0.0);
+        let hi = (x + REACH * s).floor().min(n as f64 - 1.0);
+        // NaN (a point at no place) compares false, as an empty range does.
+        if lo.partial_cmp(&hi).is_none_or(|o| o == std::cmp::Ordering::Greater) {
+            return None;
+        }
+        let (i0, i1) = (lo as usize, hi as usize);
+        let z0 = (i0 as f64 - x) / s;
+        let (mut f0, mut p0, mut z0) = {
+            let (f, p) = cdf_pdf(z0);
+            (f, p, z0)
+        };
+        for i in i0..=i1 {
+            let z1 = (i as f64 + 1.0 - x) / s;
+            let (f1, p1) = cdf_pdf(z1);
+            self.w[i - i0] = f1 - f0;
+            self.dx[i - i0] = (p0 - p1) / s;
+            self.ds[i - i0] = (p0 * z0 - p1 * z1) / s;
+            (f0, p0, z0) = (f1, p1, z1);
+        }
+        Some((i0, i1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jawtrack_tag_family::TagFamily;
+
+    fn pattern() -> Pattern {
+        Pattern::new(&TagFamily::TAG36H11.bitmap(5).expect("tag 5")).expect("8 cells")
+    }
+
+    #[test]
+    fn sharp_cells_read_as_printed() {
+        let (p, bm) = (pattern(), TagFamily::TAG36H11.bitmap(5).expect("tag 5"));
+        let mut checked = 0;
+        for y in 0..8 {
+            for x in 0..8 {
+                let value = p.paper(x as f64 + 0.5, y as f64 + 0.5, 0.01, 0.01).value;
+                assert_eq!(value, if bm.is_white(x, y) { 1.0 } else { 0.0 }, "cell ({x}, {y})");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 64);
+        assert_eq!(p.paper(-0.5, 4.0, 0.01, 0.01).value, 1.0, "the quiet zone is paper");
+    }
+
+    #[test]
+    fn an_edge_under_blur_is_half_way_and_its_slopes_are_the_derivatives() {
+        let p = pattern();
+        // The border's outer edge at u = 0, mid-side: half ink, half paper (to the Gaussian's
+        // tail beyond the reach, Φ(−5)).
+        let edge = p.paper(0.0, 4.0, 0.2, 0.2);
+        assert!((edge.value - 0.5).abs() < 1e-6, "{}", edge.value);
+        assert!(edge.du < 0.0, "paper gives way to ink going in: {}", edge.du);
+        let h = 1e-6;
+        let mut checked = 0;
+        for &(u, v) in &[(0.1, 3.3), (2.7, 1.2), (5.05, 6.9), (7.9, 0.2), (3.0, 3.0)] {
+            let (su, sv) = (0.3, 0.45);
+            let m = p.paper(u, v, su, sv);
+            let at = |du: f64, dv: f64, dsu: f64, dsv: f64| p.paper(u + du, v + dv, su + dsu, sv + dsv).value;
+            let numeric = [
+                (at(h, 0.0, 0.0, 0.0) - at(-h, 0.0, 0.0, 0.0)) / (2.0 * h),
+                (at(0.0, h, 0.0, 0.0) - at(0.0, -h, 0.0, 0.0)) / (2.0 * h),
+                (at(0.0, 0.0, h, 0.0) - at(0.0, 0.0, -h, 0.0)) / (2.0 * h),
+                (at(0.0, 0.0, 0.0, h) - at(0.0, 0.0, 0.0, -h)) / (2.0 * h),
+            ];
+            for (analytic, numeric) in [m.du, m.dv, m.dsu, m.dsv].iter().zip(numeric) {
+                assert!((analytic - numeric).abs() < 1e-6, "({u}, {v}): {analytic} vs {numeric}");
+            }
+            checked += 1;
+        }
+        assert_eq!(checked, 5);
+    }
+}

@@ -1,0 +1,710 @@
+//! The fit: pixels gathered once at the starting pose, then the pose and the tags' levels moved
+//! together until the image and the model agree.
+
+use crate::model::Pattern;
+use crate::{Image, Motion, Options, RefineError, Refined, Tag};
+use jawtrack_pose::lm::{Damping, damped, minimise};
+use jawtrack_pose::pnp::perturb;
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use nalgebra::{
+    DMatrix, DVector, Matrix2, Matrix2x3, Matrix2x6, Matrix3, Matrix3x2, Matrix3x6, Matrix6, Point2, SMatrix, SVector,
+    Vector2, Vector3, Vector6,
+};
+use std::ops::AddAssign;
+
+/// The fit stops once a step lowers its cost by less than this fraction. Near the minimum the
+/// cost is the pixels' noise, so at 20,000 pixels the fit may stop up to √(10⁻⁵ × 20,000) ≈ 0.45
+/// of the pose's standard deviation short of it. Measured (`jawtrack-bench dense`, still cases):
+/// the same errors and jitter at 10⁻⁴ and 10⁻⁶; 10⁻⁶ took 40 % longer.
+const RELATIVE_TOLERANCE: f64 = 1e-5;
+/// Pixels within this many blur σ of an edge of the pattern (plus half the smear, plus
+/// [`EDGE_BAND_PX`]) are compared: farther, the image does not change with the pose.
+const EDGE_BAND_SIGMAS: f64 = 3.0;
+const EDGE_BAND_PX: f64 = 1.5;
+/// Away from the edges, every this many pixels each way are compared, for the tag's levels.
+const FLAT_STRIDE: usize = 4;
+/// Sub-frames per pixel of smear over the exposure.
+const SUBFRAMES_PER_PX: f64 = 2.0;
+/// The residuals' robust scale is never taken below this (linear light, 0–255): a noiseless
+/// render would otherwise make every pixel an outlier.
+const MIN_SCALE: f64 = 0.05;
+/// The pixel's own area as a blur: a box of 1 px, σ² = 1/12 px².
+const PIXEL_VARIANCE: f64 = 1.0 / 12.0;
+/// The blur's σ (px) is kept at least this: below it every edge is a step to the model.
+const MIN_SIGMA_PX: f64 = 0.1;
+/// The tone's power is kept within these: beyond, the curve given was not a tone curve.
+const MIN_GAMMA: f64 = 0.25;
+const MAX_GAMMA: f64 = 4.0;
+
+/// One pixel of a tag: where it is, what it reads (linear light, 0–255) and the undistorted
+/// normalised direction it looks along.
+struct Sample {
+    row: usize,
+    normalised: Vector2<f64>,
+    linear: f64,
+}
+
+/// A tag's plane and its pixels.
+struct TagPixels {
+    pattern: Pattern,
+    /// The square's centre and half-axes in the body frame: the point at tag coordinates
+    /// (tx, ty) ∈ [−1, 1]² is centre + tx·x + ty·y.
+    centre: Vector3<f64>,
+    x: Vector3<f64>,
+    y: Vector3<f64>,
+    first_row: usize,
+    samples: Vec<Sample>,
+}
+
+/// The tag's plane at one instant, in the camera frame, with the map from a normalised
+/// direction to tag coordinates.
+struct Plane {
+    centre: Vector3<f64>,
+    x: Vector3<f64>,
+    y: Vector3<f64>,
+    to_tag: Matrix3<f64>,
+}
+
+/// The fit's state: the pose, the blur (σ, px: the lens's and the pixel's own), the tone's
+/// error and each tag's (ink, contrast) in linear light.
+#[derive(Clone)]
+struct State {
+    pose: Pose,
+    sigma_px: f64,
+    /// The image, read through the tone curve the caller gave, is the scene's linear light to
+    /// this power (1: the curve is right). A wrong curve bends every edge's ramp one way, which
+    /// a symmetric blur cannot take up: it would move the edges (a tag's ink seems to grow or
+    /// shrink) and so the pose.
+    gamma: f64,
+    /// Each tag's ink and contrast (linear light, 0–255). One blur serves the body's tags: a
+    /// blur per tag (their depths differ by millimetres where a phone's depth of field is a few
+    /// millimetres deep) traded with their sizes and made the far case worse (`docs/dense.md`).
+    levels: Vec<[f64; PER_TAG]>,
+}
+
+impl State {
+    /// What a pixel seeing `paper` of tag `k` reads (linear light, 0–255), with its derivatives
+    /// by the light the scene sends (ink + contrast × paper) and by the tone's power.
+    fn predict(&self, k: usize, paper: f64) -> (f64, f64, f64) {
+        let [ink, contrast] = self.levels[k];
+        let u = ((ink + contrast * paper) / 255.0).max(1e-9);
+        let value = 255.0 * u.powf(self.gamma);
+        (value, self.gamma * value / (255.0 * u), value * u.ln())
+    }
+}
+
+/// Parameters shared by the tags: the pose's six, the blur and the tone's power.
+const SHARED: usize = 8;
+type Shared = SVector<f64, SHARED>;
+/// Parameters of each tag: its ink and its contrast.
+const PER_TAG: usize = 2;
+type PerTag = SVector<f64, PER_TAG>;
+/// A pixel's derivatives: by the pose's six and by the blur σ.
+type Looked = SVector<f64, 7>;
+
+/// Refines `start`, the body's pose at the frame's time, from the pixels of its `tags` in
+/// `image`. `blur_px` is the lens's blur (σ, px) on the body's edges, the detector's
+/// `blur_px`, without the pixel's own spread; `motion` the body's motion over the frame's
+/// readout and exposure (`None`: still, or a global shutter with a short exposure).
+pub fn refine(
+    image: &Image<'_>,
+    camera: &CameraIntrinsics,
+    start: &Pose,
+    tags: &[Tag<'_>],
+    blur_px: f64,
+    motion: Option<&Motion>,
+    options: &Options,
+) -> Result<Refined, RefineError> {
+    let (pixels, times, sigma_px) = setup(image, camera, start, tags, blur_px, motion, options)?;
+    let count: usize = pixels.iter().map(|t| t.samples.len()).sum();
+    // Motion changes the model only through a smear (instants) or rows read at their own times.
+    let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
+    let moving = Fit { camera, pixels: &pixels, times, motion: motion.filter(|_| modelled) };
+    let mut best = moving.run(start, sigma_px, options)?;
+    if modelled {
+        // The velocity comes from the poses before; the image says whether it holds: the same
+        // pixels fitted as a still body, the better fit kept (a view that jumped with the
+        // regularity of motion would otherwise have its sharp tags modelled smeared).
+        let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None };
+        if let Ok(s) = still.run(start, sigma_px, options)
+            && s.cost < best.cost
+        {
+            best = s;
+        }
+    }
+    let (state, normal) = (&best.state, &best.normal);
+    let dof = (count as f64 - normal.h.nrows() as f64).max(1.0);
+    let variance = normal.weighted_sq / dof;
+    let inverse = normal.h.clone().try_inverse().ok_or(RefineError::Singular)?;
+    let covariance = Matrix6::from_fn(|i, j| inverse[(i, j)] * variance);
+    let shift_px = shift(camera, start, &state.pose, tags);
+    if shift_px.is_nan() || shift_px > options.max_shift_px {
+        return Err(RefineError::Strayed { shift_px, limit_px: options.max_shift_px });
+    }
+    let contrast = state.levels.iter().map(|l| l[1]).sum::<f64>() / state.levels.len() as f64;
+    Ok(Refined {
+        camera_from_body: state.pose,
+        covariance,
+        rms_contrast: (normal.sq / count as f64).sqrt() / contrast.abs().max(f64::MIN_POSITIVE),
+        pixels: count,
+        iterations: best.iterations,
+        shift_px,
+        blur_px: (state.sigma_px * state.sigma_px - PIXEL_VARIANCE).max(0.0).sqrt(),
+        tone_power: state.gamma,
+        motion: best.motion,
+    })
+}
+
+/// The Cramér–Rao bound on the pose of the body at `pose` from the pixels [`refine`] would
+/// compare there: the inverse of their Fisher information, each pixel's noise variance given
+/// by `noise` at its modelled linear value (0–255 scale, squared), the blur and each tag's
+/// levels estimated beside the pose (so their uncertainty counts). A left perturbation in the
+/// camera frame, as [`Refined::covariance`]. The levels are those that fit the image at `pose`.
+#[allow(clippy::too_many_arguments)]
+pub fn bound(
+    image: &Image<'_>,
+    camera: &CameraIntrinsics,
+    pose: &Pose,
+    tags: &[Tag<'_>],
+    blur_px: f64,
+    motion: Option<&Motion>,
+    options: &Options,
+    noise: &dyn Fn(f64) -> f64,
+) -> Result<Matrix6<f64>, RefineError> {
+    let (pixels, times, sigma_px) = setup(image, camera, pose, tags, blur_px, motion, options)?;
+    let fit = Fit { camera, pixels: &pixels, times, motion };
+    let levels = fit.levels(pose, sigma_px).ok_or(RefineError::Singular)?;
+    let state = State { pose: *pose, sigma_px, gamma: 1.0, levels };
+    let information = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE));
+    let inverse = information.h.try_inverse().ok_or(RefineError::Singular)?;
+    Ok(Matrix6::from_fn(|i, j| inverse[(i, j)]))
+}
+
+/// What [`refine`] and [`bound`] share: the settings checked, the pixels gathered at `pose`,
+/// the instants each row is modelled at, and the blur's σ with the pixel's own spread.
+#[allow(clippy::too_many_arguments)]
+fn setup(
+    image: &Image<'_>,
+    camera: &CameraIntrinsics,
+    pose: &Pose,
+    tags: &[Tag<'_>],
+    blur_px: f64,
+    motion: Option<&Motion>,
+    options: &Options,
+) -> Result<(Vec<TagPixels>, Vec<f64>, f64), RefineError> {
+    validate(options, blur_px, motion)?;
+    let smear = motion.map_or(0.0, |m| smear_px(camera, pose, tags, m));
+    let sigma_px = (blur_px * blur_px + PIXEL_VARIANCE).sqrt();
+    let band_px = EDGE_BAND_SIGMAS * sigma_px + smear / 2.0 + EDGE_BAND_PX;
+    let pixels: Vec<TagPixels> = tags.iter().filter_map(|t| gather(image, camera, pose, t, band_px, options)).collect();
+    if pixels.is_empty() {
+        return Err(RefineError::NoPixels);
+    }
+    Ok((pixels, times(smear, motion, options), sigma_px))
+}
+
+fn validate(o: &Options, blur_px: f64, motion: Option<&Motion>) -> Result<(), RefineError> {
+    let bad = |s: String| Err(RefineError::BadOptions(s));
+    if !(blur_px.is_finite() && blur_px >= 0.0) {
+        return bad(format!("the blur must be a finite σ of at least 0 px, got {blur_px}"));
+    }
+    if o.max_iterations == 0 || o.max_subframes == 0 {
+        return bad("iterations and sub-frames must be at least 1".into());
+    }
+    if !(o.quiet_zone_cells.is_finite() && (0.0..=1.0).contains(&o.quiet_zone_cells)) {
+        return bad(format!("the quiet zone taken must be 0–1 cells, got {}", o.quiet_zone_cells));
+    }
+    if !(o.huber.is_finite() && o.huber > 0.0 && o.max_shift_px.is_finite() && o.max_shift_px > 0.0) {
+        return bad("Huber's constant and the largest shift must be positive".into());
+    }
+    if let Some(m) = motion
+        && !(m.velocity.is_finite() && m.exposure_s.is_finite() && m.exposure_s >= 0.0)
+    {
+        return bad("the motion's velocity and exposure must be finite, the exposure at least 0".into());
+    }
+    Ok(())
+}
+
+/// The pixels `tag` covers at `start` (its square and `quiet_zone_cells` around it), inside the
+/// frame, not saturated, that tell: those within `band_px` of an edge of its pattern (the
+/// pose's information is there), and every [`FLAT_STRIDE`]th pixel each way elsewhere (for the
+/// tag's levels); edge pixels thinned to about `max_pixels_per_tag`, scattered. `None` when it
+/// has none or faces away.
+fn gather(
+    image: &Image<'_>,
+    camera: &CameraIntrinsics,
+    start: &Pose,
+    tag: &Tag<'_>,
+    band_px: f64,
+    o: &Options,
+) -> Option<TagPixels> {
+    let pattern = Pattern::new(tag.bitmap)?;
+    let c = tag.corners.map(Vector3::from);
+    let centre = (c[0] + c[1] + c[2] + c[3]) / 4.0;
+    let (x, y) = ((c[1] - c[0]) / 2.0, (c[0] - c[3]) / 2.0);
+    let reach = 1.0 + 2.0 * o.quiet_zone_cells / pattern.cells() as f64;
+    let plane = plane(start, &centre, &x, &y)?;
+    // The covering box of the square with its quiet zone, in pixels.
+    let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
+    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+        let p = start.transform_point(&(centre + x * sx * reach + y * sy * reach).into());
+        let px = camera.project(&p)?;
+        lo = lo.inf(&px.coords);
+        hi = hi.sup(&px.coords);
+    }
+    let (w, h) = (image.frame.width() as f64, image.frame.height() as f64);
+    let (x0, y0) = (lo.x.ceil().max(0.0) as usize, lo.y.ceil().max(0.0) as usize);
+    let (x1, y1) = (hi.x.floor().min(w - 1.0), hi.y.floor().min(h - 1.0));
+    if x1 < x0 as f64 || y1 < y0 as f64 {
+        return None;
+    }
+    let half = pattern.cells() as f64 / 2.0;
+    let band = band_px / (camera.fx * camera.fy).sqrt();
+    let mut edge = Vec::new();
+    let mut flat = Vec::new();
+    for row in y0..=y1 as usize {
+        let values = image.frame.row(row);
+        for (col, &v) in values.iter().enumerate().take(x1 as usize + 1).skip(x0) {
+            if v == u8::MAX {
+                continue; // clipped: glare, or paper brighter than the sensor holds
+            }
+            let Some(n) = camera.undistort(camera.pixel_to_distorted(&Point2::new(col as f64, row as f64))) else {
+                continue;
+            };
+            let Some((tx, ty)) = to_tag(&plane.to_tag, &n) else { continue };
+            if tx.abs() > reach || ty.abs() > reach {
+                continue;
+            }
+            let sample = (col, Sample { row, normalised: n, linear: image.linear[usize::from(v)] });
+            // Under a blur of `band`, a pixel that sees neither pure paper nor pure ink is near
+            // an edge.
+            let near = look(&plane, &pattern, &n, band, half, false).is_some_and(|m| (0.01..=0.99).contains(&m.paper));
+            if near {
+                edge.push(sample);
+            } else if col.is_multiple_of(FLAT_STRIDE) && row.is_multiple_of(FLAT_STRIDE) {
+                flat.push(sample);
+            }
+        }
+    }
+    // One pixel in `stride`, scattered (a regular grid beats against the cells' own).
+    let stride = (edge.len() as f64 / o.max_pixels_per_tag as f64).ceil().max(1.0) as u64;
+    let mut samples: Vec<Sample> =
+        edge.into_iter().filter(|(col, s)| scatter(*col, s.row).is_multiple_of(stride)).map(|(_, s)| s).collect();
+    samples.extend(flat.into_iter().map(|(_, s)| s));
+    samples.sort_by_key(|s| s.row);
+    (!samples.is_empty()).then_some(TagPixels { pattern, centre, x, y, first_row: y0, samples })
+}
+
+/// A hash of a pixel's place, to thin pixels without a pattern.
+fn scatter(col: usize, row: usize) -> u64 {
+    let mut h = (col as u64) << 32 | row as u64;
+    h = (h ^ (h >> 33)).wrapping_mul(0xff51_afd7_ed55_8ccd);
+    h = (h ^ (h >> 33)).wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+    h ^ (h >> 33)
+}
+
+/// The tag's plane under `pose`; `None` when it is seen edge-on.
+fn plane(pose: &Pose, centre: &Vector3<f64>, x: &Vector3<f64>, y: &Vector3<f64>) -> Option<Plane> {
+    let r = pose.rotation_matrix();
+    let (centre, x, y) = (pose.transform_point(&(*centre).into()).coords, r * x, r * y);
+    // A normalised direction n is the image of tag coordinates (tx, ty) where
+    // centre + tx·x + ty·y ∝ (n, 1): the columns (x, y, centre) map (tx, ty, 1) to it.
+    let to_tag = Matrix3::from_columns(&[x, y, centre]).try_inverse()?;
+    Some(Plane { centre, x, y, to_tag })
+}
+
+fn to_tag(to_tag: &Matrix3<f64>, n: &Vector2<f64>) -> Option<(f64, f64)> {
+    let m = to_tag * Vector3::new(n.x, n.y, 1.0);
+    (m.z.abs() > 1e-12).then(|| (m.x / m.z, m.y / m.z))
+}
+
+/// How far (px) the body's motion carries its tags' corners over the exposure.
+fn smear_px(camera: &CameraIntrinsics, start: &Pose, tags: &[Tag<'_>], m: &Motion) -> f64 {
+    let half = m.exposure_s / 2.0;
+    let (before, after) = (m.velocity.advance(start, -half), m.velocity.advance(start, half));
+    let mut smear: f64 = 0.0;
+    for c in tags.iter().flat_map(|t| t.corners) {
+        let p = c.into();
+        if let (Some(a), Some(b)) =
+            (camera.project(&before.transform_point(&p)), camera.project(&after.transform_point(&p)))
+        {
+            smear = smear.max((a - b).norm());
+        }
+    }
+    smear
+}
+
+/// The instants (s, relative to a row's own time) each row's pixels are modelled at: its
+/// exposure window sampled evenly, one instant per half pixel of `smear` (px), at most
+/// `max_subframes`; one instant, the row's own, without a smear.
+fn times(smear: f64, motion: Option<&Motion>, o: &Options) -> Vec<f64> {
+    let Some(m) = motion else { return vec![0.0] };
+    let k = ((smear * SUBFRAMES_PER_PX).ceil() as usize).clamp(1, o.max_subframes);
+    if k == 1 {
+        return vec![0.0];
+    }
+    (0..k).map(|i| ((i as f64 + 0.5) / k as f64 - 0.5) * m.exposure_s).collect()
+}
+
+/// The farthest any tag corner moved (px) between `a` and `b`.
+fn shift(camera: &CameraIntrinsics, a: &Pose, b: &Pose, tags: &[Tag<'_>]) -> f64 {
+    let mut most: f64 = 0.0;
+    for c in tags.iter().flat_map(|t| t.corners) {
+        let p = c.into();
+        match (camera.project(&a.transform_point(&p)), camera.project(&b.transform_point(&p))) {
+            (Some(x), Some(y)) => most = most.max((x - y).norm()),
+            _ => return f64::INFINITY,
+        }
+    }
+    most
+}
+
+/// The normal equations at a state, with the residuals' sums.
+struct Normal {
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+    /// Σ r² over the pixels.
+    sq: f64,
+    /// Σ w r².
+    weighted_sq: f64,
+}
+
+/// Where one fit ended.
+struct Outcome {
+    state: State,
+    /// Huber's cost there.
+    cost: f64,
+    iterations: usize,
+    normal: Normal,
+    /// Whether it modelled the body's motion.
+    motion: bool,
+}
+
+/// What the fit needs: the pixels, the optics and the motion.
+struct Fit<'a> {
+    camera: &'a CameraIntrinsics,
+    pixels: &'a [TagPixels],
+    /// Sub-frame instants within a row's exposure.
+    times: Vec<f64>,
+    motion: Option<&'a Motion>,
+}
+
+/// One pixel's model: the paper it sees, averaged over its row's instants, and the average's
+/// derivative by the pose's left perturbation and by the blur's σ (px).
+struct Seen {
+    paper: f64,
+    d: Looked,
+}
+
+impl Fit<'_> {
+    /// The fit from `start`: Levenberg–Marquardt with Huber weights on the residuals' robust
+    /// scale at the start.
+    fn run(&self, start: &Pose, sigma_px: f64, options: &Options) -> Result<Outcome, RefineError> {
+        let levels = self.levels(start, sigma_px).ok_or(RefineError::Singular)?;
+        let mut state = State { pose: *start, sigma_px, gamma: 1.0, levels };
+        let huber = options.huber * self.scale(&state).max(MIN_SCALE);
+        let huber_weight = |r: f64, _: f64| weight(r, huber);
+        let mut cost = self.cost(&state, huber);
+        let damping = Damping {
+            initial: 1e-3,
+            diagonal_floor: 1e-9,
+            relative_tolerance: RELATIVE_TOLERANCE,
+            max_iterations: options.max_iterations,
+        };
+        let mut iterations = 0;
+        minimise(
+            &mut state,
+            &mut cost,
+            &damping,
+            |s| {
+                iterations += 1;
+                Some(self.normal(s, &huber_weight))
+            },
+            |s, n, lambda| {
+                let step = damped(&n.h, lambda, damping.diagonal_floor).cholesky()?.solve(&(-&n.g));
+                let d = Vector6::from_iterator(step.iter().take(6).copied());
+                let pose = Pose::from_isometry(perturb(s.pose.isometry(), &d));
+                let sigma_px = (s.sigma_px + step[6]).max(MIN_SIGMA_PX);
+                let gamma = (s.gamma + step[7]).clamp(MIN_GAMMA, MAX_GAMMA);
+                let levels = s.levels.iter().enumerate().map(|(k, l)| {
+                    let o = SHARED + PER_TAG * k;
+                    [l[0] + step[o], l[1] + step[o + 1]]
+                });
+                Some(State { pose, sigma_px, gamma, levels: levels.collect() })
+            },
+            |s| self.cost(s, huber),
+        )
+        .ok_or(RefineError::Singular)?;
+        let normal = self.normal(&state, &huber_weight);
+        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some() })
+    }
+
+    /// Each of a tag's rows' planes at each instant: `rows × times`, row-major.
+    fn planes(&self, pose: &Pose, t: &TagPixels) -> Option<Vec<Plane>> {
+        let rows = t.samples.last().map_or(0, |s| s.row + 1 - t.first_row);
+        let mut out = Vec::with_capacity(rows * self.times.len());
+        for r in 0..rows {
+            let row_offset = self.motion.map_or(0.0, |m| m.shutter.offset_s((t.first_row + r) as f64));
+            for &dt in &self.times {
+                let at = match self.motion {
+                    Some(m) if row_offset + dt != 0.0 => m.velocity.advance(pose, row_offset + dt),
+                    _ => *pose,
+                };
+                out.push(plane(&at, &t.centre, &t.x, &t.y)?);
+            }
+        }
+        Some(out)
+    }
+
+    /// Every pixel's model at `pose`, tag by tag (`None` where a plane is edge-on).
+    fn seen(&self, pose: &Pose, sigma_px: f64, jacobian: bool) -> Vec<Option<Vec<Seen>>> {
+        let sigma = sigma_px / (self.camera.fx * self.camera.fy).sqrt();
+        let k = self.times.len();
+        self.pixels
+            .iter()
+            .map(|t| {
+                let planes = self.planes(pose, t)?;
+                let half = t.pattern.cells() as f64 / 2.0;
+                t.samples
+                    .iter()
+                    .map(|s| {
+                        let mut seen = Seen { paper: 0.0, d: Looked::zeros() };
+                        for p in &planes[(s.row - t.first_row) * k..][..k] {
+                            let one = look(p, &t.pattern, &s.normalised, sigma, half, jacobian)?;
+                            seen.paper += one.paper;
+                            seen.d += one.d;
+                        }
+                        seen.paper /= k as f64;
+                        // σ in normalised units to σ in pixels.
+                        seen.d[6] /= k as f64 * sigma_px / sigma;
+                        seen.d.fixed_rows_mut::<6>(0).unscale_mut(k as f64);
+                        Some(seen)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Each tag's (ink, contrast) fitted by least squares at `pose`.
+    fn levels(&self, pose: &Pose, sigma_px: f64) -> Option<Vec<[f64; PER_TAG]>> {
+        let seen = self.seen(pose, sigma_px, false);
+        self.pixels
+            .iter()
+            .zip(&seen)
+            .map(|(t, s)| {
+                let s = s.as_ref()?;
+                let (mut a, mut b) = (Matrix2::zeros(), Vector2::zeros());
+                for (px, m) in t.samples.iter().zip(s) {
+                    let j = Vector2::new(1.0, m.paper);
+                    a += j * j.transpose();
+                    b += j * px.linear;
+                }
+                let x = a.try_inverse()? * b;
+                Some([x.x, x.y])
+            })
+            .collect()
+    }
+
+    /// The residuals' robust scale: 1.4826 × their median absolute value.
+    fn scale(&self, s: &State) -> f64 {
+        let mut r = self.residuals(s);
+        if r.is_empty() {
+            return 0.0;
+        }
+        r.iter_mut().for_each(|v| *v = v.abs());
+        r.sort_by(f64::total_cmp);
+        1.4826 * r[r.len() / 2]
+    }
+
+    fn residuals(&self, s: &State) -> Vec<f64> {
+        let seen = self.seen(&s.pose, s.sigma_px, false);
+        let mut out = Vec::new();
+        for (k, (t, m)) in self.pixels.iter().zip(&seen).enumerate() {
+            let Some(m) = m else { continue };
+            out.extend(t.samples.iter().zip(m).map(|(px, m)| px.linear - s.predict(k, m.paper).0));
+        }
+        out
+    }
+
+    /// Huber's cost of the residuals; infinite where a tag is seen edge-on.
+    fn cost(&self, s: &State, huber: f64) -> f64 {
+        let seen = self.seen(&s.pose, s.sigma_px, false);
+        let mut cost = 0.0;
+        for (k, (t, m)) in self.pixels.iter().zip(&seen).enumerate() {
+            let Some(m) = m else { return f64::INFINITY };
+            cost += t.samples.iter().zip(m).map(|(px, m)| rho(px.linear - s.predict(k, m.paper).0, huber)).sum::<f64>();
+        }
+        cost
+    }
+
+    /// The normal equations at `s`, each pixel weighted by `weight(residual, model)`.
+    fn normal(&self, s: &State, weight: &dyn Fn(f64, f64) -> f64) -> Normal {
+        let n = SHARED + PER_TAG * self.pixels.len();
+        let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
+        let (mut sq, mut weighted_sq) = (0.0, 0.0);
+        let seen = self.seen(&s.pose, s.sigma_px, true);
+        for (k, ((t, m), l)) in self.pixels.iter().zip(&seen).zip(&s.levels).enumerate() {
+            let Some(m) = m else { continue };
+            let (mut hss, mut hsl, mut hll) = (
+                SMatrix::<f64, SHARED, SHARED>::zeros(),
+                SMatrix::<f64, SHARED, PER_TAG>::zeros(),
+                SMatrix::<f64, PER_TAG, PER_TAG>::zeros(),
+            );
+            let (mut gs, mut gl) = (Shared::zeros(), PerTag::zeros());
+            for (px, m) in t.samples.iter().zip(m) {
+                let (model, by_light, by_gamma) = s.predict(k, m.paper);
+                let r = px.linear - model;
+                let w = weight(r, model);
+                let mut js = Shared::zeros();
+                js.fixed_rows_mut::<7>(0).copy_from(&(m.d * (-by_light * l[1])));
+                js[7] = -by_gamma;
+                let jl = PerTag::new(-by_light, -by_light * m.paper);
+                hss += js * js.transpose() * w;
+                hsl += js * jl.transpose() * w;
+                hll += jl * jl.transpose() * w;
+                gs += js * (w * r);
+                gl += jl * (w * r);
+                sq += r * r;
+                weighted_sq += w * r * r;
+            }
+            let o = SHARED + PER_TAG * k;
+            h.view_mut((0, 0), (SHARED, SHARED)).add_assign(&hss);
+            h.view_mut((0, o), (SHARED, PER_TAG)).add_assign(&hsl);
+            h.view_mut((o, 0), (PER_TAG, SHARED)).add_assign(&hsl.transpose());
+            h.view_mut((o, o), (PER_TAG, PER_TAG)).add_assign(&hll);
+            g.rows_mut(0, SHARED).add_assign(&gs);
+            g.rows_mut(o, PER_TAG).add_assign(&gl);
+        }
+        Normal { h, g, sq, weighted_sq }
+    }
+}
+
+/// Huber's ρ.
+fn rho(r: f64, k: f64) -> f64 {
+    let a = r.abs();
+    if a <= k { r * r } else { 2.0 * k * a - k * k }
+}
+
+/// Huber's IRLS weight ψ(r)/r (on the ρ above, whose quadratic part is r²).
+fn weight(r: f64, k: f64) -> f64 {
+    let a = r.abs();
+    if a <= k { 1.0 } else { k / a }
+}
+
+/// What the pixel looking along `n` sees of a tag on `plane`: the paper, and (with
+/// `jacobian`) its derivative by a left perturbation of the pose (rotation, translation).
+fn look(plane: &Plane, pattern: &Pattern, n: &Vector2<f64>, sigma: f64, half: f64, jacobian: bool) -> Option<Seen> {
+    let (tx, ty) = to_tag(&plane.to_tag, n)?;
+    let x = plane.centre + plane.x * tx + plane.y * ty;
+    if x.z <= 0.0 {
+        return None;
+    }
+    // d(normalised)/d(camera point), and the tag plane's 2×2 image Jacobian.
+    let iz = 1.0 / x.z;
+    let dpi = Matrix2x3::new(iz, 0.0, -x.x * iz * iz, 0.0, iz, -x.y * iz * iz);
+    let a = dpi * Matrix3x2::from_columns(&[plane.x, plane.y]);
+    let j = a.try_inverse()?;
+    // The blur carried onto the plane, per axis, in cells.
+    let su = half * sigma * j.row(0).norm();
+    let sv = half * sigma * j.row(1).norm();
+    let (u, v) = ((tx + 1.0) * half, (ty + 1.0) * half);
+    let m = pattern.paper(u, v, su, sv);
+    let mut d = Looked::zeros();
+    if jacobian && (m.du != 0.0 || m.dv != 0.0 || m.dsu != 0.0 || m.dsv != 0.0) {
+        // The point on the plane a fixed pixel sees moves by −J·Dπ·dx when the plane's point x
+        // moves by dx; a left perturbation moves x by −[x]×·ω + τ.
+        let mut dx = Matrix3x6::zeros();
+        dx.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-x.cross_matrix()));
+        dx.fixed_view_mut::<3, 3>(0, 3).copy_from(&Matrix3::identity());
+        let d_tag: Matrix2x6<f64> = -(j * dpi * dx) * half;
+        // The blur carried onto the plane grows with the point's depth (nearly as it: the
+        // plane's tilt changes little over a step).
+        let d_depth = dx.row(2) / x.z;
+        let d_pose = d_tag.transpose() * Vector2::new(m.du, m.dv) + (d_depth * (m.dsu * su + m.dsv * sv)).transpose();
+        d.fixed_rows_mut::<6>(0).copy_from(&d_pose);
+        // By σ (normalised units): the spreads grow in proportion.
+        d[6] = (m.dsu * su + m.dsv * sv) / sigma;
+    }
+    Some(Seen { paper: m.value, d })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jawtrack_tag_family::TagFamily;
+    use nalgebra::UnitQuaternion;
+
+    #[test]
+    fn the_pose_derivative_is_the_models_slope() {
+        let bitmap = TagFamily::TAG36H11.bitmap(3).expect("tag 3");
+        let pattern = Pattern::new(&bitmap).expect("8 cells");
+        let (centre, x, y) = (Vector3::new(1.0, 2.0, 0.5), Vector3::new(5.0, 0.0, 0.0), Vector3::new(0.0, -5.0, 0.3));
+        let pose = Pose::from_parts(
+            UnitQuaternion::from_scaled_axis(Vector3::new(0.3, 2.9, 0.1)),
+            Vector3::new(4.0, -3.0, 150.0),
+        );
+        let p = plane(&pose, &centre, &x, &y).expect("plane");
+        let (sigma, half, h) = (1.2 / 1500.0, 4.0, 1e-7);
+        let mut checked = 0;
+        for k in 0..40 {
+            let n = Vector2::new(0.02 + 0.0011 * f64::from(k % 7), -0.015 + 0.0013 * f64::from(k / 7));
+            let seen = look(&p, &pattern, &n, sigma, half, true).expect("seen");
+            for i in 0..6 {
+                let mut d = Vector6::zeros();
+                d[i] = h;
+                let at = |s: f64| {
+                    let q = Pose::from_isometry(perturb(pose.isometry(), &(d * s)));
+                    look(&plane(&q, &centre, &x, &y).expect("plane"), &pattern, &n, sigma, half, false)
+                        .expect("seen")
+                        .paper
+                };
+                let numeric = (at(1.0) - at(-1.0)) / (2.0 * h);
+                // The blur's change with the plane's tilt is left out of the derivative.
+                let (analytic, numeric) = (seen.d[i], numeric);
+                assert!(
+                    (numeric - analytic).abs() <= 1e-4 + 0.02 * numeric.abs(),
+                    "pixel {k}, {i}: {numeric} vs {analytic}"
+                );
+            }
+            checked += 1;
+        }
+        assert_eq!(checked, 40);
+    }
+}
+
+#[cfg(test)]
+mod refusals {
+    use super::*;
+    use jawtrack_apriltag::ImageView;
+    use jawtrack_tag_family::TagFamily;
+    use nalgebra::UnitQuaternion;
+
+    fn refine_at(z: f64, blur_px: f64) -> Result<Refined, RefineError> {
+        let luma = vec![128u8; 64 * 48];
+        let frame = ImageView::new(&luma, 64, 48, 64).expect("frame");
+        let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
+        let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
+        let tags = [Tag {
+            corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]],
+            bitmap: &bitmap,
+        }];
+        let camera = CameraIntrinsics::pinhole(60.0, 60.0, 31.5, 23.5);
+        // Shifted far to the side: off the frame.
+        let pose = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(500.0, 0.0, z));
+        refine(&Image { frame, linear: &linear }, &camera, &pose, &tags, blur_px, None, &Options::default())
+    }
+
+    #[test]
+    fn a_tag_off_the_frame_or_behind_the_camera_has_no_pixels() {
+        assert_eq!(refine_at(100.0, 0.5), Err(RefineError::NoPixels));
+        assert_eq!(refine_at(-100.0, 0.5), Err(RefineError::NoPixels));
+    }
+
+    #[test]
+    fn a_blur_that_is_not_one_is_refused_by_name() {
+        for blur in [f64::NAN, -1.0, f64::INFINITY] {
+            let e = refine_at(100.0, blur).expect_err("refused").to_string();
+            assert!(e.contains("blur"), "{blur}: {e}");
+        }
+    }
+}
