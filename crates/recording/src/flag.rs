@@ -28,12 +28,15 @@ pub enum Flag {
     /// (the phone is nearer than its lens can focus, or far from where focus was locked). The
     /// frame gives no jaw pose.
     Defocused(BodyKind),
+    /// A body's dense (photometric) refinement was asked for and failed (did not converge, or
+    /// strayed from the corner pose): its pose is the corners'.
+    DenseFailed(BodyKind),
 }
 
 impl Flag {
     /// Every flag, in the order of their datagram bits (`docs/wire.md`): a flag added later
     /// goes at the end.
-    pub const ALL: [Flag; 16] = [
+    pub const ALL: [Flag; 18] = [
         Flag::NoTags,
         Flag::Lost(BodyKind::Maxilla),
         Flag::Lost(BodyKind::Mandible),
@@ -50,6 +53,8 @@ impl Flag {
         Flag::UncalibratedTag(BodyKind::Mandible),
         Flag::Defocused(BodyKind::Maxilla),
         Flag::Defocused(BodyKind::Mandible),
+        Flag::DenseFailed(BodyKind::Maxilla),
+        Flag::DenseFailed(BodyKind::Mandible),
     ];
 
     /// A short machine-readable name, e.g. `mandible:lost`.
@@ -64,6 +69,7 @@ impl Flag {
             Flag::Unreadable => "unreadable".into(),
             Flag::UncalibratedTag(b) => format!("{b}:uncalibrated_tag"),
             Flag::Defocused(b) => format!("{b}:defocused"),
+            Flag::DenseFailed(b) => format!("{b}:dense_failed"),
         }
     }
 
@@ -104,7 +110,8 @@ mod tests {
         // Bits are never renumbered: the newest flags come last.
         assert_eq!(Flag::ALL[11], Flag::Unreadable);
         assert_eq!(Flag::ALL[12..14], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::UncalibratedTag));
-        assert_eq!(Flag::ALL[14..], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::Defocused));
+        assert_eq!(Flag::ALL[14..16], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::Defocused));
+        assert_eq!(Flag::ALL[16..], [BodyKind::Maxilla, BodyKind::Mandible].map(Flag::DenseFailed));
         assert_eq!(Flag::Defocused(BodyKind::Maxilla).name(), "maxilla:defocused");
     }
 }
