@@ -24,6 +24,7 @@
 //! ([`TrackerConfig::readout_s`]) every corner is carried from its row's time to the frame's
 //! before the bodies are solved, so both are reported at the same instant.
 
+mod dense;
 mod flicker;
 pub mod oblique;
 mod result;
@@ -31,6 +32,7 @@ pub mod roi;
 pub mod sharpness;
 pub mod smoothing;
 
+pub use dense::PoseRefinement;
 pub use jawtrack_recording::Flag;
 pub use result::{BodyResult, FrameResult, Timings, tone_record};
 pub use sharpness::{DEFOCUSED_BLUR_PER_CELL, THIN_CELL_PX, THIN_RATIO};
@@ -107,6 +109,8 @@ pub struct TrackerConfig {
     /// frame gives no jaw pose: the lens was not focused on it (a phone held nearer than it
     /// can focus, or far from where its focus was locked). See [`DEFOCUSED_BLUR_PER_CELL`].
     pub max_blur_per_cell: f64,
+    /// How each body's pose is finished once solved from its tags' corners.
+    pub refine: PoseRefinement,
 }
 
 impl Default for TrackerConfig {
@@ -123,6 +127,7 @@ impl Default for TrackerConfig {
             readout_s: 0.0,
             exposure_s: 1.0 / 120.0,
             max_blur_per_cell: DEFOCUSED_BLUR_PER_CELL,
+            refine: PoseRefinement::default(),
         }
     }
 }
@@ -369,7 +374,7 @@ impl Tracker {
         }
         self.since_full = if searched.is_none() { 0 } else { self.since_full + 1 };
         let detection_s = start.elapsed().as_secs_f64();
-        let mut result = self.solve(detections, camera, t, frame.height());
+        let mut result = self.solve_in(detections, camera, t, frame.height(), Some(frame));
         result.searched = searched;
         result.timings.detection_s = detection_s;
         result.timings.stages = stages;
@@ -462,8 +467,22 @@ impl Tracker {
     }
 
     /// Solves both bodies from detections already made (e.g. by a detector elsewhere) in a
-    /// frame of `rows` rows taken at `t` (s): the time of its centre row.
+    /// frame of `rows` rows taken at `t` (s): the time of its centre row. Without the frame's
+    /// pixels the poses are the corners' whatever [`TrackerConfig::refine`] asks, and with
+    /// [`PoseRefinement::Dense`] each body says so (`dense_failed`).
     pub fn solve(&mut self, detections: Vec<Detection>, camera: &CameraIntrinsics, t: f64, rows: usize) -> FrameResult {
+        self.solve_in(detections, camera, t, rows, None)
+    }
+
+    /// [`Tracker::solve`], with the frame the detections came from for the dense refinement.
+    fn solve_in(
+        &mut self,
+        detections: Vec<Detection>,
+        camera: &CameraIntrinsics,
+        t: f64,
+        rows: usize,
+        frame: Option<&ImageView<'_>>,
+    ) -> FrameResult {
         let start = Instant::now();
         // The readout was validated with the settings.
         let shutter = RollingShutter::new(self.config.readout_s, rows).unwrap_or_else(|_| RollingShutter::global());
@@ -505,6 +524,11 @@ impl Tracker {
             };
             bodies[slot(kind)] = self.accept(kind, pose, rejected, other.or(own).as_ref(), &mut flags);
         }
+        let refining = Instant::now();
+        if self.config.refine == PoseRefinement::Dense {
+            self.refine_dense(&mut bodies, &detections, camera, t, &shutter, frame, &mut flags);
+        }
+        let refine_s = refining.elapsed().as_secs_f64();
         let defocused =
             sharpness::judge(&mut bodies, &detections, smears, self.config.max_blur_per_cell, self.cells(), &mut flags);
         for kind in BodyKind::ALL {
@@ -560,8 +584,52 @@ impl Tracker {
             flags,
             detections,
             searched: None,
-            timings: Timings { pose_s: start.elapsed().as_secs_f64(), ..Timings::default() },
+            timings: Timings { pose_s: start.elapsed().as_secs_f64(), refine_s, ..Timings::default() },
             tone: None,
+        }
+    }
+
+    /// Refines each solved body's pose from its tags' pixels ([`PoseRefinement::Dense`]); a body
+    /// whose refinement fails, or that has no frame to refine from, keeps its corner pose and is
+    /// flagged `dense_failed`.
+    #[allow(clippy::too_many_arguments)]
+    fn refine_dense(
+        &self,
+        bodies: &mut [Option<BodyResult>; 2],
+        detections: &[Detection],
+        camera: &CameraIntrinsics,
+        t: f64,
+        shutter: &RollingShutter,
+        frame: Option<&ImageView<'_>>,
+        flags: &mut Vec<Flag>,
+    ) {
+        let linear = frame.map(|_| self.detector.tone().curve.decode_table());
+        for kind in BodyKind::ALL {
+            let Some(body) = bodies[slot(kind)].as_mut() else { continue };
+            let (Some(frame), Some(linear)) = (frame, linear.as_ref()) else {
+                flags.push(Flag::DenseFailed(kind));
+                continue;
+            };
+            let state = &self.bodies[slot(kind)];
+            // The motion is modelled only where the body's recent poses foretold this one: after
+            // a jump (a cut, frames timed wrongly) the velocity they give would smear sharp tags.
+            let foretold =
+                state.last().filter(|l| self.recent(l.0, t)).and_then(|_| state.predict(t)).is_some_and(|p| {
+                    dense::miss_px(&self.marker, &body.tags, &p, &body.camera_from_body, camera) <= dense::FORETOLD_PX
+                });
+            let velocity = foretold
+                .then(|| state.velocity_at(t, body.camera_from_body))
+                .flatten()
+                .filter(|v| v.is_finite() && v.linear.norm() <= MAX_SPEED_MM_S && v.angular.norm() <= MAX_TURN_RAD_S);
+            let motion = velocity.map(|velocity| jawtrack_photometric::Motion {
+                velocity,
+                shutter: *shutter,
+                exposure_s: self.config.exposure_s,
+            });
+            let pixels = dense::Pixels { frame, linear, camera };
+            if dense::refine_body(&self.marker, &pixels, body, detections, motion.as_ref()).is_err() {
+                flags.push(Flag::DenseFailed(kind));
+            }
         }
     }
 

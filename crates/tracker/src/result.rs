@@ -42,8 +42,10 @@ impl BodyResult {
 pub struct Timings {
     /// Tag detection (both searches when a region search missed a body).
     pub detection_s: f64,
-    /// Both bodies' PnP, ambiguity and flicker checks, composition.
+    /// Both bodies' PnP, ambiguity and flicker checks, composition (and the dense refinement).
     pub pose_s: f64,
+    /// Of `pose_s`, the dense refinement of both bodies ([`crate::PoseRefinement::Dense`]).
+    pub refine_s: f64,
     /// Detection stage by stage, summed over the frame's searches.
     pub stages: jawtrack_apriltag::StageTimes,
 }

@@ -101,6 +101,14 @@ impl BodyState {
         camera.fx.max(camera.fy) * across / z * exposure_s
     }
 
+    /// Its velocity at `t`, where it is at `pose`: from its last poses before `t` and that one
+    /// (`None` without an earlier pose).
+    pub(crate) fn velocity_at(&self, t: f64, pose: Pose) -> Option<Velocity> {
+        let mut timed: Vec<Timed> = self.history.iter().filter(|(s, _)| *s < t).copied().collect();
+        timed.push((t, pose));
+        Velocity::at(&timed, t)
+    }
+
     /// The pose expected at `t`.
     pub(crate) fn predict(&self, t: f64) -> Option<Pose> {
         let last = self.last()?;

@@ -1,0 +1,116 @@
+//! How a body's pose is finished once solved from its tags' corners ([`PoseRefinement`]), and the
+//! dense refinement's call ([`jawtrack_photometric`]) with what the tracker knows of the frame:
+//! the tags the body was solved from, their edges' blur, the tone curve and the body's motion.
+
+use crate::BodyResult;
+use jawtrack_apriltag::{Detection, ImageView};
+use jawtrack_marker::Marker;
+use jawtrack_photometric::{Image, Motion, Options, RefineError, Tag, refine};
+use jawtrack_pose::{CameraIntrinsics, Pose, median};
+use nalgebra::Point3;
+
+/// How each body's pose is finished.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PoseRefinement {
+    /// The pose that fits the tags' corners (PnP refined by Levenberg–Marquardt).
+    #[default]
+    Corners,
+    /// That pose refined from every pixel of the body's tags ([`jawtrack_photometric`]): the
+    /// tags' patterns, blurred by the lens and smeared by the body's motion over each row's
+    /// exposure, compared with the image in linear light. A body whose refinement fails keeps
+    /// its corner pose and is flagged `dense_failed`.
+    Dense,
+}
+
+impl PoseRefinement {
+    /// Every choice, as named on the command line.
+    pub const ALL: [PoseRefinement; 2] = [PoseRefinement::Corners, PoseRefinement::Dense];
+
+    /// Its name: `corners` or `dense`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PoseRefinement::Corners => "corners",
+            PoseRefinement::Dense => "dense",
+        }
+    }
+}
+
+impl std::fmt::Display for PoseRefinement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for PoseRefinement {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        PoseRefinement::ALL
+            .into_iter()
+            .find(|r| r.name() == s)
+            .ok_or_else(|| format!("unknown pose refinement '{s}' (choose corners or dense)"))
+    }
+}
+
+/// The body's motion is modelled (its velocity smearing the tags over the exposure, its rows
+/// read at their own times) only when its recent poses predicted this frame's within this (px,
+/// the farthest tag corner): a jump between views, or a cut, misses by more. Chewing through a
+/// 2× crop at 60 frames/s misses by more than 5 px at times (with 5 px, 12 of 74 bodies lost
+/// their motion model and the chewing p95 grew fivefold, `jawtrack-bench dense`); a view jump
+/// that happens to continue the last one's step is left to the image ([`jawtrack_photometric::refine`]
+/// fits the body as still too and keeps the better fit).
+pub(crate) const FORETOLD_PX: f64 = 20.0;
+
+/// The farthest (px) any corner of `tags` lies between `predicted` and `solved`; infinite when
+/// one cannot be projected.
+pub(crate) fn miss_px(
+    marker: &Marker,
+    tags: &[u32],
+    predicted: &Pose,
+    solved: &Pose,
+    camera: &CameraIntrinsics,
+) -> f64 {
+    let mut most: f64 = 0.0;
+    for (_, tag) in tags.iter().filter_map(|&id| marker.find_tag(id)) {
+        for c in &tag.corners {
+            let p = Point3::from(*c);
+            match (camera.project(&predicted.transform_point(&p)), camera.project(&solved.transform_point(&p))) {
+                (Some(a), Some(b)) => most = most.max((a - b).norm()),
+                _ => return f64::INFINITY,
+            }
+        }
+    }
+    most
+}
+
+/// The frame as the dense refinement reads it.
+pub(crate) struct Pixels<'a> {
+    pub frame: &'a ImageView<'a>,
+    /// The tone curve's decoding of each 8-bit value.
+    pub linear: &'a [f64; 256],
+    pub camera: &'a CameraIntrinsics,
+}
+
+/// Refines `body`'s pose in place from its tags' pixels; on failure it is left as it was.
+pub(crate) fn refine_body(
+    marker: &Marker,
+    pixels: &Pixels<'_>,
+    body: &mut BodyResult,
+    detections: &[Detection],
+    motion: Option<&Motion>,
+) -> Result<(), RefineError> {
+    let bitmaps: Vec<_> = body.tags.iter().filter_map(|&id| Some((id, marker.family.bitmap(id)?))).collect();
+    let tags: Vec<Tag<'_>> = bitmaps
+        .iter()
+        .filter_map(|(id, bitmap)| {
+            let (_, tag) = marker.find_tag(*id)?;
+            Some(Tag { corners: tag.corners.map(|c| [c.x, c.y, c.z]), bitmap })
+        })
+        .collect();
+    let blur = median(detections.iter().filter(|d| body.tags.contains(&d.id)).filter_map(|d| d.blur_px));
+    let image = Image { frame: *pixels.frame, linear: pixels.linear };
+    let refined =
+        refine(&image, pixels.camera, &body.camera_from_body, &tags, blur.unwrap_or(0.0), motion, &Options::default())?;
+    body.camera_from_body = refined.camera_from_body;
+    body.covariance = refined.covariance;
+    Ok(())
+}
