@@ -12,6 +12,7 @@ use jawtrack_offline::{OfflineError, Pass, Said, TrackEvents, TrackOptions, trac
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_progress::ProgressBar;
 use jawtrack_recording::create_file;
+use jawtrack_tracker::PoseRefinement;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -80,6 +81,13 @@ pub(crate) struct TrackArgs {
     /// Smooth the jaw pose (One-Euro filter; never more than one frame of lag).
     #[arg(long)]
     smooth: bool,
+    /// How each body's pose is finished: `corners` fits its tags' corners; `dense` then refines
+    /// it from every pixel of its tags (their patterns, blurred by the lens and smeared by the
+    /// motion over each row's exposure, against the image in linear light). A body whose dense
+    /// refinement fails keeps its corner pose and is flagged `dense_failed`. Recorded in the
+    /// header.
+    #[arg(long, value_name = "corners|dense", default_value_t = PoseRefinement::Corners)]
+    refine: PoseRefinement,
     /// Output file (JSON lines); `-` for standard output.
     #[arg(long)]
     out: PathBuf,
@@ -121,6 +129,7 @@ impl TrackArgs {
             tone: self.edges.tone,
             region_search: self.region_search,
             smooth: self.smooth,
+            refine: self.refine,
             out: self.out.clone(),
             refine_marker: self.refine_marker.clone(),
             video: self.video.clone(),

@@ -15,7 +15,7 @@ use jawtrack_marker::Marker;
 use jawtrack_pose::CameraIntrinsics;
 use jawtrack_recording::{FrameRecord, RecordingHeader, RecordingWriter, ToneRecord};
 use jawtrack_registration::Registration;
-use jawtrack_tracker::{FrameResult, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use jawtrack_tracker::{FrameResult, PoseRefinement, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -55,6 +55,8 @@ pub struct TrackOptions {
     pub region_search: bool,
     /// Smooth the jaw pose.
     pub smooth: bool,
+    /// How each body's pose is finished: from its tags' corners, or refined from their pixels.
+    pub refine: PoseRefinement,
     /// The output's name, for messages (the writer itself comes from [`TrackEvents::output`]).
     pub out: PathBuf,
     /// Refine the marker from a first pass and write it here.
@@ -242,6 +244,7 @@ fn tracker_config(o: &TrackOptions, readout_s: f64, exposure_s: Option<f64>) -> 
         },
         search: SearchConfig { region_search: o.region_search, ..SearchConfig::default() },
         smoother: o.smooth.then(SmootherConfig::default),
+        refine: o.refine,
         readout_s,
         exposure_s: exposure_s.unwrap_or(TrackerConfig::default().exposure_s),
         ..TrackerConfig::default()
@@ -258,7 +261,7 @@ fn header(o: &TrackOptions, tracker: &Tracker, s: &Setup) -> RecordingHeader {
     header.settings = serde_json::json!({
         "decimate": o.decimate, "threads": o.threads, "linear_edges": o.linear_edges, "tone": o.tone.to_string(),
         "region_search": o.region_search,
-        "smooth": o.smooth, "registration": o.registration.as_ref().map(|p| p.display().to_string()),
+        "smooth": o.smooth, "refine": o.refine.name(), "registration": o.registration.as_ref().map(|p| p.display().to_string()),
         "refine_marker": o.refine_marker.as_ref().map(|p| p.display().to_string()),
     });
     header
