@@ -58,6 +58,7 @@ struct SettingsView: View {
                     Toggle("Fit edges in linear light", isOn: $form.draft.tracker.linearEdges)
                     Toggle("Search near the markers", isOn: $form.draft.tracker.regionSearch)
                     Toggle("Smooth the pose", isOn: $form.draft.tracker.smooth)
+                    Toggle("Refine from every pixel (slow, not live)", isOn: $form.draft.tracker.dense)
                 }
                 receiver
                 Section("Recording") { Toggle("Record the video too (.mov)", isOn: $form.draft.recordVideo) }

@@ -42,6 +42,8 @@ typedef struct JtSettings {
   bool smooth;
   // The camera's rolling-shutter readout, first row to last (s; 0: global shutter).
   double readout_s;
+  // Refine each jaw's pose from every pixel of its tags (slow: off by default).
+  bool dense;
 } JtSettings;
 
 // Camera intrinsics in pixels of the frame (pixel centres at integer coordinates).

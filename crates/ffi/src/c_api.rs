@@ -75,6 +75,8 @@ pub struct JtSettings {
     pub smooth: bool,
     /// The camera's rolling-shutter readout, first row to last (s; 0: global shutter).
     pub readout_s: f64,
+    /// Refine each jaw's pose from every pixel of its tags (slow: off by default).
+    pub dense: bool,
 }
 
 /// One body's pose in a [`JtFrameSummary`].
@@ -191,6 +193,7 @@ pub extern "C" fn jt_settings_default() -> JtSettings {
         region_search: s.region_search,
         smooth: s.smooth,
         readout_s: s.readout_s,
+        dense: s.dense,
     }
 }
 
@@ -223,6 +226,7 @@ pub unsafe extern "C" fn jt_tracker_new(
             region_search: s.region_search,
             smooth: s.smooth,
             readout_s: s.readout_s,
+            dense: s.dense,
         };
         let marker = if marker_json.is_null() {
             Marker::default()

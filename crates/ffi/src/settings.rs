@@ -5,7 +5,7 @@
 use crate::JawTrackError;
 use crate::capture::check_readout;
 use jawtrack_apriltag::DetectorConfig;
-use jawtrack_tracker::{SearchConfig, SmootherConfig, TrackerConfig};
+use jawtrack_tracker::{PoseRefinement, SearchConfig, SmootherConfig, TrackerConfig};
 
 /// Decimations the detector accepts.
 const DECIMATIONS: [f32; 5] = [1.0, 1.5, 2.0, 3.0, 4.0];
@@ -31,6 +31,10 @@ pub struct Settings {
     /// instant): both jaws are then solved at the time of the frame's centre row. The app takes
     /// it from [`crate::readout_for`].
     pub readout_s: f64,
+    /// Refine each jaw's pose from every pixel of its tags (`jawtrack track --refine dense`)
+    /// rather than from their corners alone. Off by default: it takes about 100 ms a body on a
+    /// desktop core today, too slow to run live (docs/dense.md).
+    pub dense: bool,
 }
 
 /// The tracker's defaults: those of `jawtrack track`.
@@ -46,6 +50,7 @@ pub fn default_settings() -> Settings {
         region_search: true,
         smooth: false,
         readout_s: 0.0,
+        dense: false,
     }
 }
 
@@ -90,6 +95,7 @@ impl Settings {
             search: SearchConfig { region_search: self.region_search, ..SearchConfig::default() },
             smoother: self.smooth.then(SmootherConfig::default),
             readout_s: self.readout_s,
+            refine: if self.dense { PoseRefinement::Dense } else { PoseRefinement::Corners },
             ..TrackerConfig::default()
         })
     }

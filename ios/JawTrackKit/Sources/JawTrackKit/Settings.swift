@@ -125,6 +125,8 @@ public struct StoredSettings: Codable, Equatable {
     public var linearEdges: Bool
     public var regionSearch: Bool
     public var smooth: Bool
+    /// Optional so that settings stored before the dense refinement existed still load (off).
+    public var dense: Bool?
     public var receiverHost: String
     public var receiverPort: UInt32
     public var recordVideo: Bool
@@ -146,6 +148,7 @@ public struct StoredSettings: Codable, Equatable {
         linearEdges = settings.tracker.linearEdges
         regionSearch = settings.tracker.regionSearch
         smooth = settings.tracker.smooth
+        dense = settings.tracker.dense
         receiverHost = settings.receiverHost
         receiverPort = settings.receiverPort
         recordVideo = settings.recordVideo
@@ -165,7 +168,8 @@ public struct StoredSettings: Codable, Equatable {
         }
         let tracker = JawTrackCore.Settings(
             decimate: decimate, quadSigma: quadSigma, maxHamming: maxHamming, threads: threads,
-            linearEdges: linearEdges, regionSearch: regionSearch, smooth: smooth, readoutS: 0
+            linearEdges: linearEdges, regionSearch: regionSearch, smooth: smooth, readoutS: 0,
+            dense: dense ?? false
         )
         return AppSettings(
             camera: camera, resolution: resolution, fps: fps, focus: focus, lensPosition: lensPosition,

@@ -21,6 +21,7 @@ final class SettingsTests: XCTestCase {
         changed.lensPosition = 0.25
         changed.tracker.decimate = 1.5
         changed.tracker.smooth = true
+        changed.tracker.dense = true
         changed.receiverHost = "10.0.0.2"
         changed.receiverPort = 5005
         changed.pairingKey = key
@@ -31,6 +32,22 @@ final class SettingsTests: XCTestCase {
         let reloaded = SettingsStore(values: values, secrets: secrets)
         XCTAssertNil(reloaded.loadProblem)
         XCTAssertEqual(reloaded.settings, changed)
+    }
+
+    func testSettingsStoredBeforeTheDenseRefinementLoadWithItOff() throws {
+        let values = MemoryKeyValueStore()
+        let store = SettingsStore(values: values, secrets: MemorySecretStore())
+        var on = store.settings
+        on.tracker.dense = true
+        try store.save(on)
+        var stored = try XCTUnwrap(
+            JSONSerialization.jsonObject(with: try XCTUnwrap(values.data(forKey: SettingsStore.key))) as? [String: Any])
+        XCTAssertEqual(stored["dense"] as? Bool, true)
+        stored.removeValue(forKey: "dense")
+        values.set(try JSONSerialization.data(withJSONObject: stored), forKey: SettingsStore.key)
+        let older = SettingsStore(values: values, secrets: MemorySecretStore())
+        XCTAssertNil(older.loadProblem)
+        XCTAssertFalse(older.settings.tracker.dense)
     }
 
     func testAFreshInstallRunsADetectorThreadPerPerformanceCoreAndSavedSettingsWin() throws {
