@@ -1,9 +1,9 @@
 //! `jawtrack-bench`: the benchmarks a user runs, kept out of the product binary: the tracking
-//! pipeline's speed and the benchtop accuracy experiments (both in `jawtrack-tracker-bench`,
+//! pipeline's speed, the benchtop accuracy experiments and the dense refinement (all in `jawtrack-tracker-bench`,
 //! whose `bench-accuracy` binary adds the C reference's columns), and the phone link against a
 //! real `jawtrack receive` process ([`link`]).
 //!
-//! `cargo run --release -p jawtrack-bench -- pipeline` (or `accuracy`, `link`); `--help` lists
+//! `cargo run --release -p jawtrack-bench -- pipeline` (or `accuracy`, `dense`, `link`); `--help` lists
 //! each one's flags.
 
 mod link;
@@ -29,6 +29,10 @@ enum BenchKind {
     /// columns (AprilTag C + OpenCV SQPnP) beside ours, give the same flags to
     /// `cargo run --release -p jawtrack-tracker-bench --bin bench-accuracy -- …`.
     Accuracy(Box<jawtrack_tracker_bench::accuracy::AccuracyArgs>),
+    /// The dense (photometric) refinement beside the corner pipeline on the same rendered
+    /// frames: error against the truth, a still jaw's jitter against its Cramér–Rao bound, time
+    /// per body.
+    Dense(jawtrack_tracker_bench::dense::DenseArgs),
     /// The phone link on loopback: a sustained stream against a real receiver (loss, CPU), then
     /// random, forged and replayed datagrams (none accepted, every one counted).
     Link(link::LinkBenchArgs),
@@ -39,6 +43,7 @@ fn main() {
     let done = match &a.which {
         BenchKind::Pipeline(p) => jawtrack_tracker_bench::pipeline::run(p),
         BenchKind::Accuracy(a) => jawtrack_tracker_bench::accuracy::run(a),
+        BenchKind::Dense(a) => jawtrack_tracker_bench::dense::run(a),
         BenchKind::Link(a) => link::run(a),
     };
     if let Err(e) = done {

@@ -10,7 +10,7 @@ use std::process::Command;
 #[derive(clap::Args)]
 #[command(disable_help_flag = true)]
 pub struct BenchArgs {
-    /// `pipeline`, `accuracy` or `link`, then that benchmark's flags (`jawtrack bench --help`
+    /// `pipeline`, `accuracy`, `dense` or `link`, then that benchmark's flags (`jawtrack bench --help`
     /// lists them).
     #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 0..)]
     args: Vec<String>,

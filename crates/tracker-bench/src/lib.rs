@@ -12,6 +12,7 @@ pub mod accuracy;
 pub mod benchtop;
 pub mod capture;
 pub mod chew;
+pub mod dense;
 pub mod frames;
 pub mod opencv;
 pub mod pipeline;
