@@ -24,7 +24,7 @@
 //!
 //! ```
 //! use jawtrack_apriltag::ImageView;
-//! use jawtrack_photometric::{Image, Options, Tag, refine};
+//! use jawtrack_photometric::{Body, Image, Options, Tag, refine};
 //! use jawtrack_pose::{CameraIntrinsics, Pose};
 //! use jawtrack_tag_family::TagFamily;
 //! use nalgebra::{UnitQuaternion, Vector3};
@@ -40,8 +40,8 @@
 //! let corners = [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]];
 //! let tags = [Tag { corners, bitmap: &bitmap }];
 //! let corner_pose = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 0.0, 100.0));
-//! let image = Image { frame, linear: &linear };
-//! match refine(&image, &camera, &corner_pose, &tags, 0.6, None, &Options::default()) {
+//! let body = Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px: 0.6, motion: None };
+//! match refine(&body, &corner_pose, &Options::default()) {
 //!     Ok(r) => println!("{:?} from {} pixels", r.camera_from_body, r.pixels),
 //!     // A grey frame shows no tag: the corner pose stands, and the reason is given.
 //!     Err(e) => println!("kept the corner pose: {e}"),
@@ -57,7 +57,7 @@ pub use model::Pattern;
 pub use solve::{bound, refine};
 
 use jawtrack_apriltag::ImageView;
-use jawtrack_pose::{Pose, RollingShutter, Velocity};
+use jawtrack_pose::{CameraIntrinsics, Pose, RollingShutter, Velocity};
 use jawtrack_tag_family::TagBitmap;
 use nalgebra::Matrix6;
 
@@ -80,6 +80,22 @@ pub struct Tag<'a> {
     pub corners: [[f64; 3]; 4],
     /// Its cells.
     pub bitmap: &'a TagBitmap,
+}
+
+/// One marker body as a frame shows it: what [`refine`] and [`bound`] compare.
+#[derive(Debug, Clone, Copy)]
+pub struct Body<'a> {
+    /// The frame, and how to read it as linear light.
+    pub image: Image<'a>,
+    /// The camera that took it.
+    pub camera: &'a CameraIntrinsics,
+    /// The body's tags to compare (those its pose was solved from).
+    pub tags: &'a [Tag<'a>],
+    /// The lens's blur (σ, px) on its edges without the pixel's own spread: the start of the
+    /// blur fitted (the detector's `blur_px`).
+    pub blur_px: f64,
+    /// How it moved over the frame's readout and exposure (`None`: still, or unknown).
+    pub motion: Option<Motion>,
 }
 
 /// How the body moved while the frame was read.

@@ -2,7 +2,7 @@
 //! together until the image and the model agree.
 
 use crate::model::Pattern;
-use crate::{Image, Motion, Options, RefineError, Refined, Tag};
+use crate::{Body, Image, Motion, Options, RefineError, Refined, Tag};
 use jawtrack_pose::lm::{Damping, damped, minimise};
 use jawtrack_pose::pnp::perturb;
 use jawtrack_pose::{CameraIntrinsics, Pose};
@@ -102,20 +102,10 @@ type PerTag = SVector<f64, PER_TAG>;
 /// A pixel's derivatives: by the pose's six and by the blur σ.
 type Looked = SVector<f64, 7>;
 
-/// Refines `start`, the body's pose at the frame's time, from the pixels of its `tags` in
-/// `image`. `blur_px` is the lens's blur (σ, px) on the body's edges, the detector's
-/// `blur_px`, without the pixel's own spread; `motion` the body's motion over the frame's
-/// readout and exposure (`None`: still, or a global shutter with a short exposure).
-pub fn refine(
-    image: &Image<'_>,
-    camera: &CameraIntrinsics,
-    start: &Pose,
-    tags: &[Tag<'_>],
-    blur_px: f64,
-    motion: Option<&Motion>,
-    options: &Options,
-) -> Result<Refined, RefineError> {
-    let (pixels, times, sigma_px) = setup(image, camera, start, tags, blur_px, motion, options)?;
+/// Refines `start`, the body's pose at the frame's time, from the pixels of its tags.
+pub fn refine(body: &Body<'_>, start: &Pose, options: &Options) -> Result<Refined, RefineError> {
+    let (camera, motion) = (body.camera, body.motion.as_ref());
+    let (pixels, times, sigma_px) = setup(body, start, options)?;
     let count: usize = pixels.iter().map(|t| t.samples.len()).sum();
     // Motion changes the model only through a smear (instants) or rows read at their own times.
     let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
@@ -137,7 +127,7 @@ pub fn refine(
     let variance = normal.weighted_sq / dof;
     let inverse = normal.h.clone().try_inverse().ok_or(RefineError::Singular)?;
     let covariance = Matrix6::from_fn(|i, j| inverse[(i, j)] * variance);
-    let shift_px = shift(camera, start, &state.pose, tags);
+    let shift_px = shift(camera, start, &state.pose, body.tags);
     if shift_px.is_nan() || shift_px > options.max_shift_px {
         return Err(RefineError::Strayed { shift_px, limit_px: options.max_shift_px });
     }
@@ -160,19 +150,14 @@ pub fn refine(
 /// by `noise` at its modelled linear value (0–255 scale, squared), the blur and each tag's
 /// levels estimated beside the pose (so their uncertainty counts). A left perturbation in the
 /// camera frame, as [`Refined::covariance`]. The levels are those that fit the image at `pose`.
-#[allow(clippy::too_many_arguments)]
 pub fn bound(
-    image: &Image<'_>,
-    camera: &CameraIntrinsics,
+    body: &Body<'_>,
     pose: &Pose,
-    tags: &[Tag<'_>],
-    blur_px: f64,
-    motion: Option<&Motion>,
     options: &Options,
     noise: &dyn Fn(f64) -> f64,
 ) -> Result<Matrix6<f64>, RefineError> {
-    let (pixels, times, sigma_px) = setup(image, camera, pose, tags, blur_px, motion, options)?;
-    let fit = Fit { camera, pixels: &pixels, times, motion };
+    let (pixels, times, sigma_px) = setup(body, pose, options)?;
+    let fit = Fit { camera: body.camera, pixels: &pixels, times, motion: body.motion.as_ref() };
     let levels = fit.levels(pose, sigma_px).ok_or(RefineError::Singular)?;
     let state = State { pose: *pose, sigma_px, gamma: 1.0, levels };
     let information = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE));
@@ -182,21 +167,14 @@ pub fn bound(
 
 /// What [`refine`] and [`bound`] share: the settings checked, the pixels gathered at `pose`,
 /// the instants each row is modelled at, and the blur's σ with the pixel's own spread.
-#[allow(clippy::too_many_arguments)]
-fn setup(
-    image: &Image<'_>,
-    camera: &CameraIntrinsics,
-    pose: &Pose,
-    tags: &[Tag<'_>],
-    blur_px: f64,
-    motion: Option<&Motion>,
-    options: &Options,
-) -> Result<(Vec<TagPixels>, Vec<f64>, f64), RefineError> {
+fn setup(body: &Body<'_>, pose: &Pose, options: &Options) -> Result<(Vec<TagPixels>, Vec<f64>, f64), RefineError> {
+    let (camera, motion, blur_px) = (body.camera, body.motion.as_ref(), body.blur_px);
     validate(options, blur_px, motion)?;
-    let smear = motion.map_or(0.0, |m| smear_px(camera, pose, tags, m));
+    let smear = motion.map_or(0.0, |m| smear_px(camera, pose, body.tags, m));
     let sigma_px = (blur_px * blur_px + PIXEL_VARIANCE).sqrt();
     let band_px = EDGE_BAND_SIGMAS * sigma_px + smear / 2.0 + EDGE_BAND_PX;
-    let pixels: Vec<TagPixels> = tags.iter().filter_map(|t| gather(image, camera, pose, t, band_px, options)).collect();
+    let pixels: Vec<TagPixels> =
+        body.tags.iter().filter_map(|t| gather(&body.image, camera, pose, t, band_px, options)).collect();
     if pixels.is_empty() {
         return Err(RefineError::NoPixels);
     }
@@ -691,7 +669,9 @@ mod refusals {
         let camera = CameraIntrinsics::pinhole(60.0, 60.0, 31.5, 23.5);
         // Shifted far to the side: off the frame.
         let pose = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(500.0, 0.0, z));
-        refine(&Image { frame, linear: &linear }, &camera, &pose, &tags, blur_px, None, &Options::default())
+        let body =
+            Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px, motion: None };
+        refine(&body, &pose, &Options::default())
     }
 
     #[test]

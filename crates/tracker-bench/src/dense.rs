@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::{BodyKind, Marker};
-use jawtrack_photometric::{Image, Options, Tag};
+use jawtrack_photometric::{Body, Image, Options, Tag};
 use jawtrack_pose::Pose;
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind};
 use jawtrack_tone::ToneCurve;
@@ -198,17 +198,8 @@ fn jaw_bound(
             .collect();
         let blur =
             jawtrack_pose::median(r.detections.iter().filter(|d| body.tags.contains(&d.id)).filter_map(|d| d.blur_px));
-        let b = jawtrack_photometric::bound(
-            &image,
-            &truth.intrinsics,
-            &pose,
-            &tags,
-            blur.unwrap_or(0.0),
-            None,
-            &Options::default(),
-            &noise,
-        )
-        .ok()?;
+        let seen = Body { image, camera: &truth.intrinsics, tags: &tags, blur_px: blur.unwrap_or(0.0), motion: None };
+        let b = jawtrack_photometric::bound(&seen, &pose, &Options::default(), &noise).ok()?;
         covariance.push(b);
     }
     let jaw =

@@ -3,9 +3,9 @@
 //! the tags the body was solved from, their edges' blur, the tone curve and the body's motion.
 
 use crate::BodyResult;
-use jawtrack_apriltag::{Detection, ImageView};
+use jawtrack_apriltag::Detection;
 use jawtrack_marker::Marker;
-use jawtrack_photometric::{Image, Motion, Options, RefineError, Tag, refine};
+use jawtrack_photometric::{Body, Image, Motion, Options, RefineError, Tag, refine};
 use jawtrack_pose::{CameraIntrinsics, Pose, median};
 use nalgebra::Point3;
 
@@ -82,21 +82,15 @@ pub(crate) fn miss_px(
     most
 }
 
-/// The frame as the dense refinement reads it.
-pub(crate) struct Pixels<'a> {
-    pub frame: &'a ImageView<'a>,
-    /// The tone curve's decoding of each 8-bit value.
-    pub linear: &'a [f64; 256],
-    pub camera: &'a CameraIntrinsics,
-}
-
-/// Refines `body`'s pose in place from its tags' pixels; on failure it is left as it was.
+/// Refines `body`'s pose in place from its tags' pixels in `image`; on failure it is left as it
+/// was.
 pub(crate) fn refine_body(
     marker: &Marker,
-    pixels: &Pixels<'_>,
+    image: Image<'_>,
+    camera: &CameraIntrinsics,
     body: &mut BodyResult,
     detections: &[Detection],
-    motion: Option<&Motion>,
+    motion: Option<Motion>,
 ) -> Result<(), RefineError> {
     let bitmaps: Vec<_> = body.tags.iter().filter_map(|&id| Some((id, marker.family.bitmap(id)?))).collect();
     let tags: Vec<Tag<'_>> = bitmaps
@@ -106,10 +100,9 @@ pub(crate) fn refine_body(
             Some(Tag { corners: tag.corners.map(|c| [c.x, c.y, c.z]), bitmap })
         })
         .collect();
-    let blur = median(detections.iter().filter(|d| body.tags.contains(&d.id)).filter_map(|d| d.blur_px));
-    let image = Image { frame: *pixels.frame, linear: pixels.linear };
-    let refined =
-        refine(&image, pixels.camera, &body.camera_from_body, &tags, blur.unwrap_or(0.0), motion, &Options::default())?;
+    let blur_px = median(detections.iter().filter(|d| body.tags.contains(&d.id)).filter_map(|d| d.blur_px));
+    let seen = Body { image, camera, tags: &tags, blur_px: blur_px.unwrap_or(0.0), motion };
+    let refined = refine(&seen, &body.camera_from_body, &Options::default())?;
     body.camera_from_body = refined.camera_from_body;
     body.covariance = refined.covariance;
     Ok(())

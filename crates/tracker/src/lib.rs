@@ -626,8 +626,8 @@ impl Tracker {
                 shutter: *shutter,
                 exposure_s: self.config.exposure_s,
             });
-            let pixels = dense::Pixels { frame, linear, camera };
-            if dense::refine_body(&self.marker, &pixels, body, detections, motion.as_ref()).is_err() {
+            let image = jawtrack_photometric::Image { frame: *frame, linear };
+            if dense::refine_body(&self.marker, image, camera, body, detections, motion).is_err() {
                 flags.push(Flag::DenseFailed(kind));
             }
         }
