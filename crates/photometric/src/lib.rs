@@ -6,19 +6,22 @@
 //! visible tag can speak: at a pose, each pixel looks through the camera model onto a tag's
 //! plane, where the printed pattern blurred by the lens's spread ([`model`]) says how much
 //! paper it sees; the image, read in linear light through the tone curve, should be the tag's
-//! ink level plus that fraction of its contrast. The body's pose (six parameters) and each
-//! tag's two levels are fitted to all pixels together by Levenberg–Marquardt with Huber weights,
-//! so an occluder, a glare spot or a neighbour's edge costs only its own pixels.
+//! ink level plus that fraction of its contrast, raised to a power that takes up a tone curve
+//! that is not quite the camera's. The body's pose (six parameters), the blur, that power and
+//! each tag's two levels are fitted to all pixels together by Levenberg–Marquardt with Huber
+//! weights, so an occluder, a glare spot or a neighbour's edge costs only its own pixels.
 //!
 //! Motion is modelled as the camera records it: each row is exposed at its own time under a
 //! rolling shutter, and over the exposure the body moves on at its tracked velocity, so a
 //! pixel sees the pattern averaged over its row's exposure window (sampled at up to
 //! [`Options::max_subframes`] instants). The pose is the body's at the frame's time (its centre
-//! row's), as the corner pipeline's is.
+//! row's), as the corner pipeline's is. The motion is kept only where it fits the image better
+//! than a still body does: a velocity taken from earlier frames can be wrong.
 //!
 //! The refinement starts from the corner pose and is checked against it: a refinement that does
-//! not converge, or lands farther than [`Options::max_shift_px`] from it, is refused with the
-//! reason, and the caller keeps the corner pose.
+//! not settle within [`Options::max_iterations`], cannot be solved, or lands farther than
+//! [`Options::max_shift_px`] from it, is refused with the reason ([`RefineError`]), and the
+//! caller keeps the corner pose.
 //!
 //! # Examples
 //!
@@ -112,7 +115,8 @@ pub struct Motion {
 /// Settings of the refinement.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
-    /// Linearisations at most.
+    /// Linearisations at most: a fit still lowering its cost after these is refused
+    /// ([`RefineError::NotConverged`]). It takes 4–6.
     pub max_iterations: usize,
     /// How far into the quiet zone pixels are taken (cells): the zone is one cell wide on
     /// JawTrack's faces, and beyond it the face's edge may come.
@@ -183,6 +187,12 @@ pub enum RefineError {
     /// The fit could not be solved.
     #[error("the photometric fit is singular: the tags' pixels do not fix the pose")]
     Singular,
+    /// The fit was still moving when its linearisations ran out.
+    #[error("the photometric fit did not settle in {iterations} steps")]
+    NotConverged {
+        /// Linearisations made.
+        iterations: usize,
+    },
     /// The fit went astray.
     #[error("the photometric fit moved a corner {shift_px:.2} px from the corner pose (at most {limit_px} px allowed)")]
     Strayed {

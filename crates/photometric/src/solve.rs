@@ -413,6 +413,10 @@ impl Fit<'_> {
             |s| self.cost(s, huber),
         )
         .ok_or(RefineError::Singular)?;
+        // Every linearisation used: the steps were still lowering the cost when they ran out.
+        if iterations >= options.max_iterations {
+            return Err(RefineError::NotConverged { iterations });
+        }
         let normal = self.normal(&state, &huber_weight);
         Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some() })
     }
@@ -678,6 +682,40 @@ mod refusals {
     fn a_tag_off_the_frame_or_behind_the_camera_has_no_pixels() {
         assert_eq!(refine_at(100.0, 0.5), Err(RefineError::NoPixels));
         assert_eq!(refine_at(-100.0, 0.5), Err(RefineError::NoPixels));
+    }
+
+    #[test]
+    fn a_fit_given_no_room_to_settle_is_refused_as_not_converged() {
+        // A tag drawn in the frame (ink where the pattern is), posed a little off: one
+        // linearisation cannot settle it.
+        let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
+        let pattern = Pattern::new(&bitmap).expect("8 cells");
+        let (w, h) = (64, 48);
+        let camera = CameraIntrinsics::pinhole(300.0, 300.0, 31.5, 23.5);
+        let luma: Vec<u8> = (0..w * h)
+            .map(|i| {
+                // Tag coordinates of the pixel on a 10 mm tag 100 mm away, facing the camera.
+                let (x, y) = ((i % w) as f64 - 31.5, (i / w) as f64 - 23.5);
+                let (tx, ty) = (x * 100.0 / 300.0 / 5.0, y * 100.0 / 300.0 / 5.0);
+                let paper = pattern.paper((tx + 1.0) * 4.0, (ty + 1.0) * 4.0, 0.05, 0.05).value;
+                (20.0 + 200.0 * paper) as u8
+            })
+            .collect();
+        let frame = ImageView::new(&luma, w, h, w).expect("frame");
+        let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
+        let tags = [Tag {
+            corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]],
+            bitmap: &bitmap,
+        }];
+        let body =
+            Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px: 0.3, motion: None };
+        let start = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.2, -0.1, 100.0));
+        let one = Options { max_iterations: 1, ..Options::default() };
+        assert_eq!(refine(&body, &start, &one), Err(RefineError::NotConverged { iterations: 1 }));
+        let settled = refine(&body, &start, &Options::default()).expect("settles with room");
+        assert!(settled.iterations < Options::default().max_iterations, "{} steps", settled.iterations);
+        let off = (settled.camera_from_body.translation() - Vector3::new(0.0, 0.0, 100.0)).norm();
+        assert!(off < 0.02, "{off:.4} mm from where the tag was drawn");
     }
 
     #[test]
