@@ -32,6 +32,9 @@ const MIN_SCALE: f64 = 0.05;
 const PIXEL_VARIANCE: f64 = 1.0 / 12.0;
 /// The blur's σ (px) is kept at least this: below it every edge is a step to the model.
 const MIN_SIGMA_PX: f64 = 0.1;
+/// A fit out of linearisations whose next step would move no corner farther than this (px) has
+/// settled: a hundredth of a pixel is below what any frame here resolves.
+const SETTLED_PX: f64 = 0.01;
 /// The tone's power is kept within these: beyond, the curve given was not a tone curve.
 const MIN_GAMMA: f64 = 0.25;
 const MAX_GAMMA: f64 = 4.0;
@@ -413,12 +416,38 @@ impl Fit<'_> {
             |s| self.cost(s, huber),
         )
         .ok_or(RefineError::Singular)?;
-        // Every linearisation used: the steps were still lowering the cost when they ran out.
-        if iterations >= options.max_iterations {
-            return Err(RefineError::NotConverged { iterations });
-        }
         let normal = self.normal(&state, &huber_weight);
+        // Every linearisation used: the steps were still lowering the cost when they ran out.
+        // Where there is next to no noise (a clean render) each step lowers it by a larger
+        // fraction while moving the pose by next to nothing: settled, if the next step would
+        // move no corner by SETTLED_PX.
+        if iterations >= options.max_iterations {
+            let settled = self.next_step_px(&state, &normal) < SETTLED_PX; // false for NaN
+            if !settled {
+                return Err(RefineError::NotConverged { iterations });
+            }
+        }
         Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some() })
+    }
+
+    /// How far (px, the farthest tag corner) the next Gauss–Newton step from `s` would move the
+    /// pose; infinite when it cannot be taken.
+    fn next_step_px(&self, s: &State, n: &Normal) -> f64 {
+        let Some(step) = damped(&n.h, 1e-9, 1e-9).cholesky().map(|c| c.solve(&(-&n.g))) else { return f64::INFINITY };
+        let next =
+            Pose::from_isometry(perturb(s.pose.isometry(), &Vector6::from_iterator(step.iter().take(6).copied())));
+        let mut most: f64 = 0.0;
+        for t in self.pixels {
+            for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                let p = (t.centre + t.x * sx + t.y * sy).into();
+                match (self.camera.project(&s.pose.transform_point(&p)), self.camera.project(&next.transform_point(&p)))
+                {
+                    (Some(a), Some(b)) => most = most.max((a - b).norm()),
+                    _ => return f64::INFINITY,
+                }
+            }
+        }
+        most
     }
 
     /// Each of a tag's rows' planes at each instant: `rows × times`, row-major.
