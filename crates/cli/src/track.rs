@@ -81,11 +81,8 @@ pub(crate) struct TrackArgs {
     /// Smooth the jaw pose (One-Euro filter; never more than one frame of lag).
     #[arg(long)]
     smooth: bool,
-    /// How each body's pose is finished: `corners` fits its tags' corners; `dense` then refines
-    /// it from every pixel of its tags (their patterns, blurred by the lens and smeared by the
-    /// motion over each row's exposure, against the image in linear light). A body whose dense
-    /// refinement fails keeps its corner pose and is flagged `dense_failed`. Recorded in the
-    /// header.
+    /// `dense` refines each body's corner pose from every pixel of its tags (slow; where it
+    /// fails, the corner pose stands, flagged `dense_failed`; docs/dense.md).
     #[arg(long, value_name = "corners|dense", default_value_t = PoseRefinement::Corners)]
     refine: PoseRefinement,
     /// Output file (JSON lines); `-` for standard output.
@@ -172,10 +169,8 @@ impl TrackEvents for Printed<'_> {
     }
     fn ready(&mut self) -> Result<(), OfflineError> {
         let refused = |e: anyhow::Error| OfflineError::Caller(e.into());
-        if self.a.out.as_os_str() != "-" {
-            self.a.force.check_file(&self.a.out).map_err(refused)?;
-        }
-        if let Some(path) = &self.a.refine_marker {
+        let stdout = self.a.out.as_os_str() == "-";
+        for path in std::iter::once(&self.a.out).filter(|_| !stdout).chain(&self.a.refine_marker) {
             self.a.force.check_file(path).map_err(refused)?;
         }
         Ok(())
@@ -189,9 +184,8 @@ impl TrackEvents for Printed<'_> {
         if a.out.as_os_str() == "-" {
             return Ok(Box::new(std::io::stdout()));
         }
-        let file =
-            create_file(&a.out, a.force.overwrite()).map_err(|e| OfflineError::Caller(a.force.explain(e).into()))?;
-        Ok(Box::new(file))
+        let file = create_file(&a.out, a.force.overwrite());
+        Ok(Box::new(file.map_err(|e| OfflineError::Caller(a.force.explain(e).into()))?))
     }
 }
 
@@ -199,8 +193,6 @@ pub(crate) fn run(a: &TrackArgs) -> Result<()> {
     let mut tracked = track(&a.options(), &mut Printed { a, bar: None })?;
     tell!("tracked {} frames: {}; poses in {}", tracked.frames, tracked.summary.describe(), a.out.display());
     tell!("tone curve: {}", tracked.tone.describe());
-    for w in &tracked.warnings {
-        tell!("warning: {w}");
-    }
+    tracked.warnings.iter().for_each(|w| tell!("warning: {w}"));
     Ok(())
 }
