@@ -137,8 +137,12 @@ pub fn run(a: &DenseArgs) -> Result<()> {
                 if let Some(p) = r.maxilla_from_mandible {
                     run.errors_mm.push(PoseError::of(&p, &f.maxilla_from_mandible).mm);
                 }
-                // Frames of a still tripod view differ only in noise.
-                let still = c.request.scene == SceneKind::Static && f.spec.view.hand_seed.is_none();
+                // Frames of a still tripod view differ only in noise, once those with a glare
+                // spot or an occluder (placed at random per frame) are set aside.
+                let still = c.request.scene == SceneKind::Static
+                    && f.spec.view.hand_seed.is_none()
+                    && f.glare.is_empty()
+                    && !f.occluder;
                 if still {
                     let key = (f.spec.view.distance_mm.to_bits(), f.spec.view.azimuth_deg.to_bits());
                     if view_of != Some(key) {
@@ -267,16 +271,28 @@ fn summary(r: &Run) -> Summary {
     let mut e = r.errors_mm.clone();
     e.sort_by(f64::total_cmp);
     let q = |p: f64| if e.is_empty() { f64::NAN } else { e[((e.len() - 1) as f64 * p).round() as usize] };
-    let jitters: Vec<f64> = r.views.iter().filter(|v| v.len() >= 2).map(|v| spread(v) * 1000.0).collect();
-    Summary { median: q(0.5), p95: q(0.95), max: q(1.0), jitter_um: jawtrack_pose::median(jitters), posed: e.len() }
+    Summary {
+        median: q(0.5),
+        p95: q(0.95),
+        max: q(1.0),
+        jitter_um: spread(&r.views).map(|s| s * 1000.0),
+        posed: e.len(),
+    }
 }
 
-/// The RMS distance of points from their mean (the 3-D spread), with n − 1.
-fn spread(v: &[[f64; 3]]) -> f64 {
-    let n = v.len() as f64;
-    let mean: Vec<f64> = (0..3).map(|k| v.iter().map(|p| p[k]).sum::<f64>() / n).collect();
-    let ss: f64 = v.iter().map(|p| (0..3).map(|k| (p[k] - mean[k]).powi(2)).sum::<f64>()).sum();
-    (ss / (n - 1.0)).sqrt()
+/// The 3-D spread of points about their view's mean, pooled over the views: √(Σ squared
+/// distances / Σ (n − 1)). Pooled, because a view keeps only its frames without glare or an
+/// occluder (about 4 of 6): one view's spread then rests on 9 degrees of freedom, uncertain by
+/// about a quarter. `None` without two frames in any view.
+fn spread(views: &[Vec<[f64; 3]>]) -> Option<f64> {
+    let (mut ss, mut dof) = (0.0, 0usize);
+    for v in views.iter().filter(|v| v.len() >= 2) {
+        let n = v.len() as f64;
+        let mean: Vec<f64> = (0..3).map(|k| v.iter().map(|p| p[k]).sum::<f64>() / n).collect();
+        ss += v.iter().map(|p| (0..3).map(|k| (p[k] - mean[k]).powi(2)).sum::<f64>()).sum::<f64>();
+        dof += v.len() - 1;
+    }
+    (dof > 0).then(|| (ss / dof as f64).sqrt())
 }
 
 fn row(name: &'static str, truth: &GroundTruth, corners: &Run, dense: &Run, bounds: &[f64]) -> Row {
@@ -287,7 +303,9 @@ fn row(name: &'static str, truth: &GroundTruth, corners: &Run, dense: &Run, boun
         dense: summary(dense),
         failed: dense.failed,
         bodies: dense.bodies,
-        bound_um: jawtrack_pose::median(bounds.iter().map(|b| b * 1000.0)),
+        // The RMS of the frames' bounds, as the spread is an RMS over their frames.
+        bound_um: (!bounds.is_empty())
+            .then(|| (bounds.iter().map(|b| b * b).sum::<f64>() / bounds.len() as f64).sqrt() * 1000.0),
         ms_per_body: dense.refine_s * 1000.0 / dense.bodies.max(1) as f64,
         fx: truth.intrinsics.fx,
     }
@@ -295,13 +313,13 @@ fn row(name: &'static str, truth: &GroundTruth, corners: &Run, dense: &Run, boun
 
 fn markdown(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| case | frames | fx (px) | corners: median / p95 / max (mm) | dense: median / p95 / max (mm) | dense ÷ corners (median, p95) | dense failed (bodies) | still jitter: corners / dense / bound (µm) | dense ms per body |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| case | frames | fx (px) | corners: median / p95 / max (mm) | dense: median / p95 / max (mm) | dense ÷ corners (median, p95) | dense failed (bodies) | still jitter: corners / dense / bound (µm) | dense jitter ÷ bound | dense ms per body |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    let um = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
+    let um = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.2}"));
     for r in rows {
         let (c, d) = (&r.corners, &r.dense);
         s += &format!(
-            "| {} | {} ({} / {} posed) | {:.0} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:.2}, {:.2} | {} of {} | {} / {} / {} | {:.1} |\n",
+            "| {} | {} ({} / {} posed) | {:.0} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:.2}, {:.2} | {} of {} | {} / {} / {} | {} | {:.1} |\n",
             r.name,
             r.frames,
             c.posed,
@@ -320,6 +338,7 @@ fn markdown(rows: &[Row]) -> String {
             um(c.jitter_um),
             um(d.jitter_um),
             um(r.bound_um),
+            d.jitter_um.zip(r.bound_um).map_or("—".to_string(), |(j, b)| format!("{:.2}", j / b)),
             r.ms_per_body,
         );
     }
@@ -369,6 +388,20 @@ mod tests {
             }
         }
         assert_eq!(checked, 12);
+    }
+
+    #[test]
+    fn the_spread_is_pooled_about_each_views_own_mean() {
+        // Two views far apart, each spread ±1 along x: the views' offset counts for nothing.
+        let views = vec![
+            vec![[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+            vec![[99.0, 5.0, 0.0], [101.0, 5.0, 0.0], [100.0, 5.0, 0.0]],
+            vec![[7.0, 7.0, 7.0]],
+        ];
+        // (2 + 2) squared distances over (1 + 2) degrees of freedom.
+        let s = spread(&views).expect("two views of two or more");
+        assert!((s - (4.0f64 / 3.0).sqrt()).abs() < 1e-12, "{s}");
+        assert_eq!(spread(&[vec![[1.0, 2.0, 3.0]]]), None, "one frame has no spread");
     }
 
     #[test]
