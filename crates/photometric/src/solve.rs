@@ -10,6 +10,7 @@ use nalgebra::{
     DMatrix, DVector, Matrix2, Matrix2x3, Matrix2x6, Matrix3, Matrix3x2, Matrix3x6, Matrix6, Point2, SMatrix, SVector,
     Vector2, Vector3, Vector6,
 };
+use std::cell::RefCell;
 use std::ops::AddAssign;
 
 /// The fit stops once a step lowers its cost by less than this fraction. Near the minimum the
@@ -70,7 +71,7 @@ struct Plane {
 
 /// The fit's state: the pose, the blur (σ, px: the lens's and the pixel's own), the tone's
 /// error and each tag's (ink, contrast) in linear light.
-#[derive(Clone)]
+#[derive(Clone, PartialEq)]
 struct State {
     pose: Pose,
     sigma_px: f64,
@@ -161,9 +162,9 @@ pub fn bound(
 ) -> Result<Matrix6<f64>, RefineError> {
     let (pixels, times, sigma_px) = setup(body, pose, options)?;
     let fit = Fit { camera: body.camera, pixels: &pixels, times, motion: body.motion.as_ref() };
-    let levels = fit.levels(pose, sigma_px).ok_or(RefineError::Singular)?;
+    let levels = fit.levels(&fit.seen(pose, sigma_px, false)).ok_or(RefineError::Singular)?;
     let state = State { pose: *pose, sigma_px, gamma: 1.0, levels };
-    let information = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE));
+    let (_, information) = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE), f64::INFINITY);
     let inverse = information.h.try_inverse().ok_or(RefineError::Singular)?;
     Ok(Matrix6::from_fn(|i, j| inverse[(i, j)]))
 }
@@ -341,6 +342,7 @@ fn shift(camera: &CameraIntrinsics, a: &Pose, b: &Pose, tags: &[Tag<'_>]) -> f64
 }
 
 /// The normal equations at a state, with the residuals' sums.
+#[derive(Clone)]
 struct Normal {
     h: DMatrix<f64>,
     g: DVector<f64>,
@@ -348,6 +350,8 @@ struct Normal {
     sq: f64,
     /// Σ w r².
     weighted_sq: f64,
+    /// Huber's cost of the residuals.
+    cost: f64,
 }
 
 /// Where one fit ended.
@@ -381,11 +385,16 @@ impl Fit<'_> {
     /// The fit from `start`: Levenberg–Marquardt with Huber weights on the residuals' robust
     /// scale at the start.
     fn run(&self, start: &Pose, sigma_px: f64, options: &Options) -> Result<Outcome, RefineError> {
-        let levels = self.levels(start, sigma_px).ok_or(RefineError::Singular)?;
+        // One pass of the model at the start gives the levels and the residuals' scale.
+        let seen = self.seen(start, sigma_px, false);
+        let levels = self.levels(&seen).ok_or(RefineError::Singular)?;
         let mut state = State { pose: *start, sigma_px, gamma: 1.0, levels };
-        let huber = options.huber * self.scale(&state).max(MIN_SCALE);
+        let huber = options.huber * scale(self.residuals(&state, &seen)).max(MIN_SCALE);
         let huber_weight = |r: f64, _: f64| weight(r, huber);
-        let mut cost = self.cost(&state, huber);
+        // A state is evaluated with its normal equations at once: a step that is taken (most
+        // are, near the minimum) is linearised next, from this.
+        let evaluated = RefCell::new(self.normal(&state, &huber_weight, huber));
+        let mut cost = evaluated.borrow().1.cost;
         let damping = Damping {
             initial: 1e-3,
             diagonal_floor: 1e-9,
@@ -393,13 +402,20 @@ impl Fit<'_> {
             max_iterations: options.max_iterations,
         };
         let mut iterations = 0;
+        let linearise = |s: &State| {
+            let (at, normal) = &*evaluated.borrow();
+            if at != s {
+                return None; // the loop only linearises the state it evaluated last
+            }
+            Some(normal.clone())
+        };
         minimise(
             &mut state,
             &mut cost,
             &damping,
             |s| {
                 iterations += 1;
-                Some(self.normal(s, &huber_weight))
+                linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber).1))
             },
             |s, n, lambda| {
                 let step = damped(&n.h, lambda, damping.diagonal_floor).cholesky()?.solve(&(-&n.g));
@@ -413,10 +429,15 @@ impl Fit<'_> {
                 });
                 Some(State { pose, sigma_px, gamma, levels: levels.collect() })
             },
-            |s| self.cost(s, huber),
+            |s| {
+                let e = self.normal(s, &huber_weight, huber);
+                let cost = e.1.cost;
+                *evaluated.borrow_mut() = e;
+                cost
+            },
         )
         .ok_or(RefineError::Singular)?;
-        let normal = self.normal(&state, &huber_weight);
+        let normal = linearise(&state).unwrap_or_else(|| self.normal(&state, &huber_weight, huber).1);
         // Every linearisation used: the steps were still lowering the cost when they ran out.
         // Where there is next to no noise (a clean render) each step lowers it by a larger
         // fraction while moving the pose by next to nothing: settled, if the next step would
@@ -496,12 +517,11 @@ impl Fit<'_> {
             .collect()
     }
 
-    /// Each tag's (ink, contrast) fitted by least squares at `pose`.
-    fn levels(&self, pose: &Pose, sigma_px: f64) -> Option<Vec<[f64; PER_TAG]>> {
-        let seen = self.seen(pose, sigma_px, false);
+    /// Each tag's (ink, contrast) fitted by least squares to the model `seen`.
+    fn levels(&self, seen: &[Option<Vec<Seen>>]) -> Option<Vec<[f64; PER_TAG]>> {
         self.pixels
             .iter()
-            .zip(&seen)
+            .zip(seen)
             .map(|(t, s)| {
                 let s = s.as_ref()?;
                 let (mut a, mut b) = (Matrix2::zeros(), Vector2::zeros());
@@ -516,46 +536,29 @@ impl Fit<'_> {
             .collect()
     }
 
-    /// The residuals' robust scale: 1.4826 × their median absolute value.
-    fn scale(&self, s: &State) -> f64 {
-        let mut r = self.residuals(s);
-        if r.is_empty() {
-            return 0.0;
-        }
-        r.iter_mut().for_each(|v| *v = v.abs());
-        r.sort_by(f64::total_cmp);
-        1.4826 * r[r.len() / 2]
-    }
-
-    fn residuals(&self, s: &State) -> Vec<f64> {
-        let seen = self.seen(&s.pose, s.sigma_px, false);
+    /// The residuals of the model `seen` read at the state's levels and tone.
+    fn residuals(&self, s: &State, seen: &[Option<Vec<Seen>>]) -> Vec<f64> {
         let mut out = Vec::new();
-        for (k, (t, m)) in self.pixels.iter().zip(&seen).enumerate() {
+        for (k, (t, m)) in self.pixels.iter().zip(seen).enumerate() {
             let Some(m) = m else { continue };
             out.extend(t.samples.iter().zip(m).map(|(px, m)| px.linear - s.predict(k, m.paper).0));
         }
         out
     }
 
-    /// Huber's cost of the residuals; infinite where a tag is seen edge-on.
-    fn cost(&self, s: &State, huber: f64) -> f64 {
-        let seen = self.seen(&s.pose, s.sigma_px, false);
-        let mut cost = 0.0;
-        for (k, (t, m)) in self.pixels.iter().zip(&seen).enumerate() {
-            let Some(m) = m else { return f64::INFINITY };
-            cost += t.samples.iter().zip(m).map(|(px, m)| rho(px.linear - s.predict(k, m.paper).0, huber)).sum::<f64>();
-        }
-        cost
-    }
-
-    /// The normal equations at `s`, each pixel weighted by `weight(residual, model)`.
-    fn normal(&self, s: &State, weight: &dyn Fn(f64, f64) -> f64) -> Normal {
+    /// The normal equations at `s`, each pixel weighted by `weight(residual, model)`, with
+    /// Huber's cost (constant `huber`) of the residuals there: infinite where a tag is seen
+    /// edge-on, whose pixels are then left out of the equations.
+    fn normal(&self, s: &State, weight: &dyn Fn(f64, f64) -> f64, huber: f64) -> (State, Normal) {
         let n = SHARED + PER_TAG * self.pixels.len();
         let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
-        let (mut sq, mut weighted_sq) = (0.0, 0.0);
+        let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
         let seen = self.seen(&s.pose, s.sigma_px, true);
         for (k, ((t, m), l)) in self.pixels.iter().zip(&seen).zip(&s.levels).enumerate() {
-            let Some(m) = m else { continue };
+            let Some(m) = m else {
+                cost = f64::INFINITY;
+                continue;
+            };
             let (mut hss, mut hsl, mut hll) = (
                 SMatrix::<f64, SHARED, SHARED>::zeros(),
                 SMatrix::<f64, SHARED, PER_TAG>::zeros(),
@@ -577,6 +580,7 @@ impl Fit<'_> {
                 gl += jl * (w * r);
                 sq += r * r;
                 weighted_sq += w * r * r;
+                cost += rho(r, huber);
             }
             let o = SHARED + PER_TAG * k;
             h.view_mut((0, 0), (SHARED, SHARED)).add_assign(&hss);
@@ -586,8 +590,18 @@ impl Fit<'_> {
             g.rows_mut(0, SHARED).add_assign(&gs);
             g.rows_mut(o, PER_TAG).add_assign(&gl);
         }
-        Normal { h, g, sq, weighted_sq }
+        (s.clone(), Normal { h, g, sq, weighted_sq, cost })
     }
+}
+
+/// The residuals' robust scale: 1.4826 × their median absolute value.
+fn scale(mut r: Vec<f64>) -> f64 {
+    if r.is_empty() {
+        return 0.0;
+    }
+    r.iter_mut().for_each(|v| *v = v.abs());
+    let mid = r.len() / 2;
+    1.4826 * *r.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// Huber's ρ.
