@@ -16,7 +16,8 @@ use std::ops::AddAssign;
 /// The fit stops once a step lowers its cost by less than this fraction. Near the minimum the
 /// cost is the pixels' noise, so at 20,000 pixels the fit may stop up to √(10⁻⁵ × 20,000) ≈ 0.45
 /// of the pose's standard deviation short of it. Measured (`jawtrack-bench dense`, still cases):
-/// the same errors and jitter at 10⁻⁴ and 10⁻⁶; 10⁻⁶ took 40 % longer.
+/// the same errors at 10⁻⁴ and 10⁻⁶, and the same jitter at a tolerance of 10⁻² of one pixel's
+/// noise variance (about 10⁻⁷ here), which took 60 % longer.
 const RELATIVE_TOLERANCE: f64 = 1e-5;
 /// Pixels within this many blur σ of an edge of the pattern (plus half the smear, plus
 /// [`EDGE_BAND_PX`]) are compared: farther, the image does not change with the pose.
@@ -108,30 +109,14 @@ type Looked = SVector<f64, 7>;
 
 /// Refines `start`, the body's pose at the frame's time, from the pixels of its tags.
 pub fn refine(body: &Body<'_>, start: &Pose, options: &Options) -> Result<Refined, RefineError> {
-    let (camera, motion) = (body.camera, body.motion.as_ref());
-    let (pixels, times, sigma_px) = setup(body, start, options)?;
-    let count: usize = pixels.iter().map(|t| t.samples.len()).sum();
-    // Motion changes the model only through a smear (instants) or rows read at their own times.
-    let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
-    let moving = Fit { camera, pixels: &pixels, times, motion: motion.filter(|_| modelled) };
-    let mut best = moving.run(start, sigma_px, options)?;
-    if modelled {
-        // The velocity comes from the poses before; the image says whether it holds: the same
-        // pixels fitted as a still body, the better fit kept (a view that jumped with the
-        // regularity of motion would otherwise have its sharp tags modelled smeared).
-        let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None };
-        if let Ok(s) = still.run(start, sigma_px, options)
-            && s.cost < best.cost
-        {
-            best = s;
-        }
-    }
+    validate(options, body.blur_px, body.motion.as_ref())?;
+    let best = fit(body, &Begin { pose: *start, sigma_px: sigma_px(body.blur_px), gamma: 1.0 }, options)?;
     let (state, normal) = (&best.state, &best.normal);
-    let dof = (count as f64 - normal.h.nrows() as f64).max(1.0);
+    let dof = (best.pixels as f64 - normal.h.nrows() as f64).max(1.0);
     let variance = normal.weighted_sq / dof;
     let inverse = normal.h.clone().try_inverse().ok_or(RefineError::Singular)?;
     let covariance = Matrix6::from_fn(|i, j| inverse[(i, j)] * variance);
-    let shift_px = shift(camera, start, &state.pose, body.tags);
+    let shift_px = shift(body.camera, start, &state.pose, body.tags);
     if shift_px.is_nan() || shift_px > options.max_shift_px {
         return Err(RefineError::Strayed { shift_px, limit_px: options.max_shift_px });
     }
@@ -139,8 +124,8 @@ pub fn refine(body: &Body<'_>, start: &Pose, options: &Options) -> Result<Refine
     Ok(Refined {
         camera_from_body: state.pose,
         covariance,
-        rms_contrast: (normal.sq / count as f64).sqrt() / contrast.abs().max(f64::MIN_POSITIVE),
-        pixels: count,
+        rms_contrast: (normal.sq / best.pixels as f64).sqrt() / contrast.abs().max(f64::MIN_POSITIVE),
+        pixels: best.pixels,
         iterations: best.iterations,
         shift_px,
         blur_px: (state.sigma_px * state.sigma_px - PIXEL_VARIANCE).max(0.0).sqrt(),
@@ -149,40 +134,85 @@ pub fn refine(body: &Body<'_>, start: &Pose, options: &Options) -> Result<Refine
     })
 }
 
+/// Where a fit starts: the pose, the blur's σ (px, the pixel's own spread included) and the
+/// tone's power.
+struct Begin {
+    pose: Pose,
+    sigma_px: f64,
+    gamma: f64,
+}
+
+/// The σ (px) of a detector's blur with the pixel's own spread.
+fn sigma_px(blur_px: f64) -> f64 {
+    (blur_px * blur_px + PIXEL_VARIANCE).sqrt()
+}
+
+/// The fit of the body from `begin` over the pixels taken there. With motion given, the same
+/// pixels are also fitted as a still body and the better fit is kept: the velocity comes from
+/// the poses before, and the image says whether it holds (a view that jumped with the
+/// regularity of motion would otherwise have its sharp tags modelled smeared).
+fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
+    let (camera, motion) = (body.camera, body.motion.as_ref());
+    let (pixels, times) = setup(body, &begin.pose, begin.sigma_px, options)?;
+    // Motion changes the model only through a smear (instants) or rows read at their own times.
+    let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
+    let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None, pose_fixed: false };
+    if !modelled {
+        return still.run(begin, options);
+    }
+    let best = Fit { camera, pixels: &pixels, times, motion, pose_fixed: false }.run(begin, options)?;
+    match still.run(begin, options) {
+        Ok(s) if s.cost < best.cost => Ok(s),
+        _ => Ok(best),
+    }
+}
+
 /// The Cramér–Rao bound on the pose of the body at `pose` from the pixels [`refine`] would
 /// compare there: the inverse of their Fisher information, each pixel's noise variance given
-/// by `noise` at its modelled linear value (0–255 scale, squared), the blur and each tag's
-/// levels estimated beside the pose (so their uncertainty counts). A left perturbation in the
-/// camera frame, as [`Refined::covariance`]. The levels are those that fit the image at `pose`.
+/// by `noise` at its modelled linear value (0–255 scale, squared), the blur, the tone's power
+/// and each tag's levels estimated beside the pose (so their uncertainty counts). Those are
+/// the ones that fit the image best with the pose held at `pose` (the body's `blur_px` is
+/// where that fit starts). A left perturbation in the camera frame, as [`Refined::covariance`].
 pub fn bound(
     body: &Body<'_>,
     pose: &Pose,
     options: &Options,
     noise: &dyn Fn(f64) -> f64,
 ) -> Result<Matrix6<f64>, RefineError> {
-    let (pixels, times, sigma_px) = setup(body, pose, options)?;
-    let fit = Fit { camera: body.camera, pixels: &pixels, times, motion: body.motion.as_ref() };
-    let levels = fit.levels(&fit.seen(pose, sigma_px, false)).ok_or(RefineError::Singular)?;
-    let state = State { pose: *pose, sigma_px, gamma: 1.0, levels };
+    validate(options, body.blur_px, body.motion.as_ref())?;
+    let begin = Begin { pose: *pose, sigma_px: sigma_px(body.blur_px), gamma: 1.0 };
+    let (pixels, times) = setup(body, pose, begin.sigma_px, options)?;
+    let mut fit = Fit { camera: body.camera, pixels: &pixels, times, motion: body.motion.as_ref(), pose_fixed: true };
+    let fitted = fit.run(&begin, options)?;
+    // The pixels the refinement would take with the blur that fits.
+    let (pixels, times) = setup(body, pose, fitted.state.sigma_px, options)?;
+    fit.pixels = &pixels;
+    fit.times = times;
+    let seen = fit.seen(pose, fitted.state.sigma_px, false);
+    let levels = fit.levels(&seen).ok_or(RefineError::Singular)?;
+    let state = State { levels, ..fitted.state };
     let (_, information) = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE), f64::INFINITY);
     let inverse = information.h.try_inverse().ok_or(RefineError::Singular)?;
     Ok(Matrix6::from_fn(|i, j| inverse[(i, j)]))
 }
 
-/// What [`refine`] and [`bound`] share: the settings checked, the pixels gathered at `pose`,
-/// the instants each row is modelled at, and the blur's σ with the pixel's own spread.
-fn setup(body: &Body<'_>, pose: &Pose, options: &Options) -> Result<(Vec<TagPixels>, Vec<f64>, f64), RefineError> {
-    let (camera, motion, blur_px) = (body.camera, body.motion.as_ref(), body.blur_px);
-    validate(options, blur_px, motion)?;
+/// What [`refine`] and [`bound`] share: the pixels gathered at `pose` for a blur of `sigma_px`,
+/// and the instants each row is modelled at.
+fn setup(
+    body: &Body<'_>,
+    pose: &Pose,
+    sigma_px: f64,
+    options: &Options,
+) -> Result<(Vec<TagPixels>, Vec<f64>), RefineError> {
+    let (camera, motion) = (body.camera, body.motion.as_ref());
     let smear = motion.map_or(0.0, |m| smear_px(camera, pose, body.tags, m));
-    let sigma_px = (blur_px * blur_px + PIXEL_VARIANCE).sqrt();
     let band_px = EDGE_BAND_SIGMAS * sigma_px + smear / 2.0 + EDGE_BAND_PX;
     let pixels: Vec<TagPixels> =
         body.tags.iter().filter_map(|t| gather(&body.image, camera, pose, t, band_px, options)).collect();
     if pixels.is_empty() {
         return Err(RefineError::NoPixels);
     }
-    Ok((pixels, times(smear, motion, options), sigma_px))
+    Ok((pixels, times(smear, motion, options)))
 }
 
 fn validate(o: &Options, blur_px: f64, motion: Option<&Motion>) -> Result<(), RefineError> {
@@ -363,6 +393,8 @@ struct Outcome {
     normal: Normal,
     /// Whether it modelled the body's motion.
     motion: bool,
+    /// The pixels it compared.
+    pixels: usize,
 }
 
 /// What the fit needs: the pixels, the optics and the motion.
@@ -372,6 +404,8 @@ struct Fit<'a> {
     /// Sub-frame instants within a row's exposure.
     times: Vec<f64>,
     motion: Option<&'a Motion>,
+    /// The pose is held where the fit begins; only the blur, the tone and the levels move.
+    pose_fixed: bool,
 }
 
 /// One pixel's model: the paper it sees, averaged over its row's instants, and the average's
@@ -384,11 +418,11 @@ struct Seen {
 impl Fit<'_> {
     /// The fit from `start`: Levenberg–Marquardt with Huber weights on the residuals' robust
     /// scale at the start.
-    fn run(&self, start: &Pose, sigma_px: f64, options: &Options) -> Result<Outcome, RefineError> {
+    fn run(&self, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
         // One pass of the model at the start gives the levels and the residuals' scale.
-        let seen = self.seen(start, sigma_px, false);
+        let seen = self.seen(&begin.pose, begin.sigma_px, false);
         let levels = self.levels(&seen).ok_or(RefineError::Singular)?;
-        let mut state = State { pose: *start, sigma_px, gamma: 1.0, levels };
+        let mut state = State { pose: begin.pose, sigma_px: begin.sigma_px, gamma: begin.gamma, levels };
         let huber = options.huber * scale(self.residuals(&state, &seen)).max(MIN_SCALE);
         let huber_weight = |r: f64, _: f64| weight(r, huber);
         // A state is evaluated with its normal equations at once: a step that is taken (most
@@ -418,7 +452,7 @@ impl Fit<'_> {
                 linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber).1))
             },
             |s, n, lambda| {
-                let step = damped(&n.h, lambda, damping.diagonal_floor).cholesky()?.solve(&(-&n.g));
+                let step = self.step(n, lambda, damping.diagonal_floor)?;
                 let d = Vector6::from_iterator(step.iter().take(6).copied());
                 let pose = Pose::from_isometry(perturb(s.pose.isometry(), &d));
                 let sigma_px = (s.sigma_px + step[6]).max(MIN_SIGMA_PX);
@@ -448,13 +482,26 @@ impl Fit<'_> {
                 return Err(RefineError::NotConverged { iterations });
             }
         }
-        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some() })
+        let pixels = self.pixels.iter().map(|t| t.samples.len()).sum();
+        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some(), pixels })
+    }
+
+    /// The damped Gauss–Newton step of the normal equations `n`: every parameter's, or, with the
+    /// pose held, zero for the pose's six and the rest solved without them.
+    fn step(&self, n: &Normal, lambda: f64, floor: f64) -> Option<DVector<f64>> {
+        if !self.pose_fixed {
+            return Some(damped(&n.h, lambda, floor).cholesky()?.solve(&(-&n.g)));
+        }
+        let m = n.h.nrows() - 6;
+        let h = n.h.view((6, 6), (m, m)).clone_owned();
+        let rest = damped(&h, lambda, floor).cholesky()?.solve(&(-n.g.rows(6, m)));
+        Some(DVector::from_iterator(6 + m, std::iter::repeat_n(0.0, 6).chain(rest.iter().copied())))
     }
 
     /// How far (px, the farthest tag corner) the next Gauss–Newton step from `s` would move the
     /// pose; infinite when it cannot be taken.
     fn next_step_px(&self, s: &State, n: &Normal) -> f64 {
-        let Some(step) = damped(&n.h, 1e-9, 1e-9).cholesky().map(|c| c.solve(&(-&n.g))) else { return f64::INFINITY };
+        let Some(step) = self.step(n, 1e-9, 1e-9) else { return f64::INFINITY };
         let next =
             Pose::from_isometry(perturb(s.pose.isometry(), &Vector6::from_iterator(step.iter().take(6).copied())));
         let mut most: f64 = 0.0;
@@ -694,78 +741,5 @@ mod tests {
             checked += 1;
         }
         assert_eq!(checked, 40);
-    }
-}
-
-#[cfg(test)]
-mod refusals {
-    use super::*;
-    use jawtrack_apriltag::ImageView;
-    use jawtrack_tag_family::TagFamily;
-    use nalgebra::UnitQuaternion;
-
-    fn refine_at(z: f64, blur_px: f64) -> Result<Refined, RefineError> {
-        let luma = vec![128u8; 64 * 48];
-        let frame = ImageView::new(&luma, 64, 48, 64).expect("frame");
-        let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
-        let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
-        let tags = [Tag {
-            corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]],
-            bitmap: &bitmap,
-        }];
-        let camera = CameraIntrinsics::pinhole(60.0, 60.0, 31.5, 23.5);
-        // Shifted far to the side: off the frame.
-        let pose = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(500.0, 0.0, z));
-        let body =
-            Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px, motion: None };
-        refine(&body, &pose, &Options::default())
-    }
-
-    #[test]
-    fn a_tag_off_the_frame_or_behind_the_camera_has_no_pixels() {
-        assert_eq!(refine_at(100.0, 0.5), Err(RefineError::NoPixels));
-        assert_eq!(refine_at(-100.0, 0.5), Err(RefineError::NoPixels));
-    }
-
-    #[test]
-    fn a_fit_given_no_room_to_settle_is_refused_as_not_converged() {
-        // A tag drawn in the frame (ink where the pattern is), posed a little off: one
-        // linearisation cannot settle it.
-        let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
-        let pattern = Pattern::new(&bitmap).expect("8 cells");
-        let (w, h) = (64, 48);
-        let camera = CameraIntrinsics::pinhole(300.0, 300.0, 31.5, 23.5);
-        let luma: Vec<u8> = (0..w * h)
-            .map(|i| {
-                // Tag coordinates of the pixel on a 10 mm tag 100 mm away, facing the camera.
-                let (x, y) = ((i % w) as f64 - 31.5, (i / w) as f64 - 23.5);
-                let (tx, ty) = (x * 100.0 / 300.0 / 5.0, y * 100.0 / 300.0 / 5.0);
-                let paper = pattern.paper((tx + 1.0) * 4.0, (ty + 1.0) * 4.0, 0.05, 0.05).value;
-                (20.0 + 200.0 * paper) as u8
-            })
-            .collect();
-        let frame = ImageView::new(&luma, w, h, w).expect("frame");
-        let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
-        let tags = [Tag {
-            corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]],
-            bitmap: &bitmap,
-        }];
-        let body =
-            Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px: 0.3, motion: None };
-        let start = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.2, -0.1, 100.0));
-        let one = Options { max_iterations: 1, ..Options::default() };
-        assert_eq!(refine(&body, &start, &one), Err(RefineError::NotConverged { iterations: 1 }));
-        let settled = refine(&body, &start, &Options::default()).expect("settles with room");
-        assert!(settled.iterations < Options::default().max_iterations, "{} steps", settled.iterations);
-        let off = (settled.camera_from_body.translation() - Vector3::new(0.0, 0.0, 100.0)).norm();
-        assert!(off < 0.02, "{off:.4} mm from where the tag was drawn");
-    }
-
-    #[test]
-    fn a_blur_that_is_not_one_is_refused_by_name() {
-        for blur in [f64::NAN, -1.0, f64::INFINITY] {
-            let e = refine_at(100.0, blur).expect_err("refused").to_string();
-            assert!(e.contains("blur"), "{blur}: {e}");
-        }
     }
 }

@@ -31,8 +31,8 @@ pub struct DenseArgs {
     #[arg(long, value_delimiter = ',', default_value = "still-200,still-100,gamma-1.8,hinge,chew-2ms,chew-8ms")]
     cases: Vec<String>,
     /// Frames per view of the still cases (3 tripod and 3 hand-held views): the jitter is
-    /// the spread over a tripod view's frames.
-    #[arg(long, default_value_t = 6)]
+    /// the spread over a tripod view's frames without glare or an occluder (about 7 of 10).
+    #[arg(long, default_value_t = 10)]
     still_frames: usize,
     /// Frames of the hinge and chew cases (60 frames/s for chewing).
     #[arg(long, default_value_t = 40)]
