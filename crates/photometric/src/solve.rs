@@ -417,8 +417,8 @@ struct Seen {
 }
 
 impl Fit<'_> {
-    /// The fit from `start`: Levenberg–Marquardt with Huber weights on the residuals' robust
-    /// scale at the start.
+    /// The fit from `begin`: Levenberg–Marquardt with Huber weights on the residuals' robust
+    /// scale there (the levels are fitted there first, by least squares).
     fn run(&self, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
         // One pass of the model at the start gives the levels and the residuals' scale.
         let seen = self.seen(&begin.pose, begin.sigma_px, false);
