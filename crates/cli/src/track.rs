@@ -69,7 +69,7 @@ pub(crate) struct TrackArgs {
     /// Decimation for quad finding: 1, 1.5, 2, 3 or 4.
     #[arg(long, default_value_t = 2.0)]
     decimate: f32,
-    /// Detector threads.
+    /// Threads: the detector's, and with `--refine dense` the two bodies refined at once.
     #[arg(long, default_value_t = 1)]
     threads: usize,
     #[command(flatten)]

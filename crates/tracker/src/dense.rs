@@ -5,7 +5,7 @@
 use crate::BodyResult;
 use jawtrack_apriltag::Detection;
 use jawtrack_marker::Marker;
-use jawtrack_photometric::{Body, Image, Motion, Options, RefineError, Tag, refine};
+use jawtrack_photometric::{Body, Image, Motion, Options, RefineError, Refined, Tag, refine};
 use jawtrack_pose::{CameraIntrinsics, Pose, median};
 use nalgebra::Point3;
 
@@ -82,16 +82,15 @@ pub(crate) fn miss_px(
     most
 }
 
-/// Refines `body`'s pose in place from its tags' pixels in `image`; on failure it is left as it
-/// was.
+/// `body`'s pose refined from its tags' pixels in `image`.
 pub(crate) fn refine_body(
     marker: &Marker,
     image: Image<'_>,
     camera: &CameraIntrinsics,
-    body: &mut BodyResult,
+    body: &BodyResult,
     detections: &[Detection],
     motion: Option<Motion>,
-) -> Result<(), RefineError> {
+) -> Result<Refined, RefineError> {
     let bitmaps: Vec<_> = body.tags.iter().filter_map(|&id| Some((id, marker.family.bitmap(id)?))).collect();
     let tags: Vec<Tag<'_>> = bitmaps
         .iter()
@@ -102,8 +101,5 @@ pub(crate) fn refine_body(
         .collect();
     let blur_px = median(detections.iter().filter(|d| body.tags.contains(&d.id)).filter_map(|d| d.blur_px));
     let seen = Body { image, camera, tags: &tags, blur_px: blur_px.unwrap_or(0.0), motion };
-    let refined = refine(&seen, &body.camera_from_body, &Options::default())?;
-    body.camera_from_body = refined.camera_from_body;
-    body.covariance = refined.covariance;
-    Ok(())
+    refine(&seen, &body.camera_from_body, &Options::default())
 }

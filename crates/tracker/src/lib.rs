@@ -604,8 +604,9 @@ impl Tracker {
         flags: &mut Vec<Flag>,
     ) {
         let linear = frame.map(|_| self.detector.tone().curve.decode_table());
+        let mut jobs = Vec::new();
         for kind in BodyKind::ALL {
-            let Some(body) = bodies[slot(kind)].as_mut() else { continue };
+            let Some(body) = bodies[slot(kind)].as_ref() else { continue };
             let (Some(frame), Some(linear)) = (frame, linear.as_ref()) else {
                 flags.push(Flag::DenseFailed(kind));
                 continue;
@@ -627,8 +628,19 @@ impl Tracker {
                 exposure_s: self.config.exposure_s,
             });
             let image = jawtrack_photometric::Image { frame: *frame, linear };
-            if dense::refine_body(&self.marker, image, camera, body, detections, motion).is_err() {
-                flags.push(Flag::DenseFailed(kind));
+            jobs.push((kind, body, image, motion));
+        }
+        // The bodies are refined independently: over the detector's threads when it has two.
+        let refined = self.detector.workers().map(jobs, |(kind, body, image, motion)| {
+            (kind, dense::refine_body(&self.marker, image, camera, body, detections, motion))
+        });
+        for (kind, result) in refined {
+            match (result, bodies[slot(kind)].as_mut()) {
+                (Ok(r), Some(body)) => {
+                    body.camera_from_body = r.camera_from_body;
+                    body.covariance = r.covariance;
+                }
+                _ => flags.push(Flag::DenseFailed(kind)),
             }
         }
     }

@@ -1,10 +1,10 @@
 //! The dense refinement through the tracker: on frames rendered with a phone's optics from
 //! where it can focus, it lands nearer the truth than the corners do; without the frame's
-//! pixels it cannot run, and each body says so.
+//! pixels it cannot run, and each body says so; over two threads it gives what one gives.
 
 mod support;
 
-use jawtrack_apriltag::ImageView;
+use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::BodyKind;
 use jawtrack_pose::{RollingShutter, median};
 use jawtrack_synth::{Realism, Resolution, SceneKind, SceneOptions, SynthConfig, Synthesizer};
@@ -30,24 +30,33 @@ fn the_dense_refinement_lands_nearer_the_truth_than_the_corners_through_a_phones
     };
     let synth = Synthesizer::new(config).expect("scene");
     let camera = synth.header().intrinsics;
-    let tracker = |refine| {
-        Tracker::new(synth.true_marker().clone(), TrackerConfig { refine, ..TrackerConfig::default() })
+    let tracker = |refine, nthreads| {
+        let detector = DetectorConfig { nthreads, ..DetectorConfig::default() };
+        Tracker::new(synth.true_marker().clone(), TrackerConfig { refine, detector, ..TrackerConfig::default() })
             .expect("tracker")
     };
-    let (mut corners, mut dense) = (tracker(PoseRefinement::Corners), tracker(PoseRefinement::Dense));
+    let (mut corners, mut dense) = (tracker(PoseRefinement::Corners, 1), tracker(PoseRefinement::Dense, 1));
+    // The two bodies refined at once, over the detector's two threads.
+    let mut dense_two = tracker(PoseRefinement::Dense, 2);
     let (mut by_corners, mut by_dense) = (Vec::new(), Vec::new());
+    let mut same_over_two_threads = 0;
     for i in 0..synth.len() {
         let f = synth.render(i).expect("frame");
         let (w, h) = (f.width as usize, f.height as usize);
         let view = ImageView::new(&f.luma, w, h, w).expect("view");
+        let mut one_thread = None;
         for (tracker, errors) in [(&mut corners, &mut by_corners), (&mut dense, &mut by_dense)] {
             let r = tracker.track(&view, &camera, f.truth.t).expect("tracks");
             assert!(!r.flags.iter().any(|f| matches!(f, Flag::DenseFailed(_))), "frame {i}: {:?}", r.flags);
             let m = r.maxilla_from_mandible.unwrap_or_else(|| panic!("frame {i}: no jaw pose"));
             errors.push(m.distance_to(&f.truth.maxilla_from_mandible).1);
+            one_thread = Some(m); // the dense tracker's, the loop's last
         }
+        let two = dense_two.track(&view, &camera, f.truth.t).expect("tracks").maxilla_from_mandible;
+        assert_eq!(two, one_thread, "frame {i}: two threads give what one gives");
+        same_over_two_threads += 1;
     }
-    assert_eq!((by_corners.len(), by_dense.len()), (6, 6), "frames compared");
+    assert_eq!((by_corners.len(), by_dense.len(), same_over_two_threads), (6, 6, 6), "frames compared");
     let (c, d) = (median(by_corners.iter().copied()).expect("6"), median(by_dense.iter().copied()).expect("6"));
     // Measured: corners 0.0142 mm, dense 0.0035 mm.
     assert!(d < 0.6 * c, "dense {d:.4} mm against the corners' {c:.4} mm");

@@ -128,6 +128,12 @@ impl Detector {
         &self.config
     }
 
+    /// The detector's threads, for work its callers share out beside detection (the tracker's
+    /// dense refinement of its two bodies).
+    pub fn workers(&self) -> &Workers {
+        &self.workers
+    }
+
     /// The tone curve frames are read through now ([`DetectorConfig::tone`]) and how it was
     /// found: with `Auto`, from the tags of the frames detected so far.
     pub fn tone(&self) -> ToneSummary {
