@@ -192,7 +192,7 @@ pub fn bound(
     let seen = fit.seen(pose, fitted.state.sigma_px, false);
     let levels = fit.levels(&seen).ok_or(RefineError::Singular)?;
     let state = State { levels, ..fitted.state };
-    let (_, information) = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE), f64::INFINITY);
+    let information = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE), f64::INFINITY);
     let inverse = information.h.try_inverse().ok_or(RefineError::Singular)?;
     Ok(Matrix6::from_fn(|i, j| inverse[(i, j)]))
 }
@@ -428,7 +428,7 @@ impl Fit<'_> {
         let huber_weight = |r: f64, _: f64| weight(r, huber);
         // A state is evaluated with its normal equations at once: a step that is taken (most
         // are, near the minimum) is linearised next, from this.
-        let evaluated = RefCell::new(self.normal(&state, &huber_weight, huber));
+        let evaluated = RefCell::new((state.clone(), self.normal(&state, &huber_weight, huber)));
         let mut cost = evaluated.borrow().1.cost;
         let damping = Damping {
             initial: 1e-3,
@@ -450,7 +450,7 @@ impl Fit<'_> {
             &damping,
             |s| {
                 iterations += 1;
-                linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber).1))
+                linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber)))
             },
             |s, n, lambda| {
                 let step = self.step(n, lambda, damping.diagonal_floor)?;
@@ -465,14 +465,14 @@ impl Fit<'_> {
                 Some(State { pose, sigma_px, gamma, levels: levels.collect() })
             },
             |s| {
-                let e = self.normal(s, &huber_weight, huber);
-                let cost = e.1.cost;
-                *evaluated.borrow_mut() = e;
+                let normal = self.normal(s, &huber_weight, huber);
+                let cost = normal.cost;
+                *evaluated.borrow_mut() = (s.clone(), normal);
                 cost
             },
         )
         .ok_or(RefineError::Singular)?;
-        let normal = linearise(&state).unwrap_or_else(|| self.normal(&state, &huber_weight, huber).1);
+        let normal = linearise(&state).unwrap_or_else(|| self.normal(&state, &huber_weight, huber));
         // Every linearisation used: the steps were still lowering the cost when they ran out.
         // Where there is next to no noise (a clean render) each step lowers it by a larger
         // fraction while moving the pose by next to nothing: settled, if the next step would
@@ -597,7 +597,7 @@ impl Fit<'_> {
     /// The normal equations at `s`, each pixel weighted by `weight(residual, model)`, with
     /// Huber's cost (constant `huber`) of the residuals there: infinite where a tag is seen
     /// edge-on, whose pixels are then left out of the equations.
-    fn normal(&self, s: &State, weight: &dyn Fn(f64, f64) -> f64, huber: f64) -> (State, Normal) {
+    fn normal(&self, s: &State, weight: &dyn Fn(f64, f64) -> f64, huber: f64) -> Normal {
         let n = SHARED + PER_TAG * self.pixels.len();
         let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
@@ -638,7 +638,7 @@ impl Fit<'_> {
             g.rows_mut(0, SHARED).add_assign(&gs);
             g.rows_mut(o, PER_TAG).add_assign(&gl);
         }
-        (s.clone(), Normal { h, g, sq, weighted_sq, cost })
+        Normal { h, g, sq, weighted_sq, cost }
     }
 }
 
