@@ -161,14 +161,21 @@ fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, Ref
     // Motion changes the model only through a smear (instants) or rows read at their own times.
     let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
     let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None, pose_fixed: false };
-    if !modelled {
-        return still.run(begin, options);
-    }
-    let best = Fit { camera, pixels: &pixels, times, motion, pose_fixed: false }.run(begin, options)?;
-    match still.run(begin, options) {
-        Ok(s) if s.cost < best.cost => Ok(s),
-        _ => Ok(best),
-    }
+    let moving = modelled.then(|| Fit { camera, pixels: &pixels, times, motion, pose_fixed: false });
+    let (chosen, mut best) = match &moving {
+        None => (&still, still.run(begin, options)?),
+        Some(moving) => {
+            let best = moving.run(begin, options)?;
+            match still.run(begin, options) {
+                Ok(s) if s.cost < best.cost => (&still, s),
+                _ => (moving, best),
+            }
+        }
+    };
+    // The covariance is read from the reweighted normal equations (every pixel at its Huber
+    // weight), as the corner solver's: the fit's own give outliers no curvature.
+    best.normal = chosen.normal(&best.state, &|r, _| reweighted(r, best.huber), best.huber);
+    Ok(best)
 }
 
 /// The Cramér–Rao bound on the pose of the body at `pose` from the pixels [`refine`] would
@@ -195,7 +202,14 @@ pub fn bound(
     let seen = fit.seen(pose, fitted.state.sigma_px, false);
     let levels = fit.levels(&seen).ok_or(RefineError::Singular)?;
     let state = State { levels, ..fitted.state };
-    let information = fit.normal(&state, &|_, model| 1.0 / noise(model).max(f64::MIN_POSITIVE), f64::INFINITY);
+    let information = fit.normal(
+        &state,
+        &|_, model| {
+            let w = 1.0 / noise(model).max(f64::MIN_POSITIVE);
+            (w, w)
+        },
+        f64::INFINITY,
+    );
     let inverse = information.h.try_inverse().ok_or(RefineError::Singular)?;
     Ok(Matrix6::from_fn(|i, j| inverse[(i, j)]))
 }
@@ -399,6 +413,8 @@ struct Outcome {
     motion: bool,
     /// The pixels it compared.
     pixels: usize,
+    /// Huber's constant it used (linear light, 0–255).
+    huber: f64,
 }
 
 /// What the fit needs: the pixels, the optics and the motion.
@@ -429,7 +445,11 @@ impl Fit<'_> {
         let levels = self.levels(&seen).ok_or(RefineError::Singular)?;
         let mut state = State { pose: begin.pose, sigma_px: begin.sigma_px, gamma: begin.gamma, levels };
         let huber = options.huber * scale(self.residuals(&state, &seen)).max(MIN_SCALE);
-        let huber_weight = |r: f64, _: f64| weight(r, huber);
+        // Newton's curvature for Huber's cost: a pixel beyond the constant weighs in the gradient
+        // but adds no curvature. Its reweighted curvature (as the covariance's) would shorten
+        // every step where the model's misfit at the edges puts many pixels there: measured on
+        // a still frame at 100 mm, 5–11 linearisations against 4–5 this way.
+        let huber_weight = |r: f64, _: f64| (weight(r, huber), curvature(r, huber));
         // A state is evaluated with its normal equations at once: a step that is taken (most
         // are, near the minimum) is linearised next, from this.
         let evaluated = RefCell::new((state.clone(), self.normal(&state, &huber_weight, huber)));
@@ -488,7 +508,7 @@ impl Fit<'_> {
             }
         }
         let pixels = self.pixels.iter().map(|t| t.samples.len()).sum();
-        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some(), pixels })
+        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some(), pixels, huber })
     }
 
     /// The damped Gauss–Newton step of the normal equations `n`: every parameter's, or, with the
@@ -612,10 +632,11 @@ impl Fit<'_> {
         out
     }
 
-    /// The normal equations at `s`, each pixel weighted by `weight(residual, model)`, with
+    /// The normal equations at `s`, with each pixel's weights `weights(residual, model)`: its
+    /// weight in the gradient (Σ w r J) and in the curvature (Σ c J Jᵀ). With
     /// Huber's cost (constant `huber`) of the residuals there: infinite where a tag is seen
     /// edge-on, whose pixels are then left out of the equations.
-    fn normal(&self, s: &State, weight: &dyn Fn(f64, f64) -> f64, huber: f64) -> Normal {
+    fn normal(&self, s: &State, weights: &dyn Fn(f64, f64) -> (f64, f64), huber: f64) -> Normal {
         let n = SHARED + PER_TAG * self.pixels.len();
         let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
@@ -631,14 +652,14 @@ impl Fit<'_> {
             let whole = self.each_seen(t, &s.pose, s.sigma_px, true, |px, m| {
                 let (model, by_light, by_gamma) = s.predict(k, m.paper);
                 let r = px.linear - model;
-                let w = weight(r, model);
+                let (w, c) = weights(r, model);
                 let mut js = Shared::zeros();
                 js.fixed_rows_mut::<7>(0).copy_from(&(m.d * (-by_light * l[1])));
                 js[7] = -by_gamma;
                 let jl = PerTag::new(-by_light, -by_light * m.paper);
-                hss += js * js.transpose() * w;
-                hsl += js * jl.transpose() * w;
-                hll += jl * jl.transpose() * w;
+                hss += js * js.transpose() * c;
+                hsl += js * jl.transpose() * c;
+                hll += jl * jl.transpose() * c;
                 gs += js * (w * r);
                 gl += jl * (w * r);
                 tag_sq += r * r;
@@ -682,6 +703,17 @@ fn rho(r: f64, k: f64) -> f64 {
 fn weight(r: f64, k: f64) -> f64 {
     let a = r.abs();
     if a <= k { 1.0 } else { k / a }
+}
+
+/// Huber's curvature ρ''/2: none beyond the constant, where ρ is a straight line.
+fn curvature(r: f64, k: f64) -> f64 {
+    if r.abs() <= k { 1.0 } else { 0.0 }
+}
+
+/// Huber's IRLS weight in the gradient and in the curvature alike.
+fn reweighted(r: f64, k: f64) -> (f64, f64) {
+    let w = weight(r, k);
+    (w, w)
 }
 
 /// What the pixel looking along `n` sees of a tag on `plane`: the paper, and (with
