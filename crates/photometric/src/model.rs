@@ -43,6 +43,34 @@ impl Pattern {
         self.n
     }
 
+    /// Whether the rectangle of half-widths `ru` × `rv` cells about (u, v) holds both ink and
+    /// paper (the quiet zone about the square is paper): whether (u, v) is within that of an
+    /// edge along each axis.
+    pub fn mixed(&self, u: f64, v: f64, ru: f64, rv: f64) -> bool {
+        if !(u.is_finite() && v.is_finite() && ru.is_finite() && rv.is_finite()) {
+            return false;
+        }
+        let n = self.n as i64;
+        // Cells from one beyond the square on each side: all paper farther out.
+        let span = |x: f64, r: f64| (floor(x - r).clamp(-1, n), floor(x + r).clamp(-1, n));
+        let ((i0, i1), (j0, j1)) = (span(u, ru), span(v, rv));
+        let (mut ink, mut paper) = (false, false);
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let inside = (0..n).contains(&i) && (0..n).contains(&j);
+                if inside && self.ink[(j * n + i) as usize] {
+                    ink = true;
+                } else {
+                    paper = true;
+                }
+                if ink && paper {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// The paper seen at (u, v) under the blur (`su`, `sv`), from 0 (ink) to 1 (paper), with
     /// its derivatives.
     pub fn paper(&self, u: f64, v: f64, su: f64, sv: f64) -> Paper {
@@ -163,6 +191,36 @@ mod tests {
         }
         assert_eq!(checked, 64);
         assert_eq!(p.paper(-0.5, 4.0, 0.01, 0.01).value, 1.0, "the quiet zone is paper");
+    }
+
+    #[test]
+    fn a_rectangle_is_mixed_where_it_crosses_an_edge() {
+        let p = pattern();
+        // The border is ink, the quiet zone beyond it paper: the outer edge is at u = 0.
+        assert!(p.mixed(0.05, 4.0, 0.1, 0.1), "across the outer edge");
+        assert!(p.mixed(-0.05, 4.0, 0.1, 0.1), "across it from outside");
+        assert!(!p.mixed(0.5, 4.0, 0.1, 0.1), "inside the border's ink");
+        assert!(!p.mixed(-0.5, 4.0, 0.1, 0.1), "in the quiet zone");
+        assert!(!p.mixed(-3.0, 4.0, 0.5, 0.5), "far outside: paper only");
+        assert!(!p.mixed(f64::NAN, 4.0, 0.1, 0.1), "at no place");
+        // Along v only: the border's top edge at v = 0, with a narrow u extent.
+        assert!(p.mixed(4.0, 0.02, 0.01, 0.05));
+        assert!(!p.mixed(4.0, 0.5, 0.01, 0.05));
+        // Every cell boundary between ink and paper inside the square is found from both sides.
+        let bm = TagFamily::TAG36H11.bitmap(5).expect("tag 5");
+        let mut checked = 0;
+        for y in 1..7 {
+            for x in 1..6 {
+                if bm.is_white(x, y) != bm.is_white(x + 1, y) {
+                    let edge = (x + 1) as f64;
+                    assert!(p.mixed(edge - 0.05, y as f64 + 0.5, 0.1, 0.1), "({x}, {y}) left side");
+                    assert!(p.mixed(edge + 0.05, y as f64 + 0.5, 0.1, 0.1), "({x}, {y}) right side");
+                    assert!(!p.mixed(edge - 0.5, y as f64 + 0.5, 0.1, 0.1), "({x}, {y}) mid-cell");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 5, "only {checked} edges");
     }
 
     #[test]

@@ -27,8 +27,6 @@ const RELATIVE_TOLERANCE: f64 = 1e-5;
 /// (`docs/dense.md`: 3σ + 1.5 px, taken as 2.3 times that, was twice as slow and no better).
 const EDGE_BAND_SIGMAS: f64 = 2.0;
 const EDGE_BAND_PX: f64 = 0.5;
-/// Φ⁻¹(0.99): a point this many σ from an edge sees 1 % of its far side.
-const EDGE_TAIL_SIGMAS: f64 = 2.326;
 /// Away from the edges, every this many pixels each way are compared, for the tag's levels.
 const FLAT_STRIDE: usize = 4;
 /// Sub-frames per pixel of smear over the exposure.
@@ -294,8 +292,7 @@ fn gather(
         return None;
     }
     let half = pattern.cells() as f64 / 2.0;
-    // A blur under which a point `band_px` from a straight edge sees 1 % of its far side.
-    let band = band_px / EDGE_TAIL_SIGMAS / (camera.fx * camera.fy).sqrt();
+    let band = band_px / (camera.fx * camera.fy).sqrt();
     let mut edge = Vec::new();
     let mut flat = Vec::new();
     for row in y0..=y1 as usize {
@@ -312,8 +309,7 @@ fn gather(
                 continue;
             }
             let sample = (col, Sample { row, normalised: n, linear: image.linear[usize::from(v)] });
-            // Under that blur, a pixel that sees neither pure paper nor pure ink is near an edge.
-            let near = look(&plane, &pattern, &n, band, half, false).is_some_and(|m| (0.01..=0.99).contains(&m.paper));
+            let near = near_edge(&plane, &pattern, &n, band, half);
             if near {
                 edge.push(sample);
             } else if col.is_multiple_of(FLAT_STRIDE) && row.is_multiple_of(FLAT_STRIDE) {
@@ -328,6 +324,32 @@ fn gather(
     samples.extend(flat.into_iter().map(|(_, s)| s));
     samples.sort_by_key(|s| s.row);
     (!samples.is_empty()).then_some(TagPixels { pattern, centre, x, y, first_row: y0, samples })
+}
+
+/// Whether the pixel looking along `n` is within `band` (normalised units) of an edge of the
+/// pattern on `plane`, each way along the tag's axes: whether the cells about it hold both ink
+/// and paper. `false` where the plane is behind the camera or edge-on.
+fn near_edge(plane: &Plane, pattern: &Pattern, n: &Vector2<f64>, band: f64, half: f64) -> bool {
+    let Some((tx, ty)) = to_tag(&plane.to_tag, n) else { return false };
+    let Some(j) = to_cells(plane, tx, ty) else { return false };
+    let (ru, rv) = (half * band * j.row(0).norm(), half * band * j.row(1).norm());
+    pattern.mixed((tx + 1.0) * half, (ty + 1.0) * half, ru, rv)
+}
+
+/// The map from a normalised direction's change to the tag coordinates' change at (tx, ty) on
+/// `plane`; `None` behind the camera or edge-on.
+fn to_cells(plane: &Plane, tx: f64, ty: f64) -> Option<Matrix2<f64>> {
+    let x = plane.centre + plane.x * tx + plane.y * ty;
+    if x.z <= 0.0 {
+        return None;
+    }
+    (dpi(&x) * Matrix3x2::from_columns(&[plane.x, plane.y])).try_inverse()
+}
+
+/// d(normalised)/d(camera point) at `x`.
+fn dpi(x: &Vector3<f64>) -> Matrix2x3<f64> {
+    let iz = 1.0 / x.z;
+    Matrix2x3::new(iz, 0.0, -x.x * iz * iz, 0.0, iz, -x.y * iz * iz)
 }
 
 /// A hash of a pixel's place, to thin pixels without a pattern.
@@ -730,8 +752,7 @@ fn look(plane: &Plane, pattern: &Pattern, n: &Vector2<f64>, sigma: f64, half: f6
         return None;
     }
     // d(normalised)/d(camera point), and the tag plane's 2×2 image Jacobian.
-    let iz = 1.0 / x.z;
-    let dpi = Matrix2x3::new(iz, 0.0, -x.x * iz * iz, 0.0, iz, -x.y * iz * iz);
+    let dpi = dpi(&x);
     let a = dpi * Matrix3x2::from_columns(&[plane.x, plane.y]);
     let j = a.try_inverse()?;
     // The blur carried onto the plane, per axis, in cells.
