@@ -54,6 +54,7 @@
 //! ```
 
 pub mod model;
+mod plane;
 mod solve;
 
 pub use model::Pattern;
