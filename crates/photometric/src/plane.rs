@@ -43,30 +43,27 @@ pub(crate) fn to_tag(to_tag: &Matrix3<f64>, n: &Vector2<f64>) -> Option<(f64, f6
     (m.z.abs() > 1e-12).then(|| (m.x / m.z, m.y / m.z))
 }
 
-/// Whether the pixel looking along `n` is within `band` (normalised units) of an edge of the
-/// pattern on `plane`, each way along the tag's axes: whether the cells about it hold both ink
-/// and paper. `false` where the plane is behind the camera or edge-on.
-pub(crate) fn near_edge(plane: &Plane, pattern: &Pattern, n: &Vector2<f64>, band: f64, half: f64) -> bool {
-    let Some((tx, ty)) = to_tag(&plane.to_tag, n) else { return false };
-    let Some(j) = to_cells(plane, tx, ty) else { return false };
+/// Whether the point at tag coordinates (tx, ty) on `plane` is within `band` (normalised units)
+/// of an edge of the pattern, each way along the tag's axes: whether the cells about it hold
+/// both ink and paper. `false` where the plane is behind the camera or edge-on.
+pub(crate) fn near_edge(plane: &Plane, pattern: &Pattern, tx: f64, ty: f64, band: f64, half: f64) -> bool {
+    let Some((_, _, j)) = local(plane, tx, ty) else { return false };
     let (ru, rv) = (half * band * j.row(0).norm(), half * band * j.row(1).norm());
     pattern.mixed((tx + 1.0) * half, (ty + 1.0) * half, ru, rv)
 }
 
-/// The map from a normalised direction's change to the tag coordinates' change at (tx, ty) on
-/// `plane`; `None` behind the camera or edge-on.
-fn to_cells(plane: &Plane, tx: f64, ty: f64) -> Option<Matrix2<f64>> {
+/// The plane's point at tag coordinates (tx, ty) in the camera frame, d(normalised)/d(camera
+/// point) there, and the map from a normalised direction's change to the tag coordinates'
+/// change; `None` behind the camera or edge-on.
+fn local(plane: &Plane, tx: f64, ty: f64) -> Option<(Vector3<f64>, Matrix2x3<f64>, Matrix2<f64>)> {
     let x = plane.centre + plane.x * tx + plane.y * ty;
     if x.z <= 0.0 {
         return None;
     }
-    (dpi(&x) * Matrix3x2::from_columns(&[plane.x, plane.y])).try_inverse()
-}
-
-/// d(normalised)/d(camera point) at `x`.
-fn dpi(x: &Vector3<f64>) -> Matrix2x3<f64> {
     let iz = 1.0 / x.z;
-    Matrix2x3::new(iz, 0.0, -x.x * iz * iz, 0.0, iz, -x.y * iz * iz)
+    let dpi = Matrix2x3::new(iz, 0.0, -x.x * iz * iz, 0.0, iz, -x.y * iz * iz);
+    let j = (dpi * Matrix3x2::from_columns(&[plane.x, plane.y])).try_inverse()?;
+    Some((x, dpi, j))
 }
 
 /// What the pixel looking along `n` sees of a tag on `plane`: the paper, and (with
@@ -80,14 +77,7 @@ pub(crate) fn look(
     jacobian: bool,
 ) -> Option<Seen> {
     let (tx, ty) = to_tag(&plane.to_tag, n)?;
-    let x = plane.centre + plane.x * tx + plane.y * ty;
-    if x.z <= 0.0 {
-        return None;
-    }
-    // d(normalised)/d(camera point), and the tag plane's 2×2 image Jacobian.
-    let dpi = dpi(&x);
-    let a = dpi * Matrix3x2::from_columns(&[plane.x, plane.y]);
-    let j = a.try_inverse()?;
+    let (x, dpi, j) = local(plane, tx, ty)?;
     // The blur carried onto the plane, per axis, in cells.
     let su = half * sigma * j.row(0).norm();
     let sv = half * sigma * j.row(1).norm();

@@ -296,7 +296,7 @@ fn gather(
                 continue;
             }
             let sample = (col, Sample { row, normalised: n, linear: image.linear[usize::from(v)] });
-            let near = near_edge(&plane, &pattern, &n, band, half);
+            let near = near_edge(&plane, &pattern, tx, ty, band, half);
             if near {
                 edge.push(sample);
             } else if col.is_multiple_of(FLAT_STRIDE) && row.is_multiple_of(FLAT_STRIDE) {
