@@ -104,6 +104,8 @@ pub(super) struct SideFit {
     pub cell_px: f64,
     /// How far the model misses the image: the RMS residual over the paper–ink contrast.
     pub misfit: f64,
+    /// The fitted parameters, a start for fitting the side again at other places.
+    params: Params,
 }
 
 /// The fit of a tag's border: its four sides (top, right, bottom, left of the upright tag, C's
@@ -390,8 +392,15 @@ fn blur_guess(data: &[(usize, f64, f64)], contrast: f64) -> Option<f64> {
 /// Fits one side; `None` when its profiles leave the image, the fit does not converge, or what
 /// it finds cannot be a border (no contrast, a blur wider than the cells). The windows are sized
 /// by a first guess of the blur, and sized again when the fit finds it a third different.
-pub(super) fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Option<SideFit> {
-    let (q, data, cell) = fit_side_params(im, lut, profiles)?;
+/// From `start`, the same side's fit at other places, the fit starts there instead of from a
+/// first look and a guess: it ends where it would (within its tolerance), sooner.
+pub(super) fn fit_side(
+    im: &ImageView<'_>,
+    lut: &[f64; 256],
+    profiles: &[Profile],
+    start: Option<&SideFit>,
+) -> Option<SideFit> {
+    let (q, data, cell) = fit_side_params(im, lut, profiles, start.map(|s| s.params))?;
     let point = |along: f64| {
         // The profile nearest `along` carries its normal; the line runs through the fitted
         // points of the first and last profiles.
@@ -400,24 +409,35 @@ pub(super) fn fit_side(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile
         [p.origin[0] + e * p.normal[0], p.origin[1] + e * p.normal[1]]
     };
     let misfit = misfit_of(profiles, &data, &q);
-    Some(SideFit { line: [point(-1.0), point(1.0)], sigma_px: q[2], cell_px: cell, misfit })
+    Some(SideFit { line: [point(-1.0), point(1.0)], sigma_px: q[2], cell_px: cell, misfit, params: q })
 }
 
 /// Samples along profiles: (profile, distance along its normal (px), value).
 type Samples = Vec<(usize, f64, f64)>;
 
 /// The fit behind [`fit_side`]: the parameters, the samples they were fitted to, the cell (px).
-fn fit_side_params(im: &ImageView<'_>, lut: &[f64; 256], profiles: &[Profile]) -> Option<(Params, Samples, f64)> {
+fn fit_side_params(
+    im: &ImageView<'_>,
+    lut: &[f64; 256],
+    profiles: &[Profile],
+    start: Option<Params>,
+) -> Option<(Params, Samples, f64)> {
     let cell = profiles.iter().map(|p| p.across[2] - p.across[1]).fold(f64::INFINITY, f64::min);
     if !(cell.is_finite() && cell > 1.0) {
         return None;
     }
-    let mut q = Params::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.2]);
-    // A first look, half a cell either way (at most 10 px): the levels and a guess of the blur.
-    let first = read(im, lut, profiles, &q, (0.5 * cell).clamp(3.0, 10.0))?;
-    let (ink, paper) = levels(&first)?;
-    (q[3], q[4], q[5]) = (paper, ink, paper);
-    q[2] = blur_guess(&first, paper - ink)?.clamp(0.3, cell);
+    let mut q = match start {
+        Some(q) => q,
+        None => {
+            let mut q = Params::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.2]);
+            // A first look, half a cell either way (at most 10 px): the levels and a guess of the blur.
+            let first = read(im, lut, profiles, &q, (0.5 * cell).clamp(3.0, 10.0))?;
+            let (ink, paper) = levels(&first)?;
+            (q[3], q[4], q[5]) = (paper, ink, paper);
+            q[2] = blur_guess(&first, paper - ink)?.clamp(0.3, cell);
+            q
+        }
+    };
     let mut data = Vec::new();
     for round in 0..2 {
         let guess = q[2];
@@ -478,7 +498,7 @@ impl FixedSide {
     /// at the ends). `None` when the fit fails, a window leaves the image, or the pixels sample
     /// the edge at too few phases ([`MIN_PHASES`]).
     pub(super) fn new(im: &ImageView<'_>, lut: &[f64; 256], profiles: Vec<Profile>) -> Option<Self> {
-        let (q, data, cell) = fit_side_params(im, lut, &profiles)?;
+        let (q, data, cell) = fit_side_params(im, lut, &profiles, None)?;
         let misfit = misfit_of(&profiles, &data, &q);
         let reach = REACH_SIGMAS * q[2] + REACH_PX;
         let n = profiles.len();
@@ -652,138 +672,25 @@ pub(super) fn fit_border(
     want_lines: bool,
 ) -> Option<BorderFit> {
     let (places, places_blur) = (along(bitmap.width(), &ALONG), along(bitmap.width(), &ALONG_BLUR));
-    let side = |k: usize, along: &[f64]| fit_side(im, lut, &profiles(h, bitmap, k, along)?);
+    let side = |k: usize, along: &[f64], start| fit_side(im, lut, &profiles(h, bitmap, k, along)?, start);
     let sharp = |s: &SideFit| s.sigma_px < SHARP_BLUR_PER_CELL * s.cell_px;
-    let (top, right) = (side(0, &places_blur)?, side(1, &places_blur)?);
+    let (top, right) = (side(0, &places_blur, None)?, side(1, &places_blur, None)?);
     let lens = |sigma: f64| (sigma * sigma - PIXEL_SIGMA_PX * PIXEL_SIGMA_PX).max(0.0).sqrt();
     if !want_lines || (sharp(&top) && sharp(&right)) {
         // Motion smears at most one of two perpendicular sides: the sharper is the lens's.
         return Some(BorderFit { sides: None, blur_px: lens(top.sigma_px.min(right.sigma_px)) });
     }
-    let sides = [side(0, &places)?, side(1, &places)?, side(2, &places)?, side(3, &places)?];
+    let sides = [
+        side(0, &places, Some(&top))?,
+        side(1, &places, Some(&right))?,
+        side(2, &places, None)?,
+        side(3, &places, None)?,
+    ];
     let mut sigmas = sides.map(|s| s.sigma_px);
     sigmas.sort_by(f64::total_cmp);
     Some(BorderFit { sides: Some(sides), blur_px: lens(sigmas[1]) })
 }
 
 #[cfg(test)]
-pub(super) mod tests {
-    use crate::{Detection, Detector, DetectorConfig, ImageView, TagFamily, ToneCurve};
-
-    /// Tag `id` drawn flat with `cell` px cells, turned `deg`, its quiet zone `margin` cells
-    /// wide on a background of reflectance `beyond`, blurred by a Gaussian of σ `blur` px (in
-    /// linear light, exact pixel coverage), encoded as sRGB; and its true corners.
-    fn drawn(id: u32, cell: f64, deg: f64, margin: f64, beyond: f64, blur: f64) -> (Vec<u8>, usize, [[f64; 2]; 4]) {
-        drawn_through(id, cell, deg, margin, beyond, blur, ToneCurve::Srgb)
-    }
-
-    /// As [`drawn`], encoded through `curve`.
-    pub(in crate::detector) fn drawn_through(
-        id: u32,
-        cell: f64,
-        deg: f64,
-        margin: f64,
-        beyond: f64,
-        blur: f64,
-        curve: ToneCurve,
-    ) -> (Vec<u8>, usize, [[f64; 2]; 4]) {
-        let bm = TagFamily::TAG36H11.bitmap(id).expect("id");
-        let n = (cell * (8.0 + 2.0 * margin) * 1.5 + 12.0 * blur + 40.0) as usize;
-        let centre = [n as f64 / 2.0 + 0.31, n as f64 / 2.0 - 0.17];
-        let (s, c) = deg.to_radians().sin_cos();
-        let reflectance = |x: f64, y: f64| {
-            let (dx, dy) = ((x - centre[0]) / cell, (y - centre[1]) / cell);
-            let (u, v) = (c * dx + s * dy + 4.0, -s * dx + c * dy + 4.0);
-            if u < -margin || v < -margin || u >= 8.0 + margin || v >= 8.0 + margin {
-                return beyond;
-            }
-            if u < 0.0 || v < 0.0 || u >= 8.0 || v >= 8.0 {
-                return 0.8;
-            }
-            if bm.is_white(u as usize, v as usize) { 0.8 } else { 0.03 }
-        };
-        const SUB: usize = 8;
-        let mut lin = vec![0.0f64; n * n];
-        for y in 0..n {
-            for x in 0..n {
-                let mut acc = 0.0;
-                for i in 0..SUB {
-                    for j in 0..SUB {
-                        let (ox, oy) = ((i as f64 + 0.5) / SUB as f64 - 0.5, (j as f64 + 0.5) / SUB as f64 - 0.5);
-                        acc += reflectance(x as f64 + ox, y as f64 + oy);
-                    }
-                }
-                lin[y * n + x] = acc / (SUB * SUB) as f64;
-            }
-        }
-        if blur > 0.0 {
-            let r = (4.0 * blur).ceil() as isize;
-            let k: Vec<f64> = (-r..=r).map(|i| (-((i * i) as f64) / (2.0 * blur * blur)).exp()).collect();
-            let norm: f64 = k.iter().sum();
-            let clamp = |i: isize| i.clamp(0, n as isize - 1) as usize;
-            let rows: Vec<f64> = (0..n * n)
-                .map(|i| {
-                    let (y, x) = (i / n, (i % n) as isize);
-                    k.iter().enumerate().map(|(j, w)| w * lin[y * n + clamp(x + j as isize - r)]).sum::<f64>() / norm
-                })
-                .collect();
-            lin = (0..n * n)
-                .map(|i| {
-                    let (y, x) = ((i / n) as isize, i % n);
-                    k.iter().enumerate().map(|(j, w)| w * rows[clamp(y + j as isize - r) * n + x]).sum::<f64>() / norm
-                })
-                .collect();
-        }
-        let to_px = |u: f64, v: f64| {
-            let (du, dv) = (u - 4.0, v - 4.0);
-            [centre[0] + cell * (c * du - s * dv), centre[1] + cell * (s * du + c * dv)]
-        };
-        let corners = [to_px(0.0, 8.0), to_px(8.0, 8.0), to_px(8.0, 0.0), to_px(0.0, 0.0)];
-        (lin.iter().map(|&v| (255.0 * curve.encode(v)).round() as u8).collect(), n, corners)
-    }
-
-    fn detect(img: &[u8], n: usize, border: bool) -> Vec<Detection> {
-        let config = DetectorConfig { blur_aware_edges: border, ..DetectorConfig::default() };
-        Detector::new(config).expect("valid").detect(&ImageView::new(img, n, n, n).expect("view")).expect("runs")
-    }
-
-    fn worst(d: &Detection, truth: &[[f64; 2]; 4]) -> f64 {
-        d.corners.iter().zip(truth).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0, f64::max)
-    }
-
-    /// Tags drawn flat with cells of 3–20 px under blurs of 0–5 px: where the blur nears a
-    /// sixth of a cell the gradient fit is pulled off by the neighbouring cells (to 0.7 px),
-    /// the model fit is not; and the blur is read back.
-    #[test]
-    fn blurred_small_tags_keep_their_corners_and_their_blur_is_read() {
-        // (cell px, blur σ px, quiet zone cells, reflectance beyond it, worst corner error
-        // allowed (px), the gradient fit's own at least (px): the case is a real test of it).
-        let cases = [
-            (7.0, 0.0, 1.0, 0.8, 0.02, 0.0),
-            (7.0, 1.0, 1.0, 0.8, 0.02, 0.0),
-            (20.0, 1.0, 1.0, 0.2, 0.02, 0.0),
-            (7.0, 1.3, 1.0, 0.2, 0.02, 0.02),
-            (7.0, 1.6, 1.0, 0.2, 0.02, 0.05),
-            (7.0, 2.0, 1.0, 0.2, 0.03, 0.2),
-            (4.0, 0.7, 1.0, 0.2, 0.02, 0.05),
-            (4.0, 1.0, 1.0, 0.2, 0.02, 0.1),
-            (3.0, 0.7, 1.0, 0.2, 0.04, 0.15),
-            (7.0, 2.6, 1.0, 0.8, 0.06, 0.4),
-            (7.0, 2.6, 1.0, 0.2, 0.08, 0.6),
-            (7.0, 2.6, 3.0, 0.2, 0.06, 0.4),
-            (14.0, 5.0, 1.0, 0.2, 0.3, 3.0),
-        ];
-        for (cell, blur, margin, beyond, allowed, gradient_at_least) in cases {
-            let (img, n, truth) = drawn(7, cell, 12.0, margin, beyond, blur);
-            let [gradient] = detect(&img, n, false)[..] else { panic!("cell {cell}, blur {blur}: one tag") };
-            let [model] = detect(&img, n, true)[..] else { panic!("cell {cell}, blur {blur}: one tag") };
-            let (g, m) = (worst(&gradient, &truth), worst(&model, &truth));
-            let read = model.blur_px.expect("measured");
-            let case =
-                format!("cell {cell} px, blur {blur} px: gradient {g:.3} px, model {m:.3} px, blur read {read:.2} px");
-            assert!(m <= allowed && g >= gradient_at_least, "{case}");
-            assert!((read - blur).abs() <= 0.15 + 0.05 * blur, "{case}");
-            assert_eq!(gradient.blur_px, None, "not measured without the model fit");
-        }
-    }
-}
+#[path = "border_tests.rs"]
+pub(super) mod tests;
