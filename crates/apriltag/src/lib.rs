@@ -45,7 +45,7 @@ pub mod workers;
 pub use backend::TagDetector;
 pub use config::{DetectorConfig, QuadThreshold, Roi};
 pub use decode::{CodeTable, Decoded};
-pub use detector::{Detection, Detector, Search, StageTimes};
+pub use detector::{Detection, Detector, Expected, Search, StageTimes};
 pub use gray::Gray;
 pub use image::{ImageView, luma_from_bgra, luma_from_bgra_into};
 pub use jawtrack_tag_family::{self as family, TagBitmap, TagFamily};

@@ -48,6 +48,15 @@ impl Workers {
         }
     }
 
+    /// `items.iter().map(f)`, in order, each item a piece of its own for the pool: for a few
+    /// items of very different cost.
+    pub fn map_each<T: Sync, R: Send>(&self, items: &[T], f: impl Fn(&T) -> R + Sync + Send) -> Vec<R> {
+        match &self.pool {
+            None => items.iter().map(f).collect(),
+            Some(pool) => pool.install(|| items.par_iter().with_max_len(1).map(f).collect()),
+        }
+    }
+
     /// The bands `rows` rows are split into: one without a pool, else up to four per thread
     /// of at least 32 rows each, top to bottom.
     pub fn band_ranges(&self, rows: usize) -> Vec<Range<usize>> {

@@ -16,16 +16,19 @@ use crate::quads::{Quad, fit_quads};
 use crate::threshold::threshold_with;
 use crate::tone::{ToneSession, ToneSummary};
 use crate::workers::Workers;
-use edges::refine_edges;
 use jawtrack_tag_family::TagFamily;
 use std::sync::{Arc, Mutex, TryLockError};
 
 mod border;
+mod confirm;
 mod edges;
+mod per_quad;
 mod stages;
 mod tone_fit;
 
 pub use border::PIXEL_SIGMA_PX;
+pub use confirm::Expected;
+use per_quad::finish;
 use stages::Clock;
 pub use stages::StageTimes;
 
@@ -191,8 +194,19 @@ impl Detector {
         if search.quad_decimate != self.config.quad_decimate {
             DetectorConfig { quad_decimate: search.quad_decimate, ..self.config }.validate()?;
         }
+        self.with_tone(frame, |lut| self.detect_through(frame, search, lut))
+    }
+
+    /// Runs `detect` on the frame through the current tone curve; with [`DetectorConfig::tone`]
+    /// `Auto` and a fit due, fits the curve to the tags found, and when that changes the curve
+    /// runs `detect` again through the new one.
+    fn with_tone(
+        &self,
+        frame: &ImageView<'_>,
+        detect: impl Fn(&[f64; 256]) -> Result<Vec<Detection>, DetectError>,
+    ) -> Result<Vec<Detection>, DetectError> {
         let lut = self.tone_state().lut.clone();
-        let dets = self.detect_through(frame, search, &lut)?;
+        let dets = detect(&lut)?;
         {
             let mut state = self.tone_state();
             if !(self.config.linear_edges && state.session.due()) {
@@ -209,7 +223,7 @@ impl Detector {
             })
         };
         match changed {
-            Some(lut) => self.detect_through(frame, search, &lut),
+            Some(lut) => detect(&lut),
             None => Ok(dets),
         }
     }
@@ -220,6 +234,20 @@ impl Detector {
         search: &Search,
         lut: &[f64; 256],
     ) -> Result<Vec<Detection>, DetectError> {
+        let (dets, st) = self.detect_region(frame, search, lut, &self.workers)?;
+        *self.stages.lock().unwrap_or_else(|p| p.into_inner()) = st;
+        Ok(dets)
+    }
+
+    /// The tags `search` finds through `lut`, the work spread over `workers`, and where its
+    /// time went.
+    fn detect_region(
+        &self,
+        frame: &ImageView<'_>,
+        search: &Search,
+        lut: &[f64; 256],
+        workers: &Workers,
+    ) -> Result<(Vec<Detection>, StageTimes), DetectError> {
         let (view, ox, oy) = match search.roi {
             None => (*frame, 0.0, 0.0),
             Some(r) => {
@@ -237,7 +265,7 @@ impl Detector {
                 (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
             }
         };
-        let mut dets = self.detect_view(&view, search.smeared, lut, search.quad_decimate);
+        let (mut dets, st) = self.detect_view(&view, search.smeared, lut, search.quad_decimate, workers);
         for d in &mut dets {
             d.center[0] += ox;
             d.center[1] += oy;
@@ -259,10 +287,17 @@ impl Detector {
                 h[8],
             ];
         }
-        Ok(dets)
+        Ok((dets, st))
     }
 
-    fn detect_view(&self, im: &ImageView<'_>, smeared: bool, lut: &[f64; 256], decimate: f32) -> Vec<Detection> {
+    fn detect_view(
+        &self,
+        im: &ImageView<'_>,
+        smeared: bool,
+        lut: &[f64; 256],
+        decimate: f32,
+        workers: &Workers,
+    ) -> (Vec<Detection>, StageTimes) {
         let c = &self.config;
         // Another thread detecting with this detector has the buffers: use fresh ones.
         let (mut guard, mut own);
@@ -284,7 +319,7 @@ impl Detector {
         let mut st = StageTimes::default();
         let blur = c.quad_sigma != 0.0;
         if decimate > 1.0 {
-            decimate_with(im, decimate, &mut s.decimated, &self.workers);
+            decimate_with(im, decimate, &mut s.decimated, workers);
         } else if blur {
             s.decimated.reset(im.width(), im.height(), 0);
             for (y, row) in s.decimated.data.chunks_exact_mut(im.width()).enumerate() {
@@ -297,7 +332,7 @@ impl Detector {
         let quad_im = if decimate > 1.0 || blur {
             match s.decimated.view() {
                 Ok(v) => v,
-                Err(_) => return Vec::new(), // too small to hold a tag
+                Err(_) => return (Vec::new(), st), // too small to hold a tag
             }
         } else {
             *im
@@ -306,14 +341,14 @@ impl Detector {
         // blurred frame too.
         let im = if decimate > 1.0 { im } else { &quad_im };
         st.decimate_s = clock.lap();
-        threshold_with(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold, &self.workers);
+        threshold_with(&quad_im, c.quad.min_white_black_diff, c.quad.deglitch, &mut s.threshold, workers);
         st.threshold_s = clock.lap();
         let uf = s.regions.get_or_insert_with(|| UnionFind::new(0));
-        connected_components_with(&s.threshold, uf, &self.workers);
+        connected_components_with(&s.threshold, uf, workers);
         st.components_s = clock.lap();
-        let clusters = gradient_clusters_par(&s.threshold, uf, &mut s.pixel_region, &self.workers);
+        let clusters = gradient_clusters_par(&s.threshold, uf, &mut s.pixel_region, workers);
         st.clusters_s = clock.lap();
-        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, decimate, &self.workers);
+        let mut quads = fit_quads(&clusters, &quad_im, &c.quad, decimate, workers);
         st.quads_s = clock.lap();
         st.clusters = clusters.len();
         st.quads = quads.len();
@@ -325,61 +360,13 @@ impl Detector {
                 }
             }
         }
-        let cells = c.family.width_at_border as f64;
-        let decode = |q: &Quad| decode_quad(im, &homography(q)?, &c.family, &self.table, c.decode_sharpening);
-        let dets = self.workers.filter_map(&quads, |q0| {
-            let mut q = *q0;
-            if c.refine_edges {
-                refine_edges(im, &mut q, decimate, lut, c.linear_edges, c.linear_edges && smeared, cells);
-            }
-            let d = decode(&q).or_else(|| {
-                // Our fit can be pulled off by a bright edge near a small tag (linear light
-                // weighs bright gradients most); C's fit may still read it, and then we
-                // report what C would: never fewer tags than C.
-                if !(c.refine_edges && c.linear_edges) {
-                    return None;
-                }
-                let mut q = *q0;
-                refine_edges(im, &mut q, decimate, &IDENTITY, false, false, cells);
-                decode(&q)
-            })?;
-            Some(if c.linear_edges && c.blur_aware_edges {
-                with_border_fit(im, lut, &c.family, d, !smeared)
-            } else {
-                d
-            })
-        });
+        let dets = workers.filter_map(&quads, |q| self.tag_from_quad(im, q, decimate, lut, smeared));
         st.tags_s = clock.lap();
-        let mut dets = reconcile(dets);
-        // C sorts by id; ties keep a deterministic order here (by position).
-        dets.sort_by(|a, b| {
-            a.id.cmp(&b.id).then(a.center[0].total_cmp(&b.center[0])).then(a.center[1].total_cmp(&b.center[1]))
-        });
-        for d in &mut dets {
-            // JawTrack's pixel convention.
-            d.center = [d.center[0] - 0.5, d.center[1] - 0.5];
-            for p in &mut d.corners {
-                p[0] -= 0.5;
-                p[1] -= 0.5;
-            }
-            let h = d.homography;
-            d.homography = [
-                h[0] - 0.5 * h[6],
-                h[1] - 0.5 * h[7],
-                h[2] - 0.5 * h[8],
-                h[3] - 0.5 * h[6],
-                h[4] - 0.5 * h[7],
-                h[5] - 0.5 * h[8],
-                h[6],
-                h[7],
-                h[8],
-            ];
-        }
+        let dets = finish(dets);
         st.finish_s = clock.lap();
         st.tags = dets.len();
         st.quad_decimate = decimate;
-        *self.stages.lock().unwrap_or_else(|p| p.into_inner()) = st;
-        dets
+        (dets, st)
     }
 }
 
@@ -717,73 +704,6 @@ fn sharpen(values: &mut [f64], size: usize, k: f64) {
     for (v, s) in values.iter_mut().zip(&sharpened) {
         *v += k * s;
     }
-}
-
-/// C's reconciliation: of two detections of the same id whose quads overlap, keep the one with
-/// fewer corrected bits, then the larger margin, then the smaller corner coordinates.
-fn reconcile(mut dets: Vec<Detection>) -> Vec<Detection> {
-    let mut i0 = 0;
-    while i0 < dets.len() {
-        let mut i1 = i0 + 1;
-        let mut removed_i0 = false;
-        while i1 < dets.len() {
-            let (a, b) = (&dets[i0], &dets[i1]);
-            if a.id != b.id || !convex_quads_overlap(&a.corners, &b.corners) {
-                i1 += 1;
-                continue;
-            }
-            let mut pref = prefer_smaller(0, f64::from(a.hamming), f64::from(b.hamming));
-            pref = prefer_smaller(pref, -f64::from(a.decision_margin), -f64::from(b.decision_margin));
-            for i in 0..4 {
-                pref = prefer_smaller(pref, a.corners[i][0], b.corners[i][0]);
-                pref = prefer_smaller(pref, a.corners[i][1], b.corners[i][1]);
-            }
-            if pref < 0 {
-                dets.remove(i1);
-            } else {
-                dets.remove(i0);
-                removed_i0 = true;
-                break;
-            }
-        }
-        if !removed_i0 {
-            i0 += 1;
-        }
-    }
-    dets
-}
-
-fn prefer_smaller(pref: i32, q0: f64, q1: f64) -> i32 {
-    if pref != 0 {
-        pref
-    } else if q0 < q1 {
-        -1
-    } else if q1 < q0 {
-        1
-    } else {
-        0
-    }
-}
-
-/// Whether two convex quadrilaterals share any area (separating-axis test).
-fn convex_quads_overlap(a: &[[f64; 2]; 4], b: &[[f64; 2]; 4]) -> bool {
-    for poly in [a, b] {
-        for i in 0..4 {
-            let (p, q) = (poly[i], poly[(i + 1) % 4]);
-            let axis = [q[1] - p[1], p[0] - q[0]];
-            let proj = |pts: &[[f64; 2]; 4]| {
-                pts.iter()
-                    .map(|c| c[0] * axis[0] + c[1] * axis[1])
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
-            };
-            let (a0, a1) = proj(a);
-            let (b0, b1) = proj(b);
-            if a1 < b0 || b1 < a0 {
-                return false;
-            }
-        }
-    }
-    true
 }
 
 #[cfg(test)]

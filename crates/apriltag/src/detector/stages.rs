@@ -3,7 +3,9 @@
 
 /// Where one detection's time went (s), stage by stage, and how much each stage passed on:
 /// what a profile needs, kept by the detector for its last detection
-/// ([`super::Detector::last_stages`]). Timing costs a clock read per stage.
+/// ([`super::Detector::last_stages`]). Timing costs a clock read per stage. For tags looked for
+/// where a tracker predicts them ([`super::Detector::confirm`]), each stage's time is summed
+/// over the tags, whichever thread each ran on.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimes {
     /// Decimation (and `quad_sigma`'s blur).
@@ -22,11 +24,14 @@ pub struct StageTimes {
     pub finish_s: f64,
     /// Clusters found.
     pub clusters: usize,
-    /// Quads fitted.
+    /// Quads fitted, or predicted.
     pub quads: usize,
+    /// Of `quads`, those a tracker predicted ([`super::Detector::confirm`]) rather than the
+    /// image stages found.
+    pub predicted: usize,
     /// Tags decoded.
     pub tags: usize,
-    /// The decimation quads were found at (of the later search, summed).
+    /// The decimation quads were found at (of the later search, summed; 0 for predicted quads).
     pub quad_decimate: f32,
 }
 
@@ -44,6 +49,7 @@ impl std::ops::Add for StageTimes {
             finish_s: self.finish_s + o.finish_s,
             clusters: self.clusters + o.clusters,
             quads: self.quads + o.quads,
+            predicted: self.predicted + o.predicted,
             tags: self.tags + o.tags,
             quad_decimate: o.quad_decimate,
         }
