@@ -53,6 +53,8 @@ pub struct TrackOptions {
     pub tone: ToneSetting,
     /// Search only where the markers are expected once tracked.
     pub region_search: bool,
+    /// … and look for each tag first where the poses predict it.
+    pub predict_tags: bool,
     /// Smooth the jaw pose.
     pub smooth: bool,
     /// How each body's pose is finished: from its tags' corners, or refined from their pixels.
@@ -242,7 +244,7 @@ fn tracker_config(o: &TrackOptions, readout_s: f64, exposure_s: Option<f64>) -> 
             tone: o.tone,
             ..DetectorConfig::default()
         },
-        search: SearchConfig { region_search: o.region_search, ..SearchConfig::default() },
+        search: SearchConfig { region_search: o.region_search, predicted: o.predict_tags, ..SearchConfig::default() },
         smoother: o.smooth.then(SmootherConfig::default),
         refine: o.refine,
         readout_s,
@@ -260,7 +262,7 @@ fn header(o: &TrackOptions, tracker: &Tracker, s: &Setup) -> RecordingHeader {
     header.marker = serde_json::from_str(&tracker.marker().to_json()).ok();
     header.settings = serde_json::json!({
         "decimate": o.decimate, "threads": o.threads, "linear_edges": o.linear_edges, "tone": o.tone.to_string(),
-        "region_search": o.region_search,
+        "region_search": o.region_search, "predict_tags": o.predict_tags,
         "smooth": o.smooth, "refine": o.refine.name(), "registration": o.registration.as_ref().map(|p| p.display().to_string()),
         "refine_marker": o.refine_marker.as_ref().map(|p| p.display().to_string()),
     });

@@ -1,6 +1,7 @@
 //! `jawtrack-bench pipeline`: time per frame of the whole tracking pipeline and of its stages
 //! (tag detection, pose), at 1080p and 4K, searching every frame whole and tracking in the
-//! steady state (the region where the markers are expected), with 1 and 2 detector threads;
+//! steady state (searching the region where the markers are expected, or looking for each tag
+//! where the poses predict it), with 1 and 2 detector threads;
 //! the detector's own stages (threshold, components, clusters, quads, tags); and the PnP
 //! time per body, ours beside OpenCV's solvePnP (SQPnP, ITERATIVE) on the same
 //! correspondences when Python with OpenCV is installed.
@@ -113,19 +114,22 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
             bar.inc(1);
         }
         bar.finish_and_clear();
-        for roi in [false, true] {
+        for search in [Searched::Whole, Searched::Region, Searched::Predicted] {
             for &threads in &a.threads {
-                let run = Run { resolution, roi, threads };
+                let run = Run { resolution, search, threads };
                 let timed = time_frames(&frames, &camera, run, a.repeat, &mut cases)?;
                 if !cases.is_empty() {
                     camera_for_cases.get_or_insert(camera);
                 }
                 let target = run.target(timed.whole_ms);
+                let frames = match search {
+                    Searched::Predicted => format!("{} ({} predicted)", timed.frames, timed.predicted),
+                    _ => timed.frames.to_string(),
+                };
                 line(format!(
-                    "| {} | {} | {threads} | {} | {:.2} | {:.3} | {:.2} | {:.0} | {target} |",
+                    "| {} | {} | {threads} | {frames} | {:.2} | {:.3} | {:.2} | {:.0} | {target} |",
                     resolution_name(resolution),
                     run.search(),
-                    timed.frames,
                     timed.detection_ms,
                     timed.pose_ms,
                     timed.whole_ms,
@@ -172,22 +176,41 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
     Ok(())
 }
 
+/// How a row's tracker looks for the tags.
+#[derive(Clone, Copy, PartialEq)]
+enum Searched {
+    /// The whole frame, every frame.
+    Whole,
+    /// Once tracked, the region where the markers are expected.
+    Region,
+    /// Once tracked, each tag where the poses predict it, the region when one is missing.
+    Predicted,
+}
+
 /// One row of the table.
 #[derive(Clone, Copy)]
 struct Run {
     resolution: Resolution,
-    roi: bool,
+    search: Searched,
     threads: usize,
 }
 
 impl Run {
     fn search(&self) -> &'static str {
-        if self.roi { "tracked region (steady state)" } else { "whole frame" }
+        match self.search {
+            Searched::Whole => "whole frame",
+            Searched::Region => "tracked region (steady state)",
+            Searched::Predicted => "tracked, tags where predicted (steady state)",
+        }
+    }
+
+    fn tracked(&self) -> bool {
+        self.search != Searched::Whole
     }
 
     /// The targets for this row, met or not.
     fn target(&self, whole_ms: f64) -> String {
-        let limit = match (self.resolution, self.roi, self.threads) {
+        let limit = match (self.resolution, self.tracked(), self.threads) {
             (Resolution::P1080, true, 2) => Some(1.5),
             (Resolution::P4k, true, 2) => Some(3.0),
             (Resolution::P4k, false, 2) => Some(8.0),
@@ -205,6 +228,8 @@ impl Run {
 /// A row's medians (ms), and its detector stages (ms, then counts).
 struct Timed {
     frames: usize,
+    /// Of `frames`, those whose tags were taken where predicted (in every pass).
+    predicted: usize,
     detection_ms: f64,
     pose_ms: f64,
     whole_ms: f64,
@@ -222,13 +247,18 @@ fn time_frames(
 ) -> Result<Timed> {
     let config = TrackerConfig {
         detector: DetectorConfig { nthreads: run.threads, ..DetectorConfig::default() },
-        search: SearchConfig { region_search: run.roi, ..SearchConfig::default() },
+        search: SearchConfig {
+            region_search: run.tracked(),
+            predicted: run.search == Searched::Predicted,
+            ..SearchConfig::default()
+        },
         ..TrackerConfig::default()
     };
-    let collect = run.roi && run.resolution == Resolution::P1080 && cases.is_empty();
+    let collect = run.tracked() && run.resolution == Resolution::P1080 && cases.is_empty();
     // times[frame] = (detection, pose, stages) per pass
     let mut times: Vec<Vec<(f64, f64, StageTimes)>> = vec![Vec::new(); frames.len()];
     let mut steady = vec![true; frames.len()];
+    let mut predicted = vec![true; frames.len()];
     for pass in 0..=repeat {
         let mut tracker = Tracker::new(Marker::default(), config)?;
         for (i, f) in frames.iter().enumerate() {
@@ -248,7 +278,8 @@ fn time_frames(
                 }
                 continue;
             }
-            steady[i] &= !run.roi || r.searched.is_some();
+            steady[i] &= !run.tracked() || r.searched.is_some();
+            predicted[i] &= r.timings.predicted;
             times[i].push((r.timings.detection_s, r.timings.pose_s, r.timings.stages));
         }
     }
@@ -261,6 +292,7 @@ fn time_frames(
     let count = |pick: &dyn Fn(&StageTimes) -> usize| per_frame(&|t| pick(&t.2) as f64);
     Ok(Timed {
         frames: used.len(),
+        predicted: steady.iter().zip(&predicted).filter(|(s, p)| **s && **p).count(),
         detection_ms: per_frame(&|t| t.0) * 1e3,
         pose_ms: per_frame(&|t| t.1) * 1e3,
         whole_ms: per_frame(&|t| t.0 + t.1) * 1e3,

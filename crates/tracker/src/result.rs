@@ -48,6 +48,9 @@ pub struct Timings {
     pub refine_s: f64,
     /// Detection stage by stage, summed over the frame's searches.
     pub stages: jawtrack_apriltag::StageTimes,
+    /// The tags were taken where the poses predicted them, without searching the region
+    /// ([`crate::SearchConfig::predicted`]).
+    pub predicted: bool,
 }
 
 /// What the tracker made of one frame.

@@ -1,9 +1,47 @@
 //! Where to look next: what the tracker remembers of each marker, its pose extrapolated to
 //! the coming frame at constant velocity, and the image region its tags will cover.
 
-use jawtrack_apriltag::{ImageView, Roi};
-use jawtrack_pose::{CameraIntrinsics, Pose, Velocity};
+use crate::{Tracker, slot};
+use jawtrack_apriltag::{Expected, ImageView, Roi};
+use jawtrack_marker::{BodyKind, Tag};
+use jawtrack_pose::{CameraIntrinsics, Pose, RollingShutter, Velocity};
 use nalgebra::{Point3, UnitQuaternion};
+
+/// How the tracker searches each frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchConfig {
+    /// Search only where the markers are expected once both are tracked.
+    pub region_search: bool,
+    /// Search the whole frame at least every this many frames (new tags, a second pair).
+    pub full_frame_every: usize,
+    /// The expected region grows by this fraction of its larger side on each side.
+    pub margin: f64,
+    /// … and by at least this many pixels.
+    pub min_margin_px: f64,
+    /// Find quads in the expected region on a coarser image (decimated by 4) when every tag
+    /// is predicted large enough to be found there with room to spare; a tag it misses sends
+    /// the region to the settings' decimation again.
+    pub pyramid: bool,
+    /// Before searching the expected region, look for the tags where the predicted poses put
+    /// them ([`jawtrack_apriltag::Detector::confirm`]): every tag turned towards the camera
+    /// (within 80° of face-on). The frame is taken from them when every tag the bodies were
+    /// solved from in the last frame is confirmed; else the region is searched. Frames whose
+    /// edges are fitted as motion ramps are searched.
+    pub predicted: bool,
+}
+
+impl Default for SearchConfig {
+    fn default() -> Self {
+        SearchConfig {
+            region_search: true,
+            full_frame_every: 30,
+            margin: 0.1,
+            min_margin_px: 32.0,
+            pyramid: true,
+            predicted: true,
+        }
+    }
+}
 
 /// A pose seen at a time (s).
 pub type Timed = (f64, Pose);
@@ -20,6 +58,49 @@ pub(crate) const COARSE_DECIMATION: f32 = 4.0;
 /// tag found at that decimation (about 14 px per unit of decimation, 27.5 px at 2), room for
 /// the prediction's error and the tag's turn.
 pub(crate) const COARSE_MIN_SIDE_PX: f64 = 110.0;
+
+/// Tags seen within this angle of face-on (°) are looked for where they are predicted
+/// ([`SearchConfig::predicted`]): beyond it their cells are too foreshortened to decode.
+pub(crate) const MAX_VIEW_DEG: f64 = 80.0;
+/// … and tags whose shortest side is predicted at least this long (px).
+pub(crate) const MIN_SIDE_PX: f64 = 8.0;
+/// Tags seen beyond this angle from face-on (°) are searched for in a box around their
+/// prediction rather than refitted from it ([`Expected::search`]).
+pub(crate) const SEARCH_BEYOND_DEG: f64 = 60.0;
+
+/// Of a body's `tags`, those turned towards the camera at `camera_from_body` (within
+/// [`MAX_VIEW_DEG`] of face-on, [`MIN_SIDE_PX`] long or more), each corner projected through
+/// the pose `at_row` gives for the row it falls in (the body's pose when that row was exposed);
+/// those beyond [`SEARCH_BEYOND_DEG`] to be searched for.
+pub(crate) fn expected_tags(
+    tags: &[Tag],
+    camera_from_body: &Pose,
+    at_row: impl Fn(f64) -> Option<Pose>,
+    camera: &CameraIntrinsics,
+) -> Vec<Expected> {
+    let (facing, steep) = (MAX_VIEW_DEG.to_radians().cos(), SEARCH_BEYOND_DEG.to_radians().cos());
+    let mut out = Vec::new();
+    for tag in tags {
+        let normal = camera_from_body.rotation() * tag.face_normal();
+        let centre = camera_from_body.transform_point(&Point3::from(tag.center)).coords;
+        let cos_view = -normal.dot(&centre) / centre.norm();
+        if cos_view < facing {
+            continue;
+        }
+        if !shortest_side_px(camera_from_body, &tag.corners, camera).is_some_and(|s| s >= MIN_SIDE_PX) {
+            continue;
+        }
+        let corner = |c: &nalgebra::Vector3<f64>| {
+            let first = camera.project(&camera_from_body.transform_point(&Point3::from(*c)))?;
+            let px = camera.project(&at_row(first.y)?.transform_point(&Point3::from(*c)))?;
+            Some([px.x, px.y])
+        };
+        if let [Some(a), Some(b), Some(c), Some(d)] = tag.corners.each_ref().map(corner) {
+            out.push(Expected { id: tag.id, corners: [a, b, c, d], search: cos_view < steep });
+        }
+    }
+    out
+}
 
 /// The shortest side (px) of the tag whose corners (body frame) are `corners`, seen through
 /// `camera_from_body`; `None` when a corner does not project.
@@ -160,6 +241,58 @@ pub(crate) fn near_inner_edge(corners: &[[f64; 2]; 4], roi: &Roi, frame: &ImageV
             || (roi.x + roi.width < frame.width() && x1 - c[0] < distance)
             || (roi.y + roi.height < frame.height() && y1 - c[1] < distance)
     })
+}
+
+/// Where the tracker looks in the coming frame.
+impl Tracker {
+    /// Where both markers are expected, when both are tracked and a full search is not due.
+    pub(crate) fn expected_region(&self, frame: &ImageView<'_>, camera: &CameraIntrinsics, t: f64) -> Option<Roi> {
+        let s = &self.config.search;
+        if !s.region_search || self.since_full + 1 >= s.full_frame_every {
+            return None;
+        }
+        let recent = |b: &BodyState| b.last().is_some_and(|l| self.recent(l.0, t));
+        if !self.bodies.iter().all(|b| recent(b) && !b.tags.is_empty()) {
+            return None;
+        }
+        let poses = [self.bodies[0].predict(t)?, self.bodies[1].predict(t)?];
+        let groups = [(&poses[0], self.corners[0].as_slice()), (&poses[1], self.corners[1].as_slice())];
+        region(&groups, camera, frame.width(), frame.height(), s.margin, s.min_margin_px)
+    }
+
+    /// The tags the bodies' predicted poses turn towards the camera at `t`, each corner where
+    /// its own row sees it under the rolling shutter ([`expected_tags`]).
+    pub(crate) fn expected_tags_at(&self, frame: &ImageView<'_>, camera: &CameraIntrinsics, t: f64) -> Vec<Expected> {
+        let rows = frame.height();
+        let shutter = RollingShutter::new(self.config.readout_s, rows).unwrap_or_else(|_| RollingShutter::global());
+        let mut out = Vec::new();
+        for kind in BodyKind::ALL {
+            let (Some(body), state) = (self.marker.body(kind), &self.bodies[slot(kind)]) else { continue };
+            let Some(pose) = state.predict(t) else { continue };
+            let at_row = |row: f64| state.predict(t + shutter.offset_s(row));
+            out.extend(expected_tags(&body.tags, &pose, at_row, camera));
+        }
+        out
+    }
+
+    /// The coarser decimation ([`COARSE_DECIMATION`]) a region search may find quads at:
+    /// when every tag the bodies were solved from in the last frame is predicted at `t` with
+    /// its shortest side at least [`COARSE_MIN_SIDE_PX`]. `None` when the settings'
+    /// decimation is as coarse, or a tag is smaller or cannot be predicted.
+    pub(crate) fn coarse_decimation(&self, camera: &CameraIntrinsics, t: f64) -> Option<f32> {
+        if !self.config.search.pyramid || self.config.detector.quad_decimate >= COARSE_DECIMATION {
+            return None;
+        }
+        let mut smallest = f64::INFINITY;
+        for b in &self.bodies {
+            let pose = b.predict(t)?;
+            for &id in &b.tags {
+                let (_, tag) = self.marker.find_tag(id)?;
+                smallest = smallest.min(shortest_side_px(&pose, &tag.corners, camera)?);
+            }
+        }
+        (smallest.is_finite() && smallest >= COARSE_MIN_SIDE_PX).then_some(COARSE_DECIMATION)
+    }
 }
 
 #[cfg(test)]
