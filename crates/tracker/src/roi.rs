@@ -1,5 +1,6 @@
 //! Where to look next: what the tracker remembers of each marker, its pose extrapolated to
-//! the coming frame at constant velocity, and the image region its tags will cover.
+//! the coming frame at constant velocity, the image region its tags will cover, and where each
+//! of its tags is expected.
 
 use crate::{Tracker, slot};
 use jawtrack_apriltag::{Expected, ImageView, Roi};

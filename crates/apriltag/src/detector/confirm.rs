@@ -56,8 +56,9 @@ impl Detector {
     /// prediction as [`Detector::search`] looks in a region. Then the border fit, as
     /// [`Detector::search`] does. A tag predicted off by more than the box's margin, hidden,
     /// or turned away is missing from the result: a tracker searches again
-    /// ([`Detector::search`]) when a tag it needs is missing. Tags predicted with a corner outside the frame are not tried. The tone curve is
-    /// estimated as in [`Detector::detect_in_with`]; `smeared` as in [`crate::Search`].
+    /// ([`Detector::search`]) when a tag it needs is missing. Tags predicted with a corner
+    /// outside the frame are not tried. The tone curve is estimated as in
+    /// [`Detector::detect_in_with`]; `smeared` as in [`crate::Search`].
     ///
     /// # Examples
     ///
@@ -176,16 +177,20 @@ fn around(e: &Expected, frame: &ImageView<'_>) -> Roi {
 mod tests {
     use super::Expected;
     use crate::detector::border::tests::drawn_through;
-    use crate::{Detector, DetectorConfig, ImageView, ToneCurve};
+    use crate::{Detection, Detector, DetectorConfig, ImageView, ToneCurve};
 
     /// A predicted quad a few pixels off is pulled onto the tag and reads as the search reads
-    /// it; a prediction of another id, or far off, confirms nothing.
+    /// it; one nine pixels off, or one asked to be searched, is found in the box around it; a
+    /// prediction of another id, or leaving the frame, finds nothing.
     #[test]
     fn a_predicted_tag_is_found_as_the_search_finds_it() {
         let (img, n, _) = drawn_through(7, 7.0, 12.0, 1.0, 0.8, 1.0, ToneCurve::Srgb);
         let view = ImageView::new(&img, n, n, n).expect("view");
         let detector = Detector::new(DetectorConfig::default()).expect("valid");
         let [found] = detector.detect(&view).expect("runs")[..] else { panic!("one tag") };
+        let worst = |d: &Detection| {
+            d.corners.iter().zip(&found.corners).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0, f64::max)
+        };
         let moved = |dx: f64, dy: f64, turn_deg: f64, scale: f64| {
             let (s, c) = turn_deg.to_radians().sin_cos();
             found.corners.map(|p| {
@@ -201,11 +206,10 @@ mod tests {
             let [got] = detector.confirm(&view, &[expected], false).expect("runs")[..] else {
                 panic!("predicted ({dx}, {dy}) px, {turn}°, ×{scale}: one tag")
             };
-            let off = got.corners.iter().zip(&found.corners).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]));
-            let worst = off.fold(0.0, f64::max);
+            let off = worst(&got);
             assert!(
-                got.id == 7 && worst < 0.01,
-                "predicted ({dx}, {dy}) px, {turn}°: corners {worst} px from the search's"
+                got.id == 7 && off < 0.01,
+                "predicted ({dx}, {dy}) px, {turn}°: corners {off} px from the search's"
             );
             assert_eq!(got.blur_px.is_some(), found.blur_px.is_some());
             checked += 1;
@@ -218,15 +222,11 @@ mod tests {
         // Nine pixels off, the refit takes the next edge or none: the box around it is searched.
         let far = Expected { id: 7, corners: moved(9.0, 0.0, 0.0, 1.0), search: false };
         let [got] = detector.confirm(&view, &[far], false).expect("runs")[..] else { panic!("far: one tag") };
-        let worst =
-            got.corners.iter().zip(&found.corners).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0, f64::max);
-        assert!(worst < 0.05, "far: corners {worst} px from the whole frame's");
+        assert!(worst(&got) < 0.05, "far: corners {} px from the whole frame's", worst(&got));
         assert!(detector.last_stages().clusters > 0, "found by the image stages");
         let searched = Expected { id: 7, corners: moved(2.0, -1.5, 1.0, 1.0), search: true };
         let [got] = detector.confirm(&view, &[searched], false).expect("runs")[..] else { panic!("searched: one tag") };
-        let worst =
-            got.corners.iter().zip(&found.corners).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0, f64::max);
-        assert!(worst < 0.05, "searched around: corners {worst} px from the whole frame's");
+        assert!(worst(&got) < 0.05, "searched around: corners {} px from the whole frame's", worst(&got));
         assert!(detector.last_stages().clusters > 0, "found by the image stages");
         let outside = Expected { id: 7, corners: moved(-found.center[0] - 5.0, 0.0, 0.0, 1.0), search: false };
         assert!(detector.confirm(&view, &[outside], false).expect("runs").is_empty());
