@@ -334,7 +334,10 @@ impl Tracker {
         // follows where its window starts, and predicted quads refitted as ramps landed up to
         // 1.5 mm off on rendered chewing (4K through a 2× crop, 8 ms exposure).
         let ramps = smeared || self.config.detector.smeared_edges;
-        if expected.is_some() && self.config.search.predicted && !ramps {
+        // … and so does a frame its tags moved far to, where the prediction is off by more.
+        let since = |b: &BodyState| b.last().map_or(0.0, |l| t - l.0);
+        let far = self.travel_px(camera, t, since).iter().any(|&px| px > roi::MAX_PREDICTED_TRAVEL_PX);
+        if expected.is_some() && self.config.search.predicted && !ramps && !far {
             let tags = self.expected_tags_at(frame, camera, t);
             if !tags.is_empty() {
                 let mut d = self.detector.confirm(frame, &tags, false)?;
@@ -423,10 +426,16 @@ impl Tracker {
     /// How far (px) each body's recent motion predicts its tags smear over the exposure of a
     /// frame at `t` (0 without a recent pose).
     fn smears(&self, camera: &CameraIntrinsics, t: f64) -> [f64; 2] {
+        self.travel_px(camera, t, |_| self.config.exposure_s)
+    }
+
+    /// How far (px) each body's recent motion moves its tags over the time `over(body)` (s), 0
+    /// without a recent pose.
+    fn travel_px(&self, camera: &CameraIntrinsics, t: f64, over: impl Fn(&BodyState) -> f64) -> [f64; 2] {
         BodyKind::ALL.map(|k| {
             let (b, reach) = (&self.bodies[slot(k)], self.corners[slot(k)].iter().map(|p| p.coords.norm()));
             if b.last().is_some_and(|l| self.recent(l.0, t)) {
-                b.smear_px(camera, self.config.exposure_s, reach.fold(0.0, f64::max))
+                b.smear_px(camera, over(b), reach.fold(0.0, f64::max))
             } else {
                 0.0
             }

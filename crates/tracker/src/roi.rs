@@ -27,7 +27,8 @@ pub struct SearchConfig {
     /// them ([`jawtrack_apriltag::Detector::confirm`]): every tag turned towards the camera
     /// (within 80° of face-on). The frame is taken from them when every tag the bodies were
     /// solved from in the last frame is confirmed; else the region is searched. Frames whose
-    /// edges are fitted as motion ramps are searched.
+    /// edges are fitted as motion ramps, or whose tags moved far since the last frame, are
+    /// searched.
     pub predicted: bool,
 }
 
@@ -65,6 +66,10 @@ pub(crate) const COARSE_MIN_SIDE_PX: f64 = 110.0;
 pub(crate) const MAX_VIEW_DEG: f64 = 80.0;
 /// … and tags whose shortest side is predicted at least this long (px).
 pub(crate) const MIN_SIDE_PX: f64 = 8.0;
+/// A frame whose tags moved farther than this since the last frame (px, at the bodies' last
+/// velocity) is searched, not looked for where predicted: on the demo's hinge (36 mm openings
+/// in eight frames) the predictions missed, and the tags kept came out worse.
+pub(crate) const MAX_PREDICTED_TRAVEL_PX: f64 = 20.0;
 /// Tags seen beyond this angle from face-on (°) are searched for in a box around their
 /// prediction rather than refitted from it ([`Expected::search`]).
 pub(crate) const SEARCH_BEYOND_DEG: f64 = 60.0;
