@@ -80,8 +80,9 @@ pub(crate) struct TrackArgs {
     region_search: bool,
     /// With --region-search: once tracked, look for each tag first where the poses predict it,
     /// and search the region only when a tag the last frame was solved from is not there (a
-    /// tracked frame in about half the time); `false` searches the region every frame.
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    /// tracked 1080p frame in about 60 % of the time; crates/detector-bench/BENCHMARKS.md).
+    /// Off by default: each frame's result then follows the last frame's pose to its last bits.
+    #[arg(long, default_value_t = false, action = clap::ArgAction::Set)]
     predict_tags: bool,
     /// Smooth the jaw pose (One-Euro filter; never more than one frame of lag).
     #[arg(long)]

@@ -23,8 +23,7 @@ pub struct Settings {
     pub threads: u32,
     /// Fit tag edges in linear light (frames are sRGB, as phones deliver them).
     pub linear_edges: bool,
-    /// Search only where the markers are expected once tracked, looking for each tag first
-    /// where the poses predict it (`jawtrack_tracker::SearchConfig::predicted`).
+    /// Search only where the markers are expected once tracked.
     pub region_search: bool,
     /// Smooth the jaw pose (One-Euro filter).
     pub smooth: bool,

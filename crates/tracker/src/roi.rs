@@ -28,7 +28,9 @@ pub struct SearchConfig {
     /// (within 80° of face-on). The frame is taken from them when every tag the bodies were
     /// solved from in the last frame is confirmed; else the region is searched. Frames whose
     /// edges are fitted as motion ramps, or whose tags moved far since the last frame, are
-    /// searched.
+    /// searched. Off by default: a predicted quad's refit follows its start, so the poses
+    /// follow the last frame's to their last bits (the app's pipeline and `jawtrack track` on
+    /// the same frames parted at the fifth frame).
     pub predicted: bool,
 }
 
@@ -40,7 +42,7 @@ impl Default for SearchConfig {
             margin: 0.1,
             min_margin_px: 32.0,
             pyramid: true,
-            predicted: true,
+            predicted: false,
         }
     }
 }
