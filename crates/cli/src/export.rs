@@ -40,10 +40,9 @@ pub(crate) struct ExportArgs {
     /// "maxilla_scan_from_mandible_scan","layout":"row-major 4x4","frames":[{"frame","t_s","matrix"}]}`.
     #[arg(long)]
     transforms_json: bool,
-    /// For OpenSim: the lower incisal point's and both condyles' trajectories (mm), in
-    /// OpenSim's axes (X anterior, Y up, Z right; origin the head frame's), the points the
-    /// points file's (--points) or else the standard mounting's. Frames without a jaw pose have
-    /// blank markers.
+    /// For OpenSim: the lower incisal point's and both condyles' trajectories (mm), in OpenSim's
+    /// axes (X anterior, Y up, Z right; origin the head frame's), the points the points file's
+    /// (--points) or else the standard mounting's. Frames without a jaw pose have blank markers.
     #[arg(long)]
     trc: bool,
     /// For OpenSim: the jaw's coordinates over time from the rest position: body-fixed X–Y–Z

@@ -30,9 +30,8 @@ pub(crate) struct EdgeArgs {
     /// in the frames' own values.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub(crate) linear_edges: bool,
-    /// The camera's tone curve, undone to reach linear light: auto (estimated from the tags'
-    /// edges, sRGB until they tell), srgb, gamma:G (a plain power law, e.g. gamma:1.8) or
-    /// s-curve:G:C.
+    /// The camera's tone curve, undone to reach linear light: auto (estimated from the tags' edges,
+    /// sRGB until they tell), srgb, gamma:G (a plain power law, e.g. gamma:1.8) or s-curve:G:C.
     #[arg(long, default_value = "auto", value_name = "CURVE")]
     pub(crate) tone: jawtrack_apriltag::ToneSetting,
 }

@@ -22,16 +22,14 @@ pub(crate) struct RegisterArgs {
     /// Which body the scan shows: maxilla or mandible.
     #[arg(long, value_parser = parse_body)]
     body: BodyKind,
-    /// The scan of the printed harness (STL, PLY or OBJ in mm); the post, teeth and holes
-    /// are fine.
+    /// The scan of the printed harness (STL, PLY or OBJ in mm); the post, teeth and holes are fine.
     #[arg(long)]
     scan: PathBuf,
     /// Initial guess of scan_from_marker: "rx,ry,rz,tx,ty,tz" (rotation vector in degrees,
-    /// translation in mm) or 16 numbers, a 4×4 row-major matrix as in the registration file.
-    /// It must be within about 30° and 3 mm of the truth: the marker's solid looks the same
-    /// turned 72° about a face, so the guess decides which face is which. Default: the
-    /// marker's axes at the centre of the scan's surface, for a scan in the marker's
-    /// orientation.
+    /// translation in mm) or 16 numbers, a 4×4 row-major matrix as in the registration file. It
+    /// must be within about 30° and 3 mm of the truth: the marker's solid looks the same turned 72°
+    /// about a face, so the guess decides which face is which. Default: the marker's axes at the
+    /// centre of the scan's surface, for a scan in the marker's orientation.
     #[arg(long, allow_hyphen_values = true)]
     init: Option<Pose>,
     /// The registration file to write; if it exists, only this body's entry changes.

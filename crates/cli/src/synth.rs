@@ -41,9 +41,8 @@ pub(crate) struct SynthArgs {
     #[arg(long, value_name = "MS", allow_hyphen_values = true)]
     exposure_ms: Option<f64>,
     /// Rolling-shutter readout (ms): the time from the first to the last row of the frame,
-    /// overriding the realism settings' (0 = a global shutter). Row r of H is exposed
-    /// centred at t + (r − (H−1)/2)/(H−1) × readout; the truth puts each tag corner where its
-    /// own row saw it.
+    /// overriding the realism settings' (0 = a global shutter). Row r of H is exposed centred at t
+    /// + (r − (H−1)/2)/(H−1) × readout; the truth puts each tag corner where its own row saw it.
     #[arg(long, value_name = "MS", allow_hyphen_values = true)]
     readout_ms: Option<f64>,
     /// Chew scene: the phone held in landscape, so the rows run across the face and the

@@ -74,14 +74,12 @@ pub(crate) struct TrackArgs {
     threads: usize,
     #[command(flatten)]
     edges: crate::flags::EdgeArgs,
-    /// Search only where the markers are expected once tracked (the whole frame every 30
-    /// frames and whenever a body is missing); `false` searches every frame whole.
+    /// Once tracked, search where the markers are expected (whole every 30th frame or on a loss).
     #[arg(long, alias = "roi", default_value_t = true, action = clap::ArgAction::Set)]
     region_search: bool,
     /// With --region-search: once tracked, look for each tag first where the poses predict it,
-    /// and search the region only when a tag the last frame was solved from is not there (a
-    /// tracked 1080p frame in about 60 % of the time; crates/detector-bench/BENCHMARKS.md).
-    /// Off by default: each frame's result then follows the last frame's pose to its last bits.
+    /// the region only when a tag the last frame used is missing (a tracked 1080p frame in about
+    /// 60 % of the time). Off by default: each result follows the last frame's pose to its last bits.
     #[arg(long, default_value_t = false, action = clap::ArgAction::Set)]
     predict_tags: bool,
     /// Smooth the jaw pose (One-Euro filter; never more than one frame of lag).
