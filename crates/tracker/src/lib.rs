@@ -337,13 +337,16 @@ impl Tracker {
         // … and so does a frame its tags moved far to, where the prediction is off by more.
         let since = |b: &BodyState| b.last().map_or(0.0, |l| t - l.0);
         let far = self.travel_px(camera, t, since).iter().any(|&px| px > roi::MAX_PREDICTED_TRAVEL_PX);
-        if expected.is_some() && self.config.search.predicted && !ramps && !far {
+        let blurred = self.bodies.iter().any(|b| b.blur_px.is_some_and(|px| px > roi::MAX_PREDICTED_BLUR_PX));
+        if expected.is_some() && self.config.search.predicted && !ramps && !far && !blurred {
             let tags = self.expected_tags_at(frame, camera, t);
             if !tags.is_empty() {
                 let mut d = self.detector.confirm(frame, &tags, false)?;
                 d.retain(|d| self.marker.find_tag(d.id).is_some());
                 stages = self.detector.last_stages();
-                predicted = !self.lost_a_tag(&d);
+                // A tag found blurred is searched again, as the next frame would be.
+                let sharp = d.iter().all(|d| d.blur_px.is_none_or(|px| px <= roi::MAX_PREDICTED_BLUR_PX));
+                predicted = sharp && !self.lost_a_tag(&d);
                 detections = predicted.then_some(d);
             }
         }
@@ -509,7 +512,10 @@ impl Tracker {
             sharpness::judge(&mut bodies, &detections, smears, self.config.max_blur_per_cell, self.cells(), &mut flags);
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
-                Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
+                Some(b) => {
+                    self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags);
+                    self.bodies[slot(kind)].blur_px = b.blur_px;
+                }
                 None => {
                     flags.push(Flag::Lost(kind));
                     self.bodies[slot(kind)].tags.clear();
