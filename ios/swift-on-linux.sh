@@ -177,7 +177,9 @@ case "${1:-}" in
       echo "$intrinsics" >"$work/fixtures/$set/intrinsics.txt"
       # Tracked inside the root, beside the Swift tests: glibc's libm differs between Debian
       # releases in the last bits of sin/cos, which the pose solver's iterations amplify to 1e-6 mm.
-      inside target/release/jawtrack track "fixtures/$set" --intrinsics "$intrinsics" \
+      # At the 2 ms exposure the tests give each frame (Support.swift's `play`): the exposure
+      # says how far tags smear, and so which way a frame's tags are looked for.
+      inside target/release/jawtrack track "fixtures/$set" --intrinsics "$intrinsics" --exposure-ms 2 \
         --out "target/swift/fixtures/$set/track.jsonl" >/dev/null 2>&1 || fail "jawtrack track fixtures/$set"
     done
     cp "$repo/fixtures/wire/golden.json" "$work/fixtures/wire-golden.json"

@@ -155,7 +155,8 @@ class MemoryFrameSource: FrameSource {
     }
 
     /// Hands `image` over as a padded buffer, as the camera layer does inside the pixel
-    /// buffer's lock; returns once the pipeline is done with it.
+    /// buffer's lock; returns once the pipeline is done with it. The default exposure is the
+    /// one `swift-on-linux.sh` tracks the fixtures at with `jawtrack track`.
     func play(
         _ image: LumaImage,
         layout: PixelLayout = .luma,
