@@ -11,8 +11,8 @@ use std::sync::LazyLock;
 
 /// Nodes per unit of z.
 const PER_UNIT: f64 = 32.0;
-/// The table covers [−LIMIT, LIMIT].
-const LIMIT: f64 = 8.0;
+/// The table covers [−LIMIT, LIMIT]; beyond it Φ is 0 or 1 and φ 0.
+pub(crate) const LIMIT: f64 = 8.0;
 const NODES: usize = (2.0 * LIMIT * PER_UNIT) as usize + 1;
 
 /// (Φ, φ / PER_UNIT) at each node: the slope per step between nodes.

@@ -21,7 +21,7 @@
 //! side along the motion is not smeared, so a tag's blur is the second-sharpest of its sides:
 //! what the lens did, which is what [`crate::Detection::blur_px`] reports.
 
-use crate::gauss::cdf_pdf;
+use crate::gauss::{LIMIT, cdf_pdf};
 use crate::image::ImageView;
 use jawtrack_tag_family::TagBitmap;
 use nalgebra::{SMatrix, SVector};
@@ -286,9 +286,21 @@ fn model(p: &Profile, rows: &Rows, t: f64, q: &Params) -> (f64, Params) {
     let mut d_s = [0.0; BANDS + 1];
     let mut d_m = [0.0; BANDS + 1];
     above[0] = 1.0;
+    // The boundaries run inward, so z falls as k grows: boundaries where z ≥ LIMIT lie wholly
+    // inward of the blur (Φ = 1, φ = 0) and, from the first where z ≤ −LIMIT, wholly outward
+    // (Φ = 0, φ = 0). Only the bands between weigh; the others would add exact zeros and are
+    // skipped, the sums unchanged to the bit.
+    let (mut first, mut last) = (BANDS, 0);
     for k in 0..BANDS - 1 {
         let pos = if k == 0 { e + margin * p.across[0] } else { e + p.across[k] };
         let z = (t - pos) / s;
+        if z >= LIMIT {
+            above[k + 1] = 1.0;
+            continue;
+        }
+        if z <= -LIMIT {
+            break;
+        }
         // The share of the blur (centred at t) lying inward of the boundary: Φ(z).
         let (phi, dens) = cdf_pdf(z);
         above[k + 1] = phi;
@@ -297,23 +309,30 @@ fn model(p: &Profile, rows: &Rows, t: f64, q: &Params) -> (f64, Params) {
         if k == 0 {
             d_m[k + 1] = -dens * p.across[0] / s;
         }
+        (first, last) = (first.min(k), k);
     }
-    let mut value = 0.0;
-    let mut g = Params::zeros();
-    for b in 0..BANDS {
+    // The band just outward of the first boundary the blur reaches, through the one just inward
+    // of the last (or, when it reaches none, the band holding t).
+    let bands = if first < BANDS {
+        first..last + 2
+    } else {
+        let b = above.iter().take_while(|&&a| a == 1.0).count() - 1;
+        b..b + 1
+    };
+    let (mut value, mut g0, mut g2, mut g3, mut g4, mut g5, mut g6) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for b in bands {
         // The band's share: mass inward of its outer boundary less that inward of its inner one.
         let w = above[b] - above[b + 1];
         let (we, ws, wm) = (d_e[b] - d_e[b + 1], d_s[b] - d_s[b + 1], d_m[b] - d_m[b + 1]);
         value += rows.value[b] * w;
-        g[0] += rows.value[b] * we;
-        g[2] += rows.value[b] * ws + rows.d_sigma[b] * w;
-        g[3] += rows.d_levels[b][0] * w;
-        g[4] += rows.d_levels[b][1] * w;
-        g[5] += rows.d_levels[b][2] * w;
-        g[6] += rows.value[b] * wm;
+        g0 += rows.value[b] * we;
+        g2 += rows.value[b] * ws + rows.d_sigma[b] * w;
+        g3 += rows.d_levels[b][0] * w;
+        g4 += rows.d_levels[b][1] * w;
+        g5 += rows.d_levels[b][2] * w;
+        g6 += rows.value[b] * wm;
     }
-    g[1] = g[0] * p.along;
-    (value, g)
+    (value, Params::from([g0, g0 * p.along, g2, g3, g4, g5, g6]))
 }
 
 /// The four pixels around `p` (C's convention: pixel centres at +0.5) and their bilinear
@@ -601,8 +620,18 @@ fn levenberg_marquardt(profiles: &[Profile], data: &[(usize, f64, f64)], start: 
         let mut jtj = SMatrix::<f64, NP, NP>::zeros();
         let mut jtr = Params::zeros();
         for (r, g) in &here {
-            jtj += g * g.transpose();
+            // The lower triangle only (the normal matrix is symmetric), mirrored below.
+            for j in 0..NP {
+                for i in j..NP {
+                    jtj[(i, j)] += g[i] * g[j];
+                }
+            }
             jtr += g * *r;
+        }
+        for j in 0..NP {
+            for i in j + 1..NP {
+                jtj[(j, i)] = jtj[(i, j)];
+            }
         }
         let mut improved = false;
         for _ in 0..8 {
