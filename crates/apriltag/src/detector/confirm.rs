@@ -97,7 +97,7 @@ impl Detector {
         // C's pixel convention, as the quads the image stages find, and their order: the
         // corners at tag coordinates (−1,−1), (1,−1), (1,1), (−1,1), where a detection lists
         // (−1,1), (1,1), (1,−1), (−1,−1).
-        let jobs: Vec<Job> = expected
+        let mut jobs: Vec<Job> = expected
             .iter()
             .filter(inside)
             .map(|e| {
@@ -106,6 +106,9 @@ impl Detector {
                 Job { expected: *e, quad, around: around(e, frame) }
             })
             .collect();
+        // The boxes to search first: each costs several refits, and a thread left with one at
+        // the end keeps the other waiting. The tags are sorted by id at the end.
+        jobs.sort_by_key(|j| j.quad.is_some());
         // Each box searched on one thread: the image stages of a box a few dozen pixels
         // across cost less than sharing them out.
         let serial = Workers::new(1);
