@@ -23,7 +23,8 @@ pub struct Settings {
     pub threads: u32,
     /// Fit tag edges in linear light (frames are sRGB, as phones deliver them).
     pub linear_edges: bool,
-    /// Search only where the markers are expected once tracked.
+    /// Search only where the markers are expected once tracked, and first where the poses
+    /// predict each tag (`jawtrack track --predict-tags`, which is on by default too).
     pub region_search: bool,
     /// Smooth the jaw pose (One-Euro filter).
     pub smooth: bool,
