@@ -145,6 +145,9 @@ pub struct Tracker {
     smoother: Option<Smoother>,
     /// Frames since the whole frame was last searched.
     since_full: usize,
+    /// Whether the last frame held a tag too blurred to look for where predicted
+    /// ([`roi::MAX_PREDICTED_BLUR_PX`]).
+    blurred: bool,
     /// Each body's tag corners in its frame, for the expected region.
     corners: [Vec<Point3<f64>>; 2],
     /// Per tag id: frames it was detected in with its body solved, and frames it was dropped.
@@ -191,6 +194,7 @@ impl Tracker {
             bodies: Default::default(),
             last_relative: None,
             since_full: 0,
+            blurred: false,
             corners,
             tag_counts: Default::default(),
             bite: BiteWindow::new(config.bite),
@@ -297,6 +301,7 @@ impl Tracker {
         self.bodies = Default::default();
         self.last_relative = None;
         self.since_full = 0;
+        self.blurred = false;
         self.bite.clear();
         if let Some(s) = &mut self.smoother {
             s.reset();
@@ -337,16 +342,13 @@ impl Tracker {
         // … and so does a frame its tags moved far to, where the prediction is off by more.
         let since = |b: &BodyState| b.last().map_or(0.0, |l| t - l.0);
         let far = self.travel_px(camera, t, since).iter().any(|&px| px > roi::MAX_PREDICTED_TRAVEL_PX);
-        let blurred = self.bodies.iter().any(|b| b.blur_px.is_some_and(|px| px > roi::MAX_PREDICTED_BLUR_PX));
-        if expected.is_some() && self.config.search.predicted && !ramps && !far && !blurred {
+        if expected.is_some() && self.config.search.predicted && !ramps && !far && !self.blurred {
             let tags = self.expected_tags_at(frame, camera, t);
             if !tags.is_empty() {
                 let mut d = self.detector.confirm(frame, &tags, false)?;
                 d.retain(|d| self.marker.find_tag(d.id).is_some());
                 stages = self.detector.last_stages();
-                // A tag found blurred is searched again, as the next frame would be.
-                let sharp = d.iter().all(|d| d.blur_px.is_none_or(|px| px <= roi::MAX_PREDICTED_BLUR_PX));
-                predicted = sharp && !self.lost_a_tag(&d);
+                predicted = !roi::any_blurred(&d) && !self.lost_a_tag(&d);
                 detections = predicted.then_some(d);
             }
         }
@@ -379,6 +381,7 @@ impl Tracker {
             predicted = false;
         }
         self.since_full = if searched.is_none() { 0 } else { self.since_full + 1 };
+        self.blurred = roi::any_blurred(detections.iter().filter(|d| self.marker.find_tag(d.id).is_some()));
         let detection_s = start.elapsed().as_secs_f64();
         let mut result = self.solve_in(detections, camera, t, frame.height(), Some(frame));
         result.searched = searched;
@@ -512,10 +515,7 @@ impl Tracker {
             sharpness::judge(&mut bodies, &detections, smears, self.config.max_blur_per_cell, self.cells(), &mut flags);
         for kind in BodyKind::ALL {
             match &bodies[slot(kind)] {
-                Some(b) => {
-                    self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags);
-                    self.bodies[slot(kind)].blur_px = b.blur_px;
-                }
+                Some(b) => self.bodies[slot(kind)].remember(t, b.camera_from_body, seen[slot(kind)], &b.tags),
                 None => {
                     flags.push(Flag::Lost(kind));
                     self.bodies[slot(kind)].tags.clear();

@@ -3,7 +3,7 @@
 //! of its tags is expected.
 
 use crate::{Tracker, slot};
-use jawtrack_apriltag::{Expected, ImageView, Roi};
+use jawtrack_apriltag::{Detection, Expected, ImageView, Roi};
 use jawtrack_marker::{BodyKind, Tag};
 use jawtrack_pose::{CameraIntrinsics, Pose, RollingShutter, Velocity};
 use nalgebra::{Point3, UnitQuaternion};
@@ -72,13 +72,18 @@ pub(crate) const MIN_SIDE_PX: f64 = 8.0;
 /// velocity) is searched, not looked for where predicted: on the demo's hinge (36 mm openings
 /// in eight frames) the predictions missed, and the tags kept came out worse.
 pub(crate) const MAX_PREDICTED_TRAVEL_PX: f64 = 20.0;
-/// A body whose tags' edges were blurred by more than this (σ, px) in the last frame is
-/// searched, not looked for where predicted: an edge refit's windows (±3 px) then hold only
-/// part of its ramp, and the refit follows where it starts. Predicted quads started 2.3 and
-/// 4.1 px off were refitted onto the same corners (within 0.04 px) at 1.3–1.6 px of blur (a
-/// phone at 200 mm, 1080p), and landed 1.7 and 3.6 px off at 6 px (4K through a 2× crop,
+/// A frame after one with a tag whose edges were blurred by more than this (σ, px), or whose
+/// tags found where predicted hold one, is searched: an edge refit's windows (±3 px) then hold
+/// only part of the ramp, and the refit follows where it starts. Predicted quads started 2.3
+/// and 4.1 px off were refitted onto the same corners (within 0.04 px) at 1.3–1.6 px of blur
+/// (a phone at 200 mm, 1080p), and landed 1.7 and 3.6 px off at 6 px (4K through a 2× crop,
 /// focus locked 30 mm behind the markers).
 pub(crate) const MAX_PREDICTED_BLUR_PX: f64 = 2.0;
+
+/// Whether any of `tags` is blurred more than [`MAX_PREDICTED_BLUR_PX`].
+pub(crate) fn any_blurred<'a>(tags: impl IntoIterator<Item = &'a Detection>) -> bool {
+    tags.into_iter().any(|d| d.blur_px.is_some_and(|px| px > MAX_PREDICTED_BLUR_PX))
+}
 /// Tags seen beyond this angle from face-on (°) are searched for in a box around their
 /// prediction rather than refitted from it ([`Expected::search`]).
 pub(crate) const SEARCH_BEYOND_DEG: f64 = 60.0;
@@ -159,8 +164,6 @@ pub(crate) struct BodyState {
     pub(crate) seen: Vec<Timed>,
     /// The tags used the last time it was solved in the frame before.
     pub(crate) tags: Vec<u32>,
-    /// Their edges' blur then (σ, px; [`crate::BodyResult::blur_px`]).
-    pub(crate) blur_px: Option<f64>,
 }
 
 impl BodyState {
