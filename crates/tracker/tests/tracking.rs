@@ -11,7 +11,7 @@ use jawtrack_pose::{CameraIntrinsics, Observation, PnpOptions, Pose, solve_pnp};
 use jawtrack_registration::BiteRefusal;
 use jawtrack_registration::Registration;
 use jawtrack_synth::{Realism, SceneKind, SceneOptions, SynthConfig, Synthesizer};
-use jawtrack_tracker::{Flag, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
+use jawtrack_tracker::{Flag, FrameResult, SearchConfig, SmootherConfig, Tracker, TrackerConfig};
 use nalgebra::{Matrix6, Point3, UnitQuaternion, Vector2, Vector3};
 
 /// Rows of the frames the hand-made detections stand for (a global shutter ignores them).
@@ -184,24 +184,12 @@ fn predicted_tags_are_found_as_the_region_search_finds_them() {
         ..SynthConfig::new(SceneKind::Hinge)
     };
     let synth = Synthesizer::new(config).expect("scene");
-    let camera = synth.header().intrinsics;
-    let tracker_with = |predicted: bool| {
-        let search = SearchConfig { predicted, ..SearchConfig::default() };
-        Tracker::new(synth.true_marker().clone(), TrackerConfig { search, ..TrackerConfig::default() })
-            .expect("tracker")
-    };
-    let (mut predicting, mut searching) = (tracker_with(true), tracker_with(false));
     let (mut confirmed, mut compared, mut sums) = (0, 0, [0.0; 4]);
-    for i in 0..synth.len() {
-        let f = synth.render(i).expect("frame");
-        let (w, h) = (f.width as usize, f.height as usize);
-        let view = ImageView::new(&f.luma, w, h, w).expect("view");
-        let a = predicting.track(&view, &camera, f.truth.t).expect("tracks");
-        let b = searching.track(&view, &camera, f.truth.t).expect("tracks");
+    for (i, truth, a, b) in tracked_both_ways(&synth) {
         assert!(!b.timings.predicted && b.timings.stages.predicted == 0, "frame {i}: the region searched");
         // Predicted and nothing searched: every tag the last frame was solved from was found.
         confirmed += usize::from(a.timings.predicted);
-        let (ea, eb) = same_tags_and_errors(&a, &b, &f.truth.maxilla_from_mandible, i);
+        let (ea, eb) = same_tags_and_errors(&a, &b, &truth, i);
         assert!(ea.0 < eb.0 + 0.015 && ea.1 < eb.1 + 0.02, "frame {i}: {ea:?} predicted, {eb:?} searched");
         sums = [sums[0] + ea.0, sums[1] + ea.1, sums[2] + eb.0, sums[3] + eb.1];
         compared += 1;
@@ -218,12 +206,7 @@ fn predicted_tags_are_found_as_the_region_search_finds_them() {
 
 /// Asserts that two trackers' results for frame `i` hold the same tags, and returns each one's
 /// jaw error against `truth` (mm, °).
-fn same_tags_and_errors(
-    a: &jawtrack_tracker::FrameResult,
-    b: &jawtrack_tracker::FrameResult,
-    truth: &Pose,
-    i: usize,
-) -> ((f64, f64), (f64, f64)) {
+fn same_tags_and_errors(a: &FrameResult, b: &FrameResult, truth: &Pose, i: usize) -> ((f64, f64), (f64, f64)) {
     let ids = |r: &jawtrack_tracker::FrameResult| r.detections.iter().map(|d| d.id).collect::<Vec<_>>();
     assert_eq!(ids(a), ids(b), "frame {i}: the same tags");
     let error = |r: &jawtrack_tracker::FrameResult| {
@@ -630,6 +613,23 @@ fn blurred_tags_are_searched_not_refitted_where_predicted() {
         ..SynthConfig::new(SceneKind::Static)
     };
     let synth = Synthesizer::new(config).expect("scene");
+    let mut checked = 0;
+    for (i, _, a, b) in tracked_both_ways(&synth) {
+        // When written: 4.3–4.6 px in every frame (without the rule, frames 1–4 were refitted
+        // where predicted).
+        let blur: Vec<f64> = [&a.maxilla, &a.mandible].into_iter().flatten().filter_map(|b| b.blur_px).collect();
+        assert!(blur.len() == 2 && blur.iter().all(|&px| px > 3.0), "frame {i}: blur {blur:?} px");
+        assert!(!a.timings.predicted && a.timings.stages.predicted == 0, "frame {i}: looked for where predicted");
+        let tags = |r: &FrameResult| [&r.maxilla, &r.mandible].map(|b| b.as_ref().map(|b| b.tags.clone()));
+        assert_eq!((tags(&a), a.maxilla_from_mandible), (tags(&b), b.maxilla_from_mandible), "frame {i}");
+        checked += 1;
+    }
+    assert_eq!(checked, 5);
+}
+
+/// `synth`'s frames tracked twice, looking for tags where predicted and searching the region:
+/// each frame's index, true jaw pose and the two results.
+fn tracked_both_ways(synth: &Synthesizer) -> Vec<(usize, Pose, FrameResult, FrameResult)> {
     let camera = synth.header().intrinsics;
     let tracker_with = |predicted: bool| {
         let search = SearchConfig { predicted, ..SearchConfig::default() };
@@ -637,22 +637,14 @@ fn blurred_tags_are_searched_not_refitted_where_predicted() {
             .expect("tracker")
     };
     let (mut predicting, mut searching) = (tracker_with(true), tracker_with(false));
-    let mut checked = 0;
-    for i in 0..synth.len() {
-        let f = synth.render(i).expect("frame");
-        let (w, h) = (f.width as usize, f.height as usize);
-        let view = ImageView::new(&f.luma, w, h, w).expect("view");
-        let a = predicting.track(&view, &camera, f.truth.t).expect("tracks");
-        let b = searching.track(&view, &camera, f.truth.t).expect("tracks");
-        // When written: 4.3–4.6 px in every frame (without the rule, frames 1–4 were refitted
-        // where predicted).
-        let blur: Vec<f64> = [&a.maxilla, &a.mandible].into_iter().flatten().filter_map(|b| b.blur_px).collect();
-        assert!(blur.len() == 2 && blur.iter().all(|&px| px > 3.0), "frame {i}: blur {blur:?} px");
-        assert!(!a.timings.predicted && a.timings.stages.predicted == 0, "frame {i}: looked for where predicted");
-        let tags =
-            |r: &jawtrack_tracker::FrameResult| [&r.maxilla, &r.mandible].map(|b| b.as_ref().map(|b| b.tags.clone()));
-        assert_eq!((tags(&a), a.maxilla_from_mandible), (tags(&b), b.maxilla_from_mandible), "frame {i}");
-        checked += 1;
-    }
-    assert_eq!(checked, 5);
+    (0..synth.len())
+        .map(|i| {
+            let f = synth.render(i).expect("frame");
+            let (w, h) = (f.width as usize, f.height as usize);
+            let view = ImageView::new(&f.luma, w, h, w).expect("view");
+            let a = predicting.track(&view, &camera, f.truth.t).expect("tracks");
+            let b = searching.track(&view, &camera, f.truth.t).expect("tracks");
+            (i, f.truth.maxilla_from_mandible, a, b)
+        })
+        .collect()
 }
