@@ -28,8 +28,8 @@ pub struct SearchConfig {
     /// (within 80° of face-on). The frame is taken from them when every tag the bodies were
     /// solved from in the last frame is confirmed; else the region is searched. Frames whose
     /// edges are fitted as motion ramps, or whose tags moved far since the last frame, are
-    /// searched, and so are bodies whose tags are blurred more than 2 px, where a refit follows
-    /// its start. On by default: a tracked 1080p frame in about 60 % of the time, and on
+    /// searched, and so is a frame after one with a tag blurred more than 2 px, where a refit
+    /// follows its start. On by default: a tracked 1080p frame in about 60 % of the time, and on
     /// rendered hinge openings the jaw nearer the truth (crates/detector-bench/BENCHMARKS.md).
     pub predicted: bool,
 }
