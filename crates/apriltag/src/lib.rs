@@ -16,8 +16,9 @@
 //! - `min_white_black_diff` is 20, not 5: noisy frames are 5–7× faster, no tag is lost.
 //!
 //! Smallest tags found (black square, on white paper, upright and at 30°): 17 px at decimate
-//! 1, 27.5 px at decimate 2 — the same as C (`tests/detector_geometry.rs`). Speed, recall,
-//! accuracy and memory against C: `crates/detector-bench/BENCHMARKS.md`.
+//! 1, 27.5 px at decimate 2, 49.5 px at decimate 4 — the same as C
+//! (`tests/detector_geometry.rs`). Speed, recall, accuracy and memory against C:
+//! `crates/detector-bench/BENCHMARKS.md`.
 //!
 //! With `nthreads` > 1, the image stages (decimation, threshold, regions, clusters) run by bands
 //! of rows and quad fitting and decoding by cluster and quad on a thread pool ([`workers`]),

@@ -20,8 +20,9 @@ pub struct SearchConfig {
     /// … and by at least this many pixels.
     pub min_margin_px: f64,
     /// Find quads in the expected region on a coarser image (decimated by 4) when every tag
-    /// is predicted large enough to be found there with room to spare; a tag it misses sends
-    /// the region to the settings' decimation again.
+    /// is predicted large enough to be found there with room to spare (70 px, or 110 px after
+    /// a frame with a tag blurred more than 2 px); a tag it misses sends the region to the
+    /// settings' decimation again.
     pub pyramid: bool,
     /// Before searching the expected region, look for the tags where the predicted poses put
     /// them ([`jawtrack_apriltag::Detector::confirm`]): every tag turned towards the camera
@@ -58,10 +59,17 @@ pub(crate) const SMEAR_PX: f64 = 3.0;
 /// of the image stages' pixels of decimating by 2 (on the detector benchmark's 4K frames it is
 /// as accurate, `crates/detector-bench/BENCHMARKS.md`).
 pub(crate) const COARSE_DECIMATION: f32 = 4.0;
-/// … when every tag's shortest side is predicted at least this long (px): twice the smallest
-/// tag found at that decimation (about 14 px per unit of decimation, 27.5 px at 2), room for
-/// the prediction's error and the tag's turn.
+/// … when every tag's shortest side is predicted at least this long (px) after a frame with a
+/// tag blurred more than [`MAX_PREDICTED_BLUR_PX`]: twice the smallest sharp tag found at that
+/// decimation (49.5 px, `jawtrack-apriltag`'s `tests/detector_geometry.rs`), room for the
+/// prediction's error, the tag's turn and the blur. At 70 px, a 4K chew through a 2× crop
+/// (8 ms exposure, the mandible's blur 3–6 px) came out at a median of 0.35 mm against 0.12.
 pub(crate) const COARSE_MIN_SIDE_PX: f64 = 110.0;
+/// … or at least this long after a frame whose tags were all sharper: 1.4 times the smallest
+/// found. On a 4K hinge opening (oblique tags 72–78 px, blur under 1.2 px) the region is then
+/// searched in two thirds of the time, and the jaw came out nearer the truth (median 0.017
+/// against 0.026 mm over 39 frames).
+pub(crate) const COARSE_MIN_SIDE_SHARP_PX: f64 = 70.0;
 
 /// Tags seen within this angle of face-on (°) are looked for where they are predicted
 /// ([`SearchConfig::predicted`]): beyond it their cells are too foreshortened to decode.
@@ -297,7 +305,8 @@ impl Tracker {
 
     /// The coarser decimation ([`COARSE_DECIMATION`]) a region search may find quads at:
     /// when every tag the bodies were solved from in the last frame is predicted at `t` with
-    /// its shortest side at least [`COARSE_MIN_SIDE_PX`]. `None` when the settings'
+    /// its shortest side at least [`COARSE_MIN_SIDE_SHARP_PX`] ([`COARSE_MIN_SIDE_PX`] after a
+    /// frame with a tag blurred more than [`MAX_PREDICTED_BLUR_PX`]). `None` when the settings'
     /// decimation is as coarse, or a tag is smaller or cannot be predicted.
     pub(crate) fn coarse_decimation(&self, camera: &CameraIntrinsics, t: f64) -> Option<f32> {
         if !self.config.search.pyramid || self.config.detector.quad_decimate >= COARSE_DECIMATION {
@@ -311,7 +320,8 @@ impl Tracker {
                 smallest = smallest.min(shortest_side_px(&pose, &tag.corners, camera)?);
             }
         }
-        (smallest.is_finite() && smallest >= COARSE_MIN_SIDE_PX).then_some(COARSE_DECIMATION)
+        let min_side = if self.blurred { COARSE_MIN_SIDE_PX } else { COARSE_MIN_SIDE_SHARP_PX };
+        (smallest.is_finite() && smallest >= min_side).then_some(COARSE_DECIMATION)
     }
 }
 

@@ -137,12 +137,38 @@ fn steady_tracking_searches_only_the_expected_region() {
 #[test]
 fn large_tags_are_searched_on_a_coarser_image_as_accurately() {
     // The markers held still 40 mm from the camera at 1080p: every tag seen (one a body) has
-    // its shortest side over 110 px. (At 50 mm an oblique tag comes in under it, and every
-    // frame is searched at decimation 2.)
+    // its shortest side over 110 px, large enough for the coarse image however blurred.
+    let (coarse, compared, smallest, _) = coarse_against_fine(40.0, Realism::clean());
+    assert!(smallest > 110.0, "shortest side {smallest} px");
+    // The first frame is searched whole, at the settings' decimation; the rest coarsely.
+    assert_eq!(coarse, compared - 1, "frames searched coarsely");
+}
+
+#[test]
+fn sharp_tags_are_searched_coarsely_from_a_smaller_size_than_blurred_ones() {
+    // At 60 mm an oblique tag's shortest side is 70–110 px: large enough for the coarse image
+    // when every tag was sharp in the last frame, not when one was blurred more than 2 px
+    // (the lens's own blur at 12 µm is 2.6 px, a phone focused well behind the markers).
+    let (coarse, compared, smallest, blur) = coarse_against_fine(60.0, Realism::clean());
+    assert!((70.0..110.0).contains(&smallest), "shortest side {smallest} px");
+    assert!(blur < 1.0, "sharp: blur {blur} px");
+    assert_eq!(coarse, compared - 1, "sharp: frames searched coarsely");
+    let blurred = Realism { optics_sigma_um: 12.0, focal_length_mm: 6.8, ..Realism::clean() };
+    let (coarse, compared, smallest, blur) = coarse_against_fine(60.0, blurred);
+    assert!((70.0..110.0).contains(&smallest), "shortest side {smallest} px");
+    assert!(blur > 2.0, "blurred: blur {blur} px");
+    assert_eq!((coarse, compared), (0, 6), "blurred: frames searched coarsely");
+}
+
+/// Tracks six frames of the still markers `distance_mm` from a 1080p camera, rendered with
+/// `realism`, with and without the pyramid ([`SearchConfig::pyramid`]), and checks each frame
+/// as accurate either way. Returns the frames searched coarsely, the frames compared, the
+/// shortest side of a tag found (px) and the largest blur of a tag found (px).
+fn coarse_against_fine(distance_mm: f64, realism: Realism) -> (usize, usize, f64, f64) {
     let frames = 6;
     let config = SynthConfig {
-        realism: Realism::clean(),
-        options: SceneOptions { distance_mm: Some(40.0), frames_per_view: frames, ..SceneOptions::default() },
+        realism,
+        options: SceneOptions { distance_mm: Some(distance_mm), frames_per_view: frames, ..SceneOptions::default() },
         max_frames: Some(frames),
         ..SynthConfig::new(SceneKind::Static)
     };
@@ -153,7 +179,7 @@ fn large_tags_are_searched_on_a_coarser_image_as_accurately() {
         Tracker::new(Marker::default(), TrackerConfig { search, ..TrackerConfig::default() }).expect("tracker")
     };
     let (mut coarse, mut fine) = (tracker_with(true), tracker_with(false));
-    let (mut coarse_frames, mut compared) = (0, 0);
+    let (mut coarse_frames, mut compared, mut smallest, mut blur) = (0, 0, f64::INFINITY, 0.0f64);
     for i in 0..synth.len() {
         let f = synth.render(i).expect("frame");
         let (w, h) = (f.width as usize, f.height as usize);
@@ -163,14 +189,21 @@ fn large_tags_are_searched_on_a_coarser_image_as_accurately() {
         assert_eq!(b.timings.stages.quad_decimate, 2.0, "frame {i}: without the pyramid");
         coarse_frames += usize::from(a.timings.stages.quad_decimate == 4.0);
         let (ea, eb) = same_tags_and_errors(&a, &b, &f.truth.maxilla_from_mandible, i);
-        // As accurate: within 0.005 mm and 0.01° of the fine search (0.034 mm / 0.065° against
-        // 0.035 mm / 0.059° when written).
+        // As accurate: within 0.005 mm and 0.01° of the fine search (at 40 mm, 0.034 mm /
+        // 0.065° against 0.035 mm / 0.059° when written).
         assert!(ea.0 < eb.0 + 0.005 && ea.1 < eb.1 + 0.01, "frame {i}: {ea:?} coarse, {eb:?} fine");
+        for d in &b.detections {
+            let side = |k: usize| {
+                let (p, q) = (d.corners[k], d.corners[(k + 1) % 4]);
+                (q[0] - p[0]).hypot(q[1] - p[1])
+            };
+            smallest = (0..4).map(side).fold(smallest, f64::min);
+            blur = blur.max(d.blur_px.unwrap_or(0.0));
+        }
         compared += 1;
     }
     assert_eq!(compared, frames);
-    // The first frame is searched whole, at the settings' decimation; the rest coarsely.
-    assert_eq!(coarse_frames, frames - 1, "frames searched coarsely");
+    (coarse_frames, compared, smallest, blur)
 }
 
 #[test]
