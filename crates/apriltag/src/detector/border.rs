@@ -239,24 +239,27 @@ pub(super) fn profiles(h: &[f64; 9], bitmap: &TagBitmap, side: usize, along: &[f
 /// A profile's columns under the current blur: each band's value (the columns' prints weighed
 /// by the Gaussian's mass over each column), and its derivatives in paper, ink, beyond and σ.
 struct Rows {
+    /// 1/σ (multiplied by rather than divided by: a division's latency was a third of the
+    /// model's time).
+    inv_s: f64,
     value: [f64; BANDS],
     d_levels: [[f64; 3]; BANDS],
     d_sigma: [f64; BANDS],
 }
 
 fn rows(p: &Profile, q: &Params) -> Rows {
-    let s = q[2];
+    let inv_s = 1.0 / q[2];
     // Mass of the Gaussian (centred on the profile) below each column boundary.
     let mut below = [0.0; COLUMNS + 1];
     let mut d_below = [0.0; COLUMNS + 1];
     below[COLUMNS] = 1.0;
     for (k, &t) in p.columns.iter().enumerate() {
-        let z = t / s;
+        let z = t * inv_s;
         let (cdf, pdf) = cdf_pdf(z);
         below[k + 1] = cdf;
-        d_below[k + 1] = -pdf * z / s;
+        d_below[k + 1] = -pdf * z * inv_s;
     }
-    let mut r = Rows { value: [0.0; BANDS], d_levels: [[0.0; 3]; BANDS], d_sigma: [0.0; BANDS] };
+    let mut r = Rows { inv_s, value: [0.0; BANDS], d_levels: [[0.0; 3]; BANDS], d_sigma: [0.0; BANDS] };
     let levels = [q[3], q[4], q[5]];
     for b in 0..BANDS {
         for c in 0..COLUMNS {
@@ -277,53 +280,19 @@ fn rows(p: &Profile, q: &Params) -> Rows {
 /// The model's value and its gradient for a point `t` px along `p`'s normal, `rows` being the
 /// profile's columns under `q`.
 fn model(p: &Profile, rows: &Rows, t: f64, q: &Params) -> (f64, Params) {
-    let [e0, e1, s, margin] = [q[0], q[1], q[2], q[6]];
+    let [e0, e1, margin] = [q[0], q[1], q[6]];
+    let inv_s = rows.inv_s;
     let e = e0 + e1 * p.along;
-    // Mass of the Gaussian across the side below each band boundary (and its derivatives in
-    // the offset, σ and the quiet zone's width).
-    let mut above = [0.0; BANDS + 1];
-    let mut d_e = [0.0; BANDS + 1];
-    let mut d_s = [0.0; BANDS + 1];
-    let mut d_m = [0.0; BANDS + 1];
-    above[0] = 1.0;
-    // The boundaries run inward, so z falls as k grows: boundaries where z ≥ LIMIT lie wholly
-    // inward of the blur (Φ = 1, φ = 0) and, from the first where z ≤ −LIMIT, wholly outward
-    // (Φ = 0, φ = 0). Only the bands between weigh; the others would add exact zeros and are
-    // skipped, the sums unchanged to the bit.
-    let (mut first, mut last) = (BANDS, 0);
-    for k in 0..BANDS - 1 {
-        let pos = if k == 0 { e + margin * p.across[0] } else { e + p.across[k] };
-        let z = (t - pos) / s;
-        if z >= LIMIT {
-            above[k + 1] = 1.0;
-            continue;
-        }
-        if z <= -LIMIT {
-            break;
-        }
-        // The share of the blur (centred at t) lying inward of the boundary: Φ(z).
-        let (phi, dens) = cdf_pdf(z);
-        above[k + 1] = phi;
-        d_e[k + 1] = -dens / s;
-        d_s[k + 1] = -dens * z / s;
-        if k == 0 {
-            d_m[k + 1] = -dens * p.across[0] / s;
-        }
-        (first, last) = (first.min(k), k);
-    }
-    // The band just outward of the first boundary the blur reaches, through the one just inward
-    // of the last (or, when it reaches none, the band holding t).
-    let bands = if first < BANDS {
-        first..last + 2
-    } else {
-        let b = above.iter().take_while(|&&a| a == 1.0).count() - 1;
-        b..b + 1
-    };
+    // Each band weighs by the Gaussian's mass across the side between its boundaries: the mass
+    // inward of its outer boundary (Φ(z) of that boundary, 1 for the outermost band) less that
+    // inward of its inner one (0 for the innermost), with their derivatives in the offset, σ
+    // and the quiet zone's width. The boundaries run inward, so z falls as k grows: those where
+    // z ≥ LIMIT lie wholly inward of the blur (Φ = 1, φ = 0) and, from the first where
+    // z ≤ −LIMIT, wholly outward (Φ = 0, φ = 0). So only the bands from the one just outward
+    // of the first boundary the blur reaches to the one just inward of the last weigh (or,
+    // when it reaches none, the band holding t, wholly).
     let (mut value, mut g0, mut g2, mut g3, mut g4, mut g5, mut g6) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for b in bands {
-        // The band's share: mass inward of its outer boundary less that inward of its inner one.
-        let w = above[b] - above[b + 1];
-        let (we, ws, wm) = (d_e[b] - d_e[b + 1], d_s[b] - d_s[b + 1], d_m[b] - d_m[b + 1]);
+    let mut add = |b: usize, w: f64, we: f64, ws: f64, wm: f64| {
         value += rows.value[b] * w;
         g0 += rows.value[b] * we;
         g2 += rows.value[b] * ws + rows.d_sigma[b] * w;
@@ -331,7 +300,29 @@ fn model(p: &Profile, rows: &Rows, t: f64, q: &Params) -> (f64, Params) {
         g4 += rows.d_levels[b][1] * w;
         g5 += rows.d_levels[b][2] * w;
         g6 += rows.value[b] * wm;
+    };
+    // The mass inward of the current band's outer boundary and its derivatives.
+    let (mut above, mut d_e, mut d_s, mut d_m) = (1.0, 0.0, 0.0, 0.0);
+    // The innermost band the blur reaches (its inner boundary's mass is 0).
+    let mut band = BANDS - 1;
+    for k in 0..BANDS - 1 {
+        let pos = if k == 0 { e + margin * p.across[0] } else { e + p.across[k] };
+        let z = (t - pos) * inv_s;
+        if z >= LIMIT {
+            continue;
+        }
+        if z <= -LIMIT {
+            band = k;
+            break;
+        }
+        // The share of the blur (centred at t) lying inward of the boundary: Φ(z).
+        let (phi, dens) = cdf_pdf(z);
+        let (inner_e, inner_s) = (-dens * inv_s, -dens * z * inv_s);
+        let inner_m = if k == 0 { -dens * p.across[0] * inv_s } else { 0.0 };
+        add(k, above - phi, d_e - inner_e, d_s - inner_s, d_m - inner_m);
+        (above, d_e, d_s, d_m) = (phi, inner_e, inner_s, inner_m);
     }
+    add(band, above, d_e, d_s, d_m);
     (value, Params::from([g0, g0 * p.along, g2, g3, g4, g5, g6]))
 }
 
