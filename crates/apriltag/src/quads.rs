@@ -36,6 +36,7 @@ fn sqrtf(v: f64) -> f64 {
     f64::from((v as f32).sqrt())
 }
 
+#[derive(Clone, Copy)]
 struct LineFit {
     /// Point on the line (mean), and unit normal.
     params: [f64; 4],
@@ -43,9 +44,10 @@ struct LineFit {
     mse: f64,
 }
 
-fn fit_line(lfps: &[LineFitPt], i0: usize, i1: usize) -> LineFit {
+/// The moments of the points `i0..=i1` (wrapping past the end), and how many they are.
+fn moments(lfps: &[LineFitPt], i0: usize, i1: usize) -> (LineFitPt, usize) {
     let sz = lfps.len();
-    let (m, n) = if i0 < i1 {
+    if i0 < i1 {
         let mut m = lfps[i1];
         if i0 > 0 {
             let a = lfps[i0 - 1];
@@ -60,6 +62,7 @@ fn fit_line(lfps: &[LineFitPt], i0: usize, i1: usize) -> LineFit {
         }
         (m, i1 - i0 + 1)
     } else {
+        // Wrapped ranges sum as C does, (last − a) + b, left to right.
         let (last, a, b) = (lfps[sz - 1], lfps[i0 - 1], lfps[i1]);
         (
             LineFitPt {
@@ -72,16 +75,30 @@ fn fit_line(lfps: &[LineFitPt], i0: usize, i1: usize) -> LineFit {
             },
             sz - i0 + i1 + 1,
         )
-    };
-    // Wrapped ranges sum as C does, (last − a) + b, left to right.
+    }
+}
+
+/// The points' mean, their covariance (xx, xy, yy) and its larger and smaller eigenvalues.
+fn covariance(m: &LineFitPt) -> ([f64; 2], [f64; 3], f64, f64) {
     let ex = m.mx / m.w;
     let ey = m.my / m.w;
     let cxx = m.mxx / m.w - ex * ex;
     let cxy = m.mxy / m.w - ex * ey;
     let cyy = m.myy / m.w - ey * ey;
     let root = sqrtf((cxx - cyy) * (cxx - cyy) + 4.0 * cxy * cxy);
-    let eig_small = 0.5 * (cxx + cyy - root);
-    let eig = 0.5 * (cxx + cyy + root);
+    ([ex, ey], [cxx, cxy, cyy], 0.5 * (cxx + cyy + root), 0.5 * (cxx + cyy - root))
+}
+
+/// [`fit_line`]'s error alone: what the sliding window along a cluster needs, without the
+/// line.
+fn line_err(lfps: &[LineFitPt], i0: usize, i1: usize) -> f64 {
+    let (m, n) = moments(lfps, i0, i1);
+    n as f64 * covariance(&m).3
+}
+
+fn fit_line(lfps: &[LineFitPt], i0: usize, i1: usize) -> LineFit {
+    let (m, n) = moments(lfps, i0, i1);
+    let ([ex, ey], [cxx, cxy, cyy], eig, eig_small) = covariance(&m);
     let (nx1, ny1) = (cxx - eig, cxy);
     let m1 = nx1 * nx1 + ny1 * ny1;
     let (nx2, ny2) = (cxy, cyy - eig);
@@ -180,7 +197,7 @@ fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
     if ksz < 2 {
         return None;
     }
-    let errs: Vec<f64> = (0..sz).map(|i| fit_line(lfps, (i + sz - ksz) % sz, (i + ksz) % sz).err).collect();
+    let errs: Vec<f64> = (0..sz).map(|i| line_err(lfps, (i + sz - ksz) % sz, (i + ksz) % sz)).collect();
     // Smooth with a Gaussian of σ = 1 cut at 5 % (7 taps, single-precision weights as in C).
     let sigma = 1.0f64;
     let fsz = 2 * (((-(0.05f64.ln()) * 2.0 * sigma * sigma).sqrt() + 1.0) as usize) + 1;
@@ -190,11 +207,16 @@ fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
             ((-(j * j) as f64) / (2.0 * sigma * sigma)).exp() as f32
         })
         .collect();
-    let smoothed: Vec<f64> = (0..sz)
-        .map(|iy| {
+    // The errors with the filter's half-width wrapped on at either end (a division per tap
+    // was most of the smoothing's time).
+    let half = fsz / 2;
+    let wrapped: Vec<f64> = (0..sz + 2 * half).map(|k| errs[(k + sz - half) % sz]).collect();
+    let smoothed: Vec<f64> = wrapped
+        .windows(fsz)
+        .map(|w| {
             let mut acc = 0.0f64;
-            for (i, fi) in f.iter().enumerate() {
-                acc += errs[(iy + i + sz - fsz / 2) % sz] * f64::from(*fi);
+            for (e, fi) in w.iter().zip(&f) {
+                acc += e * f64::from(*fi);
             }
             acc
         })
@@ -215,19 +237,21 @@ fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
     let n = maxima.len();
     let max_dot = f64::from(q.cos_critical_rad);
     let max_mse = f64::from(q.max_line_fit_mse);
+    // Each line between two maxima, fitted once however many combinations try it.
+    let mut fits: Vec<Option<LineFit>> = std::iter::repeat_with(|| None).take(n * n).collect();
+    let mut line = |a: usize, b: usize| -> LineFit {
+        *fits[a * n + b].get_or_insert_with(|| fit_line(lfps, maxima[a].0, maxima[b].0))
+    };
     let mut best = None;
     let mut best_error = f64::from(f32::INFINITY);
     for m0 in 0..n.saturating_sub(3) {
-        let i0 = maxima[m0].0;
         for m1 in m0 + 1..n.saturating_sub(2) {
-            let i1 = maxima[m1].0;
-            let l01 = fit_line(lfps, i0, i1);
+            let l01 = line(m0, m1);
             if l01.mse > max_mse {
                 continue;
             }
             for m2 in m1 + 1..n.saturating_sub(1) {
-                let i2 = maxima[m2].0;
-                let l12 = fit_line(lfps, i1, i2);
+                let l12 = line(m1, m2);
                 if l12.mse > max_mse {
                     continue;
                 }
@@ -235,19 +259,19 @@ fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
                 if dot.abs() > max_dot {
                     continue;
                 }
-                for &(i3, _) in &maxima[m2 + 1..] {
-                    let l23 = fit_line(lfps, i2, i3);
+                for m3 in m2 + 1..n {
+                    let l23 = line(m2, m3);
                     if l23.mse > max_mse {
                         continue;
                     }
-                    let l30 = fit_line(lfps, i3, i0);
+                    let l30 = line(m3, m0);
                     if l30.mse > max_mse {
                         continue;
                     }
                     let err = l01.err + l12.err + l23.err + l30.err;
                     if err < best_error {
                         best_error = err;
-                        best = Some([i0, i1, i2, i3]);
+                        best = Some([maxima[m0].0, maxima[m1].0, maxima[m2].0, maxima[m3].0]);
                     }
                 }
             }
