@@ -19,11 +19,12 @@ pub struct BodyResult {
     pub rejected_tags: Vec<u32>,
     /// RMS reprojection error (px).
     pub rms_px: f64,
-    /// Covariance of (rotation vector [rad], translation [mm]) of a left perturbation in the
+    /// Covariance of (rotation vector in rad, translation in mm) of a left perturbation in the
     /// camera frame.
     pub covariance: Matrix6<f64>,
     /// How blurred its tags' edges are by the lens (σ, px; their [`Detection::blur_px`]'s median
-    /// less what the motion predicted over the exposure adds, [`sharpness`]), when measured.
+    /// less what the motion predicted over the exposure adds: the `sharpness` module), when
+    /// measured.
     pub blur_px: Option<f64>,
     /// The width (px) of its tags' cells (the median, each tag's along its longest side: its
     /// scale at its distance, however steeply it is seen).

@@ -57,10 +57,10 @@ const BOX_MARGIN: f64 = 0.25;
 
 impl Detector {
     /// The `expected` tags that are where a tracker predicts them. Each predicted quad's edges
-    /// are refitted twice (first reaching 4 px, [`PULL_IN_DECIMATE`]; then as a quad found at
-    /// the settings' decimation), decoded, and kept when it decodes as its own id with its
-    /// sides' lengths as predicted ([`SIDE_CHANGE`]) and none moved beyond the first refit's
-    /// reach ([`SIDE_MOVE_PX`]); a tag to be searched
+    /// are refitted twice (first reaching 4 px; then as a quad found at the settings'
+    /// decimation), decoded, and kept when it decodes as its own id with its sides' lengths
+    /// within a sixteenth of the predicted ones and none moved more than 4 px (the first
+    /// refit's reach); a tag to be searched
     /// ([`Expected::search`]), or whose quad was not kept, is looked for in a box around its
     /// prediction as [`Detector::search`] looks in a region. Then the border fit, as
     /// [`Detector::search`] does. A tag predicted off by more than the box's margin, hidden,
