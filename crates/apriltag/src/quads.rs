@@ -141,7 +141,8 @@ fn compute_lfps(pts: &[Pt], im: &ImageView<'_>) -> Vec<LineFitPt> {
 /// the right on ties, so tied points end up by leaf from the last leaf to the first, and
 /// within a leaf as its network left them. That order is written into each key's low bits
 /// (the angle's order-preserving bits above), and the keys sorted as integers: the same
-/// permutation in a third of the time of C's merge sort.
+/// permutation without the merge sort's copies at every level (perf, the 1080p benchmark set
+/// with C's parameters: the sorting 10 % of the time before, about 4 % after).
 fn sort_by_angle(pts: &mut [(Pt, f32)], scratch: &mut Vec<(Pt, f32)>) {
     let n = pts.len();
     if pts.iter().any(|p| p.1.is_nan()) || n > u32::MAX as usize / 8 {
@@ -257,8 +258,8 @@ fn segment_maxima(lfps: &[LineFitPt], q: &QuadThreshold) -> Option<[usize; 4]> {
             ((-(j * j) as f64) / (2.0 * sigma * sigma)).exp() as f32
         })
         .collect();
-    // The errors with the filter's half-width wrapped on at either end (a division per tap
-    // was most of the smoothing's time).
+    // The errors with the filter's half-width wrapped on at either end, so the taps need no
+    // modulo (an integer division) each.
     let half = fsz / 2;
     let wrapped: Vec<f64> = (0..sz + 2 * half).map(|k| errs[(k + sz - half) % sz]).collect();
     let smoothed: Vec<f64> = wrapped
