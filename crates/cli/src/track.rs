@@ -79,7 +79,7 @@ pub(crate) struct TrackArgs {
     region_search: bool,
     /// With --region-search: once tracked, look for each tag first where the poses predict it,
     /// the region only when a tag the last frame used is missing, the frame is smeared or blurred,
-    /// or the tags moved far (a tracked 1080p frame in about 60 % of the time).
+    /// the tags moved far, or the tone curve is fitted (a tracked 1080p frame in 60 % of the time).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     predict_tags: bool,
     /// Smooth the jaw pose (One-Euro filter; never more than one frame of lag).

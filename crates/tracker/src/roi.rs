@@ -30,8 +30,10 @@ pub struct SearchConfig {
     /// solved from in the last frame is confirmed; else the region is searched. Frames whose
     /// edges are fitted as motion ramps, or whose tags moved far since the last frame, are
     /// searched, and so is a frame after one with a tag blurred more than 2 px, where a refit
-    /// follows its start. On by default: a tracked 1080p frame in about 60 % of the time, and on
-    /// rendered hinge openings the jaw nearer the truth (crates/detector-bench/BENCHMARKS.md).
+    /// follows its start, and a frame the tone curve is fitted in
+    /// ([`jawtrack_apriltag::Detector::tone_fit_due`]), so that the curve is the search's. On
+    /// by default: a tracked 1080p frame in about 60 % of the time, and on rendered hinge
+    /// openings the jaw as near the truth or nearer (crates/detector-bench/BENCHMARKS.md).
     pub predicted: bool,
 }
 

@@ -143,6 +143,14 @@ impl Detector {
         self.tone_state().session.summary()
     }
 
+    /// Whether the next detection fits the tone curve: `Auto`, edges fitted in linear light,
+    /// and the curve still settling or due a refit ([`crate::tone`]). A tracker searches such
+    /// a frame rather than confirming predicted tags ([`Detector::confirm`]), so that the curve
+    /// is fitted to the tags a search finds, however the other frames are found.
+    pub fn tone_fit_due(&self) -> bool {
+        self.config.linear_edges && self.tone_state().session.due()
+    }
+
     fn tone_state(&self) -> std::sync::MutexGuard<'_, ToneState> {
         self.tone.lock().unwrap_or_else(|p| p.into_inner())
     }
