@@ -148,7 +148,12 @@ impl Detector {
     /// a frame rather than confirming predicted tags ([`Detector::confirm`]), so that the curve
     /// is fitted to the tags a search finds, however the other frames are found.
     pub fn tone_fit_due(&self) -> bool {
-        self.config.linear_edges && self.tone_state().session.due()
+        self.fits_tone(&self.tone_state())
+    }
+
+    /// Whether a detection now fits the tone curve, `state` being the detector's.
+    fn fits_tone(&self, state: &ToneState) -> bool {
+        self.config.linear_edges && state.session.due()
     }
 
     fn tone_state(&self) -> std::sync::MutexGuard<'_, ToneState> {
@@ -217,7 +222,7 @@ impl Detector {
         let dets = detect(&lut)?;
         {
             let mut state = self.tone_state();
-            if !(self.config.linear_edges && state.session.due()) {
+            if !self.fits_tone(&state) {
                 state.session.skip();
                 return Ok(dets);
             }
