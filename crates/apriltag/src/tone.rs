@@ -39,7 +39,9 @@ pub const GAMMA_SEARCH: std::ops::RangeInclusive<f64> = 1.2..=3.6;
 /// detections (docs/accuracy.md, "Tone curves").
 pub const SETTLING_FRAMES: usize = 3;
 /// Once settled, a frame is fitted every this many (2 s at 60 fps): a phone's curve adapts to
-/// the scene over seconds, and a fit costs about five detections' time.
+/// the scene over seconds, and a fit costs about five detections' time. A [`Detector`] makes
+/// these refits on a thread of its own and takes each into the session a fixed number of
+/// detections later, so that the frame due one is not stalled.
 pub const REFIT_EVERY_FRAMES: usize = 120;
 /// After a frame whose tags told nothing (too few, or too few phases across their edges), this
 /// many frames pass before the next fit: a scene whose tags never tell (held square to the
@@ -163,6 +165,11 @@ impl ToneSession {
         self.setting == ToneSetting::Auto
             && self.retry_in == 0
             && (self.frames_fitted < SETTLING_FRAMES || self.since_fit + 1 >= REFIT_EVERY_FRAMES)
+    }
+
+    /// Whether the curve has settled: the fits due from now on are the periodic refits.
+    pub fn settled(&self) -> bool {
+        self.frames_fitted >= SETTLING_FRAMES
     }
 
     /// Counts a frame that was not fitted.

@@ -18,6 +18,7 @@ use crate::tone::{ToneSession, ToneSummary};
 use crate::workers::Workers;
 use jawtrack_tag_family::TagFamily;
 use std::sync::{Arc, Mutex, TryLockError};
+use tone_refit::PendingFit;
 
 mod border;
 mod confirm;
@@ -25,6 +26,7 @@ mod edges;
 mod per_quad;
 mod stages;
 mod tone_fit;
+mod tone_refit;
 
 pub use border::PIXEL_SIGMA_PX;
 pub use confirm::Expected;
@@ -153,7 +155,7 @@ impl Detector {
 
     /// Whether a detection now fits the tone curve, `state` being the detector's.
     fn fits_tone(&self, state: &ToneState) -> bool {
-        self.config.linear_edges && state.session.due()
+        self.config.linear_edges && state.session.due() && state.pending.is_none()
     }
 
     fn tone_state(&self) -> std::sync::MutexGuard<'_, ToneState> {
@@ -211,8 +213,10 @@ impl Detector {
     }
 
     /// Runs `detect` on the frame through the current tone curve; with [`DetectorConfig::tone`]
-    /// `Auto` and a fit due, fits the curve to the tags found, and when that changes the curve
-    /// runs `detect` again through the new one.
+    /// `Auto` and a fit due, fits the curve to the tags found. While the curve settles the fit
+    /// is made here, and when it changes the curve `detect` runs again through the new one;
+    /// once settled it is made on a thread of its own and taken a fixed number of detections
+    /// later ([`tone_refit`]).
     fn with_tone(
         &self,
         frame: &ImageView<'_>,
@@ -222,12 +226,20 @@ impl Detector {
         let dets = detect(&lut)?;
         {
             let mut state = self.tone_state();
+            state.take_due_refit();
             if !self.fits_tone(&state) {
                 state.session.skip();
                 return Ok(dets);
             }
+            if state.session.settled()
+                && let Some(pending) = PendingFit::start(self.config.family, frame, &dets, Arc::clone(&lut))
+            {
+                state.pending = Some(pending);
+                state.session.skip();
+                return Ok(dets);
+            }
         }
-        let fit = self.fit_tone_through(frame, &dets, &lut);
+        let fit = tone_fit::fit_tone_through(&self.config.family, frame, &dets, &lut);
         let changed = {
             let mut state = self.tone_state();
             state.session.record(fit).map(|curve| {
@@ -458,13 +470,25 @@ struct ToneState {
     session: ToneSession,
     /// Encoded values to linear light: the curve undone (identity for C's edge fit).
     lut: Arc<[f64; 256]>,
+    /// A refit under way on its own thread.
+    pending: Option<PendingFit>,
 }
 
 impl ToneState {
     fn new(c: &DetectorConfig) -> Self {
         let session = ToneSession::new(c.tone);
         let lut = if c.linear_edges { session.curve().decode_table() } else { IDENTITY };
-        ToneState { session, lut: Arc::new(lut) }
+        ToneState { session, lut: Arc::new(lut), pending: None }
+    }
+
+    /// Counts a detection for the refit under way, and takes it into the session when its
+    /// time has come: later detections read through the curve it leads to.
+    fn take_due_refit(&mut self) {
+        let Some(fit) = self.pending.as_mut().and_then(PendingFit::tick) else { return };
+        self.pending = None;
+        if let Some(curve) = self.session.record(fit) {
+            self.lut = Arc::new(curve.decode_table());
+        }
     }
 }
 

@@ -23,6 +23,7 @@ use super::border::{ALONG_BLUR, BANDS, FixedSide, PIXEL_SIGMA_PX, Print, Profile
 use super::{Detection, Detector};
 use crate::image::ImageView;
 use crate::tone::{FrameToneFit, GAMMA_SEARCH};
+use jawtrack_tag_family::TagFamily;
 use jawtrack_tone::ToneCurve;
 use nalgebra::{SMatrix, SVector};
 use std::cell::RefCell;
@@ -68,100 +69,100 @@ impl Detector {
     /// by a border's edge).
     pub fn fit_tone(&self, frame: &ImageView<'_>, dets: &[Detection]) -> Option<FrameToneFit> {
         let lut = self.tone_state().lut.clone();
-        self.fit_tone_through(frame, dets, &lut)
+        fit_tone_through(&self.config().family, frame, dets, &lut)
     }
+}
 
-    /// As [`Detector::fit_tone`], the tags having been detected through `start`.
-    pub(super) fn fit_tone_through(
-        &self,
-        frame: &ImageView<'_>,
-        dets: &[Detection],
-        start: &[f64; 256],
-    ) -> Option<FrameToneFit> {
-        let mut sides: Vec<(f64, Edge)> = Vec::new();
-        for d in dets {
-            let Some(bitmap) = self.config().family.bitmap(d.id) else { continue };
-            // The border model works in C's pixel convention, the detections in ours.
-            let h = d.homography;
-            let h = [
-                h[0] + 0.5 * h[6],
-                h[1] + 0.5 * h[7],
-                h[2] + 0.5 * h[8],
-                h[3] + 0.5 * h[6],
-                h[4] + 0.5 * h[7],
-                h[5] + 0.5 * h[8],
-                h[6],
-                h[7],
-                h[8],
-            ];
-            let places = along(bitmap.width(), &ALONG_BLUR);
-            for k in 0..4 {
-                let Some(profiles) = profiles(&h, &bitmap, k, &places) else { continue };
-                let Some(side) = FixedSide::new(frame, start, profiles) else { continue };
-                if side.cell_px < MIN_CELL_PX || side.misfit > MAX_START_MISFIT {
-                    continue;
-                }
-                if let Some(edge) = Edge::new(&side) {
-                    sides.push((side.cell_px, edge));
-                }
+/// As [`Detector::fit_tone`], the tags (of `family`) having been detected through `start`.
+pub(super) fn fit_tone_through(
+    family: &TagFamily,
+    frame: &ImageView<'_>,
+    dets: &[Detection],
+    start: &[f64; 256],
+) -> Option<FrameToneFit> {
+    let mut sides: Vec<(f64, Edge)> = Vec::new();
+    for d in dets {
+        let Some(bitmap) = family.bitmap(d.id) else { continue };
+        // The border model works in C's pixel convention, the detections in ours.
+        let h = d.homography;
+        let h = [
+            h[0] + 0.5 * h[6],
+            h[1] + 0.5 * h[7],
+            h[2] + 0.5 * h[8],
+            h[3] + 0.5 * h[6],
+            h[4] + 0.5 * h[7],
+            h[5] + 0.5 * h[8],
+            h[6],
+            h[7],
+            h[8],
+        ];
+        let places = along(bitmap.width(), &ALONG_BLUR);
+        for k in 0..4 {
+            let Some(profiles) = profiles(&h, &bitmap, k, &places) else { continue };
+            let Some(side) = FixedSide::new(frame, start, profiles) else { continue };
+            if side.cell_px < MIN_CELL_PX || side.misfit > MAX_START_MISFIT {
+                continue;
+            }
+            if let Some(edge) = Edge::new(&side) {
+                sides.push((side.cell_px, edge));
             }
         }
-        if sides.is_empty() {
-            return None;
-        }
-        sides.sort_by(|a, b| b.0.total_cmp(&a.0));
-        sides.truncate(MAX_SIDES);
-        let blur_px = {
-            let mut s: Vec<f64> = sides.iter().map(|s| s.1.sigma_px).collect();
-            s.sort_by(f64::total_cmp);
-            let median = s[s.len() / 2];
-            (median * median - PIXEL_SIGMA_PX * PIXEL_SIGMA_PX).max(0.0).sqrt()
-        };
-        let edges: Vec<Edge> = sides.into_iter().map(|s| s.1).collect();
-        // Each strip's edge place, carried from curve to curve as the search moves.
-        let mut places: Vec<Vec<f64>> = edges.iter().map(|e| e.places(start)).collect();
-        let chi2 = |curve: ToneCurve, places: &mut Vec<Vec<f64>>| {
-            let lut = curve.decode_table();
-            edges
-                .iter()
-                .zip(places.iter_mut())
-                .map(|(e, p)| e.asymmetry(&lut, p))
-                .fold((0.0, 0), |(c, n), (ci, ni)| (c + ci, n + ni))
-        };
-        // sRGB from the places found through the curve the tags were detected with (sRGB,
-        // until an estimate replaces it), before the search carries them off.
-        let (srgb, _) = chi2(ToneCurve::Srgb, &mut places.clone());
-        // Far from the camera's curve the lopsidedness may dip again (a crushed end weighs
-        // little): the best of a scan, refined. The scan runs from sRGB's neighbourhood out
-        // both ways, so the places move in small steps.
-        let (lo, hi) = (*GAMMA_SEARCH.start(), *GAMMA_SEARCH.end());
-        let step = (hi - lo) / GAMMA_SCAN as f64;
-        let mut scanned: Vec<(f64, f64, Vec<Vec<f64>>)> = Vec::new();
-        let middle = ((2.2 - lo) / step).round() as usize;
-        for half in [(middle..=GAMMA_SCAN).collect::<Vec<_>>(), (0..middle).rev().collect()] {
-            let mut p = places.clone();
-            for i in half {
-                let g = lo + step * i as f64;
-                let (c, _) = chi2(ToneCurve::Gamma { gamma: g }, &mut p);
-                scanned.push((g, c, p.clone()));
-            }
-        }
-        let (best, _, best_places) =
-            scanned.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap_or((2.2, f64::INFINITY, places.clone()));
-        places = best_places;
-        let (gamma, _) = golden((best - step).max(lo), (best + step).min(hi), GOLDEN_STEPS, |g| {
-            chi2(ToneCurve::Gamma { gamma: g }, &mut places).0
-        });
-        let (best, residuals) = chi2(ToneCurve::Gamma { gamma }, &mut places);
-        (residuals > 0).then_some(FrameToneFit {
-            gamma,
-            chi2: best,
-            srgb_chi2: srgb,
-            residuals,
-            sides: edges.len(),
-            blur_px,
-        })
     }
+    if sides.is_empty() {
+        return None;
+    }
+    sides.sort_by(|a, b| b.0.total_cmp(&a.0));
+    sides.truncate(MAX_SIDES);
+    let blur_px = {
+        let mut s: Vec<f64> = sides.iter().map(|s| s.1.sigma_px).collect();
+        s.sort_by(f64::total_cmp);
+        let median = s[s.len() / 2];
+        (median * median - PIXEL_SIGMA_PX * PIXEL_SIGMA_PX).max(0.0).sqrt()
+    };
+    let edges: Vec<Edge> = sides.into_iter().map(|s| s.1).collect();
+    // Each strip's edge place, carried from curve to curve as the search moves.
+    let mut places: Vec<Vec<f64>> = edges.iter().map(|e| e.places(start)).collect();
+    let chi2 = |curve: ToneCurve, places: &mut Vec<Vec<f64>>| {
+        let lut = curve.decode_table();
+        edges
+            .iter()
+            .zip(places.iter_mut())
+            .map(|(e, p)| e.asymmetry(&lut, p))
+            .fold((0.0, 0), |(c, n), (ci, ni)| (c + ci, n + ni))
+    };
+    // sRGB from the places found through the curve the tags were detected with (sRGB,
+    // until an estimate replaces it), before the search carries them off.
+    let (srgb, _) = chi2(ToneCurve::Srgb, &mut places.clone());
+    // Far from the camera's curve the lopsidedness may dip again (a crushed end weighs
+    // little): the best of a scan, refined. The scan runs from sRGB's neighbourhood out
+    // both ways, so the places move in small steps.
+    let (lo, hi) = (*GAMMA_SEARCH.start(), *GAMMA_SEARCH.end());
+    let step = (hi - lo) / GAMMA_SCAN as f64;
+    let mut scanned: Vec<(f64, f64, Vec<Vec<f64>>)> = Vec::new();
+    let middle = ((2.2 - lo) / step).round() as usize;
+    for half in [(middle..=GAMMA_SCAN).collect::<Vec<_>>(), (0..middle).rev().collect()] {
+        let mut p = places.clone();
+        for i in half {
+            let g = lo + step * i as f64;
+            let (c, _) = chi2(ToneCurve::Gamma { gamma: g }, &mut p);
+            scanned.push((g, c, p.clone()));
+        }
+    }
+    let (best, _, best_places) =
+        scanned.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap_or((2.2, f64::INFINITY, places.clone()));
+    places = best_places;
+    let (gamma, _) = golden((best - step).max(lo), (best + step).min(hi), GOLDEN_STEPS, |g| {
+        chi2(ToneCurve::Gamma { gamma: g }, &mut places).0
+    });
+    let (best, residuals) = chi2(ToneCurve::Gamma { gamma }, &mut places);
+    (residuals > 0).then_some(FrameToneFit {
+        gamma,
+        chi2: best,
+        srgb_chi2: srgb,
+        residuals,
+        sides: edges.len(),
+        blur_px,
+    })
 }
 
 /// The least of `f` over [lo, hi] by golden-section search (one minimum assumed), and where.
