@@ -2,7 +2,8 @@
 //! (tag detection, pose), at 1080p and 4K, searching every frame whole and tracking in the
 //! steady state (searching the region where the markers are expected, or looking for each tag
 //! where the poses predict it), with 1 and 2 detector threads;
-//! the detector's own stages (threshold, components, clusters, quads, tags); and the PnP
+//! the detector's own stages (threshold, components, clusters, quads, tags); every frame of a
+//! long take, for the slowest (a frame that pays for more than detection stalls the stream); and the PnP
 //! time per body, ours beside OpenCV's solvePnP (SQPnP, ITERATIVE) on the same
 //! correspondences when Python with OpenCV is installed.
 //!
@@ -13,6 +14,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use jawtrack_apriltag::tone::{REFIT_EVERY_FRAMES, SETTLING_FRAMES};
 use jawtrack_apriltag::{DetectorConfig, ImageView, StageTimes};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_pose::{CameraIntrinsics, Observation, Pose, solve_pnp};
@@ -48,6 +50,10 @@ pub struct PipelineArgs {
     /// The Python that runs OpenCV (skipped with a note when it cannot import cv2).
     #[arg(long, default_value = "python3")]
     python: String,
+    /// Frames of the long take (the rendered ones played forth and back), which times every
+    /// frame of a tracking run long enough to hold the tone curve's periodic refits.
+    #[arg(long, default_value_t = 2 * REFIT_EVERY_FRAMES + 40)]
+    long_take: usize,
     /// Also write the table (Markdown) here.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -68,6 +74,9 @@ struct PnpCase {
 pub fn run(a: &PipelineArgs) -> Result<()> {
     if a.frames < 2 || a.repeat == 0 || a.pnp_repeat == 0 {
         bail!("--frames must be at least 2, --repeat and --pnp-repeat at least 1");
+    }
+    if a.long_take <= SETTLING_FRAMES {
+        bail!("--long-take must be more than the {SETTLING_FRAMES} frames the tone curve settles over");
     }
     if !(a.zoom >= 1.0 && a.zoom <= 4.0) {
         bail!("--zoom must be between 1 and 4, got {}", a.zoom);
@@ -91,6 +100,7 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
     let mut stage_rows = Vec::new();
     let mut cases: Vec<PnpCase> = Vec::new();
     let mut camera_for_cases = None;
+    let mut rendered = Vec::new();
     for &resolution in &a.resolutions {
         let mut lens = resolution.default_intrinsics();
         (lens.fx, lens.fy) = (lens.fx * a.zoom, lens.fy * a.zoom);
@@ -138,6 +148,7 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
                 stage_rows.push((run, timed.stages));
             }
         }
+        rendered.push((resolution, frames, camera));
     }
     line(String::new());
     line(
@@ -165,6 +176,31 @@ pub fn run(a: &PipelineArgs) -> Result<()> {
             st[8],
             st[9]
         ));
+    }
+    line(String::new());
+    line(format!(
+        "A long take: the frames played forth and back for {} frames (the tone curve's refits \
+         fall every {REFIT_EVERY_FRAMES} detections once it has settled), tracked once with tags where \
+         predicted; each frame's detection and pose (ms) after the first {SETTLING_FRAMES}, which fit the \
+         curve while it settles:",
+        a.long_take
+    ));
+    line(String::new());
+    line("| resolution | threads | frames | median ms | p99 ms | slowest ms | frames over 16.7 ms |".into());
+    line("|---|---|---|---|---|---|---|".into());
+    for (resolution, frames, camera) in &rendered {
+        for &threads in &a.threads {
+            let t = long_take(frames, camera, threads, a.long_take)?;
+            line(format!(
+                "| {} | {threads} | {} | {:.2} | {:.2} | {:.2} | {} |",
+                resolution_name(*resolution),
+                t.frames,
+                t.median_ms,
+                t.p99_ms,
+                t.slowest_ms,
+                t.over_budget
+            ));
+        }
     }
     if let Some(camera) = camera_for_cases {
         line(String::new());
@@ -308,6 +344,56 @@ fn time_frames(
             count(&|s| s.quads),
             count(&|s| s.tags),
         ],
+    })
+}
+
+/// Every frame's time over a long take ([`long_take`]).
+struct LongTake {
+    frames: usize,
+    median_ms: f64,
+    p99_ms: f64,
+    slowest_ms: f64,
+    /// Frames over a 60 frames/s budget.
+    over_budget: usize,
+}
+
+/// Tracks `take` frames — `frames` forth, back, forth… so the motion runs on — with tags
+/// where predicted and `threads` detector threads, once, and times each (detection and
+/// pose) after the tone curve's settling frames.
+fn long_take(
+    frames: &[jawtrack_synth::Frame],
+    camera: &CameraIntrinsics,
+    threads: usize,
+    take: usize,
+) -> Result<LongTake> {
+    let config = TrackerConfig {
+        detector: DetectorConfig { nthreads: threads, ..DetectorConfig::default() },
+        search: SearchConfig { region_search: true, predicted: true, ..SearchConfig::default() },
+        ..TrackerConfig::default()
+    };
+    let mut tracker = Tracker::new(Marker::default(), config)?;
+    let order = (0..frames.len()).chain((1..frames.len() - 1).rev()).cycle().take(take);
+    let period = frames.last().map_or(0.0, |f| f.truth.t) - frames[0].truth.t;
+    let step = period / (frames.len() - 1) as f64;
+    let mut ms = Vec::with_capacity(take);
+    for (k, i) in order.enumerate() {
+        let f = &frames[i];
+        let (w, h) = (f.width as usize, f.height as usize);
+        let view = ImageView::new(&f.luma, w, h, w)?;
+        // Time runs on as the frames go back and forth.
+        let r = tracker.track(&view, camera, frames[0].truth.t + k as f64 * step)?;
+        if k >= SETTLING_FRAMES {
+            ms.push((r.timings.detection_s + r.timings.pose_s) * 1e3);
+        }
+    }
+    ms.sort_by(f64::total_cmp);
+    let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
+    Ok(LongTake {
+        frames: ms.len(),
+        median_ms: at(0.5),
+        p99_ms: at(0.99),
+        slowest_ms: at(1.0),
+        over_budget: ms.iter().filter(|&&t| t > 1e3 / 60.0).count(),
     })
 }
 
