@@ -286,6 +286,9 @@ fn time_frames(
         search: SearchConfig {
             region_search: run.tracked(),
             predicted: run.search == Searched::Predicted,
+            // The whole frame at the settings' decimation: the detector's own speed, whatever
+            // the tracked tags' size.
+            pyramid: run.tracked(),
             ..SearchConfig::default()
         },
         ..TrackerConfig::default()

@@ -360,11 +360,14 @@ impl Tracker {
         let mut detections = match detections {
             Some(d) => d,
             None => {
-                let coarse = expected.is_some().then(|| self.coarse_decimation(camera, t)).flatten();
+                // The region, or the whole frame searched periodically while both bodies are
+                // tracked: a tag that comes into view is of the size of those tracked.
+                let tracked = expected.is_some() || self.both_tracked(t);
+                let coarse = tracked.then(|| self.coarse_decimation(camera, t)).flatten();
                 let mut d = self.detect(frame, expected, smeared, coarse)?;
                 stages = stages + self.detector.last_stages();
                 if coarse.is_some() && self.lost_a_tag(&d) {
-                    // A tag the coarse image missed: search the region again at the settings' decimation.
+                    // A tag the coarse image missed: search again at the settings' decimation.
                     d = self.detect(frame, expected, smeared, None)?;
                     stages = stages + self.detector.last_stages();
                 }

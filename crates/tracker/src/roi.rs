@@ -19,10 +19,11 @@ pub struct SearchConfig {
     pub margin: f64,
     /// … and by at least this many pixels.
     pub min_margin_px: f64,
-    /// Find quads in the expected region on a coarser image (decimated by 4) when every tag
-    /// is predicted large enough to be found there with room to spare (70 px, or 110 px after
-    /// a frame with a tag blurred more than 2 px); a tag it misses sends the region to the
-    /// settings' decimation again.
+    /// Find quads in the expected region, and in the whole frame searched periodically while
+    /// both bodies are tracked, on a coarser image (decimated by 4) when every tag is predicted
+    /// large enough to be found there with room to spare (70 px, or 110 px after a frame with
+    /// a tag blurred more than 2 px); a tag it misses sends the search to the settings'
+    /// decimation again. A tag that comes into view is of the size of the tracked ones.
     pub pyramid: bool,
     /// Before searching the expected region, look for the tags where the predicted poses put
     /// them ([`jawtrack_apriltag::Detector::confirm`]): every tag turned towards the camera
@@ -278,16 +279,17 @@ impl Tracker {
     /// Where both markers are expected, when both are tracked and a full search is not due.
     pub(crate) fn expected_region(&self, frame: &ImageView<'_>, camera: &CameraIntrinsics, t: f64) -> Option<Roi> {
         let s = &self.config.search;
-        if !s.region_search || self.since_full + 1 >= s.full_frame_every {
-            return None;
-        }
-        let recent = |b: &BodyState| b.last().is_some_and(|l| self.recent(l.0, t));
-        if !self.bodies.iter().all(|b| recent(b) && !b.tags.is_empty()) {
+        if !s.region_search || self.since_full + 1 >= s.full_frame_every || !self.both_tracked(t) {
             return None;
         }
         let poses = [self.bodies[0].predict(t)?, self.bodies[1].predict(t)?];
         let groups = [(&poses[0], self.corners[0].as_slice()), (&poses[1], self.corners[1].as_slice())];
         region(&groups, camera, frame.width(), frame.height(), s.margin, s.min_margin_px)
+    }
+
+    /// Whether both bodies were solved recently enough to go by at `t`, each from tags.
+    pub(crate) fn both_tracked(&self, t: f64) -> bool {
+        self.bodies.iter().all(|b| b.last().is_some_and(|l| self.recent(l.0, t)) && !b.tags.is_empty())
     }
 
     /// The tags the bodies' predicted poses turn towards the camera at `t`, each corner where

@@ -160,6 +160,46 @@ fn sharp_tags_are_searched_coarsely_from_a_smaller_size_than_blurred_ones() {
     assert_eq!((coarse, compared), (0, 6), "blurred: frames searched coarsely");
 }
 
+#[test]
+fn the_whole_frame_searched_periodically_is_searched_coarsely_while_both_tracked_tags_are_large() {
+    // Sharp still markers at 60 mm (shortest sides 70–110 px), the whole frame searched every
+    // other frame: once both bodies are tracked, those searches find quads on the coarse
+    // image too, each frame as accurate as without the pyramid.
+    let frames = 6;
+    let config = SynthConfig {
+        realism: Realism::clean(),
+        options: SceneOptions { distance_mm: Some(60.0), frames_per_view: frames, ..SceneOptions::default() },
+        max_frames: Some(frames),
+        ..SynthConfig::new(SceneKind::Static)
+    };
+    let synth = Synthesizer::new(config).expect("scene");
+    let camera = synth.header().intrinsics;
+    let tracker_with = |pyramid: bool| {
+        let search = SearchConfig { pyramid, predicted: false, full_frame_every: 2, ..SearchConfig::default() };
+        Tracker::new(Marker::default(), TrackerConfig { search, ..TrackerConfig::default() }).expect("tracker")
+    };
+    let (mut coarse, mut fine) = (tracker_with(true), tracker_with(false));
+    let (mut whole, mut whole_coarse, mut compared) = (0, 0, 0);
+    for i in 0..synth.len() {
+        let f = synth.render(i).expect("frame");
+        let (w, h) = (f.width as usize, f.height as usize);
+        let view = ImageView::new(&f.luma, w, h, w).expect("view");
+        let a = coarse.track(&view, &camera, f.truth.t).expect("tracks");
+        let b = fine.track(&view, &camera, f.truth.t).expect("tracks");
+        assert_eq!(a.searched.is_none(), b.searched.is_none(), "frame {i}: the same search");
+        if i > 0 && a.searched.is_none() {
+            whole += 1;
+            whole_coarse += usize::from(a.timings.stages.quad_decimate == 4.0);
+        }
+        let (ea, eb) = same_tags_and_errors(&a, &b, &f.truth.maxilla_from_mandible, i);
+        assert!(ea.0 < eb.0 + 0.005 && ea.1 < eb.1 + 0.01, "frame {i}: {ea:?} coarse, {eb:?} fine");
+        compared += 1;
+    }
+    assert_eq!(compared, frames);
+    // Frames 0, 2 and 4 search the whole frame; the first, with nothing tracked yet, finely.
+    assert_eq!((whole, whole_coarse), (2, 2), "whole-frame searches after the first, and of them coarse");
+}
+
 /// Tracks six frames of the still markers `distance_mm` from a 1080p camera, rendered with
 /// `realism`, with and without the pyramid ([`SearchConfig::pyramid`]), and checks each frame
 /// as accurate either way. Returns the frames searched coarsely, the frames compared, the
