@@ -362,13 +362,14 @@ impl Tracker {
             None => {
                 // The region, or the whole frame searched periodically while both bodies are
                 // tracked: a tag that comes into view is of the size of those tracked.
-                let tracked = expected.is_some() || self.both_tracked(t);
+                let tracked = expected.is_some() || (self.config.search.region_search && self.both_tracked(t));
                 let coarse = tracked.then(|| self.coarse_decimation(camera, t)).flatten();
-                let mut d = self.detect(frame, expected, smeared, coarse)?;
+                let min_quad = tracked.then(|| self.min_quad_px(camera, t)).flatten().unwrap_or(0.0);
+                let mut d = self.detect(frame, expected, smeared, (coarse, min_quad))?;
                 stages = stages + self.detector.last_stages();
                 if coarse.is_some() && self.lost_a_tag(&d) {
                     // A tag the coarse image missed: search again at the settings' decimation.
-                    d = self.detect(frame, expected, smeared, None)?;
+                    d = self.detect(frame, expected, smeared, (None, min_quad))?;
                     stages = stages + self.detector.last_stages();
                 }
                 d
@@ -383,7 +384,7 @@ impl Tracker {
                 .any(|d| roi::near_inner_edge(&d.corners, &r, frame, self.config.search.min_margin_px / 2.0))
         });
         if expected.is_some() && (missing || at_edge) {
-            detections = self.detect(frame, None, smeared, None)?;
+            detections = self.detect(frame, None, smeared, (None, 0.0))?;
             stages = stages + self.detector.last_stages();
             searched = None;
             predicted = false;
@@ -404,18 +405,20 @@ impl Tracker {
         Ok(result)
     }
 
-    /// Detects the marker's tags in `roi`, finding quads at `decimate` (the settings' for `None`).
+    /// Detects the marker's tags in `roi`, finding quads at `decimate` (the settings' for `None`)
+    /// and trying those whose longest side is `min_quad_px` or more.
     fn detect(
         &self,
         frame: &ImageView<'_>,
         roi: Option<Roi>,
         smeared: bool,
-        decimate: Option<f32>,
+        (decimate, min_quad_px): (Option<f32>, f64),
     ) -> Result<Vec<Detection>, TrackError> {
         let search = Search {
             roi,
             smeared: smeared || self.config.detector.smeared_edges,
             quad_decimate: decimate.unwrap_or(self.config.detector.quad_decimate),
+            min_quad_px,
         };
         let mut d = self.detector.search(frame, &search)?;
         d.retain(|d| self.marker.find_tag(d.id).is_some());

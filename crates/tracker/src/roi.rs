@@ -11,7 +11,9 @@ use nalgebra::{Point3, UnitQuaternion};
 /// How the tracker searches each frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SearchConfig {
-    /// Search only where the markers are expected once both are tracked.
+    /// Search only where the markers are expected once both are tracked; and there, as in the
+    /// whole frame searched periodically while both are, try only quads whose longest side is
+    /// at least half the smallest tracked tag's, not the quads the tags' data cells make.
     pub region_search: bool,
     /// Search the whole frame at least every this many frames (new tags, a second pair).
     pub full_frame_every: usize,
@@ -20,10 +22,11 @@ pub struct SearchConfig {
     /// … and by at least this many pixels.
     pub min_margin_px: f64,
     /// Find quads in the expected region, and in the whole frame searched periodically while
-    /// both bodies are tracked, on a coarser image (decimated by 4) when every tag is predicted
-    /// large enough to be found there with room to spare (70 px, or 110 px after a frame with
-    /// a tag blurred more than 2 px); a tag it misses sends the search to the settings'
-    /// decimation again. A tag that comes into view is of the size of the tracked ones.
+    /// both bodies are tracked (with `region_search`), on a coarser image (decimated by 4)
+    /// when every tag is predicted large enough to be found there with room to spare (70 px,
+    /// or 110 px after a frame with a tag blurred more than 2 px); a tag it misses sends the
+    /// search to the settings' decimation again. A tag that comes into view is of the size of
+    /// the tracked ones.
     pub pyramid: bool,
     /// Before searching the expected region, look for the tags where the predicted poses put
     /// them ([`jawtrack_apriltag::Detector::confirm`]): every tag turned towards the camera
@@ -73,6 +76,14 @@ pub(crate) const COARSE_MIN_SIDE_PX: f64 = 110.0;
 /// searched in two thirds of the time, and the jaw came out nearer the truth (median 0.017
 /// against 0.026 mm over 39 frames).
 pub(crate) const COARSE_MIN_SIDE_SHARP_PX: f64 = 70.0;
+
+/// A search while both bodies are tracked tries only quads whose longest side is at least
+/// this fraction of the smallest tracked tag's longest side. A tag's data cells make quads a
+/// few cells across (of its eight); a tag of the markers that turns into view keeps at least
+/// 0.7 of its face-on width along its longest side, and the tracked tags have at most theirs.
+/// On the 4K hinge, half the quads a tracked region holds are the data cells' (shortest sides
+/// 10–50 px, the tags' 70 px and more), and each costs two edge refits and two decodings.
+pub(crate) const MIN_QUAD_OF_SMALLEST_TAG: f64 = 0.5;
 
 /// Tags seen within this angle of face-on (°) are looked for where they are predicted
 /// ([`SearchConfig::predicted`]): beyond it their cells are too foreshortened to decode.
@@ -140,11 +151,21 @@ pub(crate) fn shortest_side_px(
     corners: &[nalgebra::Vector3<f64>; 4],
     camera: &CameraIntrinsics,
 ) -> Option<f64> {
+    Some(sides_px(camera_from_body, corners, camera)?.into_iter().fold(f64::INFINITY, f64::min))
+}
+
+/// The four sides' lengths (px) of the tag whose corners (body frame) are `corners`, seen
+/// through `camera_from_body`; `None` when a corner does not project.
+fn sides_px(
+    camera_from_body: &Pose,
+    corners: &[nalgebra::Vector3<f64>; 4],
+    camera: &CameraIntrinsics,
+) -> Option<[f64; 4]> {
     let mut px = [nalgebra::Point2::origin(); 4];
     for (p, c) in px.iter_mut().zip(corners) {
         *p = camera.project(&camera_from_body.transform_point(&Point3::from(*c)))?;
     }
-    Some((0..4).map(|i| (px[(i + 1) % 4] - px[i]).norm()).fold(f64::INFINITY, f64::min))
+    Some([0, 1, 2, 3].map(|i| (px[(i + 1) % 4] - px[i]).norm()))
 }
 
 /// `last` moved on to time `t` with the velocity it had since `previous`: the body's origin
@@ -305,6 +326,23 @@ impl Tracker {
             out.extend(expected_tags(&body.tags, &pose, at_row, camera));
         }
         out
+    }
+
+    /// The shortest a quad's longest side may be (px) for a search while both bodies are
+    /// tracked to try it ([`jawtrack_apriltag::Search::min_quad_px`]):
+    /// [`MIN_QUAD_OF_SMALLEST_TAG`] of the smallest longest side among the tags the bodies
+    /// were solved from in the last frame, predicted at `t`. `None` when one cannot be
+    /// predicted.
+    pub(crate) fn min_quad_px(&self, camera: &CameraIntrinsics, t: f64) -> Option<f64> {
+        let mut smallest = f64::INFINITY;
+        for b in &self.bodies {
+            let pose = b.predict(t)?;
+            for &id in &b.tags {
+                let (_, tag) = self.marker.find_tag(id)?;
+                smallest = smallest.min(sides_px(&pose, &tag.corners, camera)?.into_iter().fold(0.0, f64::max));
+            }
+        }
+        smallest.is_finite().then_some(MIN_QUAD_OF_SMALLEST_TAG * smallest)
     }
 
     /// The coarser decimation ([`COARSE_DECIMATION`]) a region search may find quads at:

@@ -131,7 +131,8 @@ impl Detector {
                         return Ok((found, st));
                     }
                 }
-                let search = Search { roi: Some(job.around), smeared, quad_decimate: c.quad_decimate };
+                let search =
+                    Search { roi: Some(job.around), smeared, quad_decimate: c.quad_decimate, min_quad_px: 0.0 };
                 let (found, searched) = self.detect_region(frame, &search, lut, &serial)?;
                 Ok((found.into_iter().find(|d| d.id == job.expected.id), st + searched))
             });

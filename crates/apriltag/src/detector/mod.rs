@@ -43,6 +43,10 @@ pub struct Search {
     pub smeared: bool,
     /// The decimation quads are found at, in place of the settings' (1, 1.5, 2, 3 or 4).
     pub quad_decimate: f32,
+    /// Quads whose longest side is shorter than this (px) are neither refitted nor decoded: a
+    /// tracker that knows its tags' size passes over the quads a tag's data cells make. 0
+    /// tries every quad.
+    pub min_quad_px: f64,
 }
 
 /// One detected tag, in JawTrack's pixel convention (the centre of the top-left pixel is
@@ -187,7 +191,7 @@ impl Detector {
         roi: Option<Roi>,
         smeared: bool,
     ) -> Result<Vec<Detection>, DetectError> {
-        self.search(frame, &Search { roi, smeared, quad_decimate: self.config.quad_decimate })
+        self.search(frame, &Search { roi, smeared, quad_decimate: self.config.quad_decimate, min_quad_px: 0.0 })
     }
 
     /// Detects tags as `search` says: where, whether edges are smeared, and on how coarse an
@@ -202,7 +206,7 @@ impl Detector {
     /// let detector = Detector::new(DetectorConfig::default()).expect("valid settings");
     /// let frame = vec![128u8; 640 * 480];
     /// let view = ImageView::new(&frame, 640, 480, 640).expect("a frame");
-    /// let search = Search { roi: None, smeared: false, quad_decimate: 4.0 };
+    /// let search = Search { roi: None, smeared: false, quad_decimate: 4.0, min_quad_px: 0.0 };
     /// assert!(detector.search(&view, &search).expect("searched").is_empty());
     /// ```
     pub fn search(&self, frame: &ImageView<'_>, search: &Search) -> Result<Vec<Detection>, DetectError> {
@@ -290,7 +294,7 @@ impl Detector {
                 (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
             }
         };
-        let (mut dets, st) = self.detect_view(&view, search.smeared, lut, search.quad_decimate, workers);
+        let (mut dets, st) = self.detect_view(&view, search, lut, workers);
         for d in &mut dets {
             d.center[0] += ox;
             d.center[1] += oy;
@@ -318,11 +322,11 @@ impl Detector {
     fn detect_view(
         &self,
         im: &ImageView<'_>,
-        smeared: bool,
+        search: &Search,
         lut: &[f64; 256],
-        decimate: f32,
         workers: &Workers,
     ) -> (Vec<Detection>, StageTimes) {
+        let (smeared, decimate) = (search.smeared, search.quad_decimate);
         let c = &self.config;
         // Another thread detecting with this detector has the buffers: use fresh ones.
         let (mut guard, mut own);
@@ -376,7 +380,6 @@ impl Detector {
         let mut quads = fit_quads(&clusters, &quad_im, &c.quad, decimate, workers);
         st.quads_s = clock.lap();
         st.clusters = clusters.len();
-        st.quads = quads.len();
         if decimate > 1.0 {
             for q in &mut quads {
                 for p in &mut q.p {
@@ -385,6 +388,10 @@ impl Detector {
                 }
             }
         }
+        if search.min_quad_px > 0.0 {
+            quads.retain(|q| longest_side(q) >= search.min_quad_px);
+        }
+        st.quads = quads.len();
         let dets = workers.filter_map(&quads, |q| self.tag_from_quad(im, q, decimate, lut, smeared));
         st.tags_s = clock.lap();
         let dets = finish(dets);
@@ -451,6 +458,13 @@ fn with_border_fit(im: &ImageView<'_>, lut: &[f64; 256], family: &TagFamily, d: 
     let Some(homography) = homography_of([tl, tr, br, bl]) else { return measured };
     let (cx, cy) = project(&homography, 0.0, 0.0);
     Detection { corners, center: [cx, cy], homography, ..measured }
+}
+
+/// The longest side of `q` (px).
+fn longest_side(q: &Quad) -> f64 {
+    (0..4)
+        .map(|i| f64::from((q.p[(i + 1) % 4][0] - q.p[i][0]).hypot(q.p[(i + 1) % 4][1] - q.p[i][1])))
+        .fold(0.0, f64::max)
 }
 
 /// Pixel values as they are (what C uses).

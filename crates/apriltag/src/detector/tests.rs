@@ -296,3 +296,31 @@ fn a_noisy_smear_nearly_a_cell_wide_is_still_read_as_one_ramp() {
     assert_eq!(checked, 3);
     assert!(worst < 0.8, "a noisy ramp's corners {worst:.2} px off (1.06 px before the fix)");
 }
+
+#[test]
+fn quads_shorter_than_asked_are_not_tried() {
+    // Tag 7 with 12 px cells (its black square 96 px across) and, beside it, tag 3 with 5 px
+    // cells (40 px).
+    let (big, nb) = drawn_tag(7, 12, 0);
+    let (small, ns) = drawn_tag(3, 5, 0);
+    let (w, h) = (nb + ns + 90, nb + 60);
+    let mut img = vec![128u8; w * h];
+    for y in 0..nb {
+        img[(y + 30) * w + 30..(y + 30) * w + 30 + nb].copy_from_slice(&big[y * nb..(y + 1) * nb]);
+    }
+    for y in 0..ns {
+        img[(y + 60) * w + nb + 60..(y + 60) * w + nb + 60 + ns].copy_from_slice(&small[y * ns..(y + 1) * ns]);
+    }
+    let view = ImageView::new(&img, w, h, w).expect("view");
+    let d = detector();
+    let search = |min_quad_px: f64| Search { roi: None, smeared: false, quad_decimate: 2.0, min_quad_px };
+    let all = d.search(&view, &search(0.0)).expect("runs");
+    let tried_all = d.last_stages().quads;
+    assert_eq!(all.iter().map(|t| t.id).collect::<Vec<_>>(), [3, 7], "both tags, every quad tried");
+    let large = d.search(&view, &search(48.0)).expect("runs");
+    let tried_large = d.last_stages().quads;
+    assert_eq!(large, all[1..], "the large tag alone, its corners as before, from 48 px");
+    assert_eq!((tried_all, tried_large), (2, 1), "quads tried");
+    assert!(d.search(&view, &search(130.0)).expect("runs").is_empty(), "none as long as 130 px");
+    assert_eq!(d.last_stages().quads, 0);
+}
