@@ -138,10 +138,10 @@ fn steady_tracking_searches_only_the_expected_region() {
 fn large_tags_are_searched_on_a_coarser_image_as_accurately() {
     // The markers held still 40 mm from the camera at 1080p: every tag seen (one a body) has
     // its shortest side over 110 px, large enough for the coarse image however blurred.
-    let (coarse, compared, smallest, _) = coarse_against_fine(40.0, Realism::clean());
-    assert!(smallest > 110.0, "shortest side {smallest} px");
+    let run = coarse_against_fine(40.0, Realism::clean(), 30);
+    assert!(run.smallest > 110.0, "shortest side {} px", run.smallest);
     // The first frame is searched whole, at the settings' decimation; the rest coarsely.
-    assert_eq!(coarse, compared - 1, "frames searched coarsely");
+    assert_eq!(run.coarse(), run.frames.len() - 1, "frames searched coarsely");
 }
 
 #[test]
@@ -149,62 +149,55 @@ fn sharp_tags_are_searched_coarsely_from_a_smaller_size_than_blurred_ones() {
     // At 60 mm an oblique tag's shortest side is 70–110 px: large enough for the coarse image
     // when every tag was sharp in the last frame, not when one was blurred more than 2 px
     // (the lens's own blur at 12 µm is 2.6 px, a phone focused well behind the markers).
-    let (coarse, compared, smallest, blur) = coarse_against_fine(60.0, Realism::clean());
-    assert!((70.0..110.0).contains(&smallest), "shortest side {smallest} px");
-    assert!(blur < 1.0, "sharp: blur {blur} px");
-    assert_eq!(coarse, compared - 1, "sharp: frames searched coarsely");
+    let sharp = coarse_against_fine(60.0, Realism::clean(), 30);
+    assert!((70.0..110.0).contains(&sharp.smallest), "shortest side {} px", sharp.smallest);
+    assert!(sharp.blur < 1.0, "sharp: blur {} px", sharp.blur);
+    assert_eq!(sharp.coarse(), sharp.frames.len() - 1, "sharp: frames searched coarsely");
     let blurred = Realism { optics_sigma_um: 12.0, focal_length_mm: 6.8, ..Realism::clean() };
-    let (coarse, compared, smallest, blur) = coarse_against_fine(60.0, blurred);
-    assert!((70.0..110.0).contains(&smallest), "shortest side {smallest} px");
-    assert!(blur > 2.0, "blurred: blur {blur} px");
-    assert_eq!((coarse, compared), (0, 6), "blurred: frames searched coarsely");
+    let blurred = coarse_against_fine(60.0, blurred, 30);
+    assert!((70.0..110.0).contains(&blurred.smallest), "shortest side {} px", blurred.smallest);
+    assert!(blurred.blur > 2.0, "blurred: blur {} px", blurred.blur);
+    assert_eq!((blurred.coarse(), blurred.frames.len()), (0, 6), "blurred: frames searched coarsely");
 }
 
 #[test]
 fn the_whole_frame_searched_periodically_is_searched_coarsely_while_both_tracked_tags_are_large() {
-    // Sharp still markers at 60 mm (shortest sides 70–110 px), the whole frame searched every
-    // other frame: once both bodies are tracked, those searches find quads on the coarse
-    // image too, each frame as accurate as without the pyramid.
-    let frames = 6;
-    let config = SynthConfig {
-        realism: Realism::clean(),
-        options: SceneOptions { distance_mm: Some(60.0), frames_per_view: frames, ..SceneOptions::default() },
-        max_frames: Some(frames),
-        ..SynthConfig::new(SceneKind::Static)
-    };
-    let synth = Synthesizer::new(config).expect("scene");
-    let camera = synth.header().intrinsics;
-    let tracker_with = |pyramid: bool| {
-        let search = SearchConfig { pyramid, predicted: false, full_frame_every: 2, ..SearchConfig::default() };
-        Tracker::new(Marker::default(), TrackerConfig { search, ..TrackerConfig::default() }).expect("tracker")
-    };
-    let (mut coarse, mut fine) = (tracker_with(true), tracker_with(false));
-    let (mut whole, mut whole_coarse, mut compared) = (0, 0, 0);
-    for i in 0..synth.len() {
-        let f = synth.render(i).expect("frame");
-        let (w, h) = (f.width as usize, f.height as usize);
-        let view = ImageView::new(&f.luma, w, h, w).expect("view");
-        let a = coarse.track(&view, &camera, f.truth.t).expect("tracks");
-        let b = fine.track(&view, &camera, f.truth.t).expect("tracks");
-        assert_eq!(a.searched.is_none(), b.searched.is_none(), "frame {i}: the same search");
-        if i > 0 && a.searched.is_none() {
-            whole += 1;
-            whole_coarse += usize::from(a.timings.stages.quad_decimate == 4.0);
-        }
-        let (ea, eb) = same_tags_and_errors(&a, &b, &f.truth.maxilla_from_mandible, i);
-        assert!(ea.0 < eb.0 + 0.005 && ea.1 < eb.1 + 0.01, "frame {i}: {ea:?} coarse, {eb:?} fine");
-        compared += 1;
-    }
-    assert_eq!(compared, frames);
+    // The sharp still markers at 60 mm, the whole frame searched every other frame: once both
+    // bodies are tracked, those searches find quads on the coarse image too.
+    let run = coarse_against_fine(60.0, Realism::clean(), 2);
+    let whole: Vec<(usize, bool)> =
+        run.frames.iter().enumerate().filter(|(_, f)| f.whole).map(|(i, f)| (i, f.coarse)).collect();
     // Frames 0, 2 and 4 search the whole frame; the first, with nothing tracked yet, finely.
-    assert_eq!((whole, whole_coarse), (2, 2), "whole-frame searches after the first, and of them coarse");
+    assert_eq!(whole, [(0, false), (2, true), (4, true)], "whole-frame searches, and whether coarse");
+}
+
+/// How each frame was searched with the pyramid ([`coarse_against_fine`]).
+struct Searched {
+    /// The whole frame, not a region.
+    whole: bool,
+    /// At the coarse decimation.
+    coarse: bool,
+}
+
+/// What [`coarse_against_fine`] found: each frame's search, the shortest side of a tag found
+/// (px) and the largest blur of a tag found (px).
+struct CoarseRun {
+    frames: Vec<Searched>,
+    smallest: f64,
+    blur: f64,
+}
+
+impl CoarseRun {
+    fn coarse(&self) -> usize {
+        self.frames.iter().filter(|f| f.coarse).count()
+    }
 }
 
 /// Tracks six frames of the still markers `distance_mm` from a 1080p camera, rendered with
-/// `realism`, with and without the pyramid ([`SearchConfig::pyramid`]), and checks each frame
-/// as accurate either way. Returns the frames searched coarsely, the frames compared, the
-/// shortest side of a tag found (px) and the largest blur of a tag found (px).
-fn coarse_against_fine(distance_mm: f64, realism: Realism) -> (usize, usize, f64, f64) {
+/// `realism`, with and without the pyramid ([`SearchConfig::pyramid`]), the whole frame
+/// searched at least every `full_frame_every` frames, and checks each frame searched alike and
+/// as accurate either way.
+fn coarse_against_fine(distance_mm: f64, realism: Realism, full_frame_every: usize) -> CoarseRun {
     let frames = 6;
     let config = SynthConfig {
         realism,
@@ -215,11 +208,11 @@ fn coarse_against_fine(distance_mm: f64, realism: Realism) -> (usize, usize, f64
     let synth = Synthesizer::new(config).expect("scene");
     let camera = synth.header().intrinsics;
     let tracker_with = |pyramid: bool| {
-        let search = SearchConfig { pyramid, predicted: false, ..SearchConfig::default() };
+        let search = SearchConfig { pyramid, predicted: false, full_frame_every, ..SearchConfig::default() };
         Tracker::new(Marker::default(), TrackerConfig { search, ..TrackerConfig::default() }).expect("tracker")
     };
     let (mut coarse, mut fine) = (tracker_with(true), tracker_with(false));
-    let (mut coarse_frames, mut compared, mut smallest, mut blur) = (0, 0, f64::INFINITY, 0.0f64);
+    let mut run = CoarseRun { frames: Vec::new(), smallest: f64::INFINITY, blur: 0.0 };
     for i in 0..synth.len() {
         let f = synth.render(i).expect("frame");
         let (w, h) = (f.width as usize, f.height as usize);
@@ -227,7 +220,7 @@ fn coarse_against_fine(distance_mm: f64, realism: Realism) -> (usize, usize, f64
         let a = coarse.track(&view, &camera, f.truth.t).expect("tracks");
         let b = fine.track(&view, &camera, f.truth.t).expect("tracks");
         assert_eq!(b.timings.stages.quad_decimate, 2.0, "frame {i}: without the pyramid");
-        coarse_frames += usize::from(a.timings.stages.quad_decimate == 4.0);
+        assert_eq!(a.searched.is_none(), b.searched.is_none(), "frame {i}: the same search");
         let (ea, eb) = same_tags_and_errors(&a, &b, &f.truth.maxilla_from_mandible, i);
         // As accurate: within 0.005 mm and 0.01° of the fine search (at 40 mm, 0.034 mm /
         // 0.065° against 0.035 mm / 0.059° when written).
@@ -237,13 +230,13 @@ fn coarse_against_fine(distance_mm: f64, realism: Realism) -> (usize, usize, f64
                 let (p, q) = (d.corners[k], d.corners[(k + 1) % 4]);
                 (q[0] - p[0]).hypot(q[1] - p[1])
             };
-            smallest = (0..4).map(side).fold(smallest, f64::min);
-            blur = blur.max(d.blur_px.unwrap_or(0.0));
+            run.smallest = (0..4).map(side).fold(run.smallest, f64::min);
+            run.blur = run.blur.max(d.blur_px.unwrap_or(0.0));
         }
-        compared += 1;
+        run.frames.push(Searched { whole: a.searched.is_none(), coarse: a.timings.stages.quad_decimate == 4.0 });
     }
-    assert_eq!(compared, frames);
-    (coarse_frames, compared, smallest, blur)
+    assert_eq!(run.frames.len(), frames);
+    run
 }
 
 #[test]
