@@ -73,6 +73,34 @@ pub struct Detection {
     pub blur_px: Option<f64>,
 }
 
+impl Detection {
+    /// The same tag in pixels moved by (`dx`, `dy`): a window's detection in its frame, or
+    /// a frame's in a patch of it.
+    pub(crate) fn shifted(&self, dx: f64, dy: f64) -> Detection {
+        Detection {
+            center: [self.center[0] + dx, self.center[1] + dy],
+            corners: self.corners.map(|p| [p[0] + dx, p[1] + dy]),
+            homography: shifted_homography(&self.homography, dx, dy),
+            ..*self
+        }
+    }
+}
+
+/// Homography `h` followed by moving its pixels by (`dx`, `dy`).
+pub(crate) fn shifted_homography(h: &[f64; 9], dx: f64, dy: f64) -> [f64; 9] {
+    [
+        h[0] + dx * h[6],
+        h[1] + dx * h[7],
+        h[2] + dx * h[8],
+        h[3] + dy * h[6],
+        h[4] + dy * h[7],
+        h[5] + dy * h[8],
+        h[6],
+        h[7],
+        h[8],
+    ]
+}
+
 /// An AprilTag detector for one family ([`DetectorConfig::family`]).
 #[derive(Debug)]
 pub struct Detector {
@@ -294,29 +322,8 @@ impl Detector {
                 (frame.sub_view(r.x, r.y, r.width, r.height)?, r.x as f64, r.y as f64)
             }
         };
-        let (mut dets, st) = self.detect_view(&view, search, lut, workers);
-        for d in &mut dets {
-            d.center[0] += ox;
-            d.center[1] += oy;
-            for c in &mut d.corners {
-                c[0] += ox;
-                c[1] += oy;
-            }
-            // Move the homography with the window: pixels' = pixels + offset.
-            let h = d.homography;
-            d.homography = [
-                h[0] + ox * h[6],
-                h[1] + ox * h[7],
-                h[2] + ox * h[8],
-                h[3] + oy * h[6],
-                h[4] + oy * h[7],
-                h[5] + oy * h[8],
-                h[6],
-                h[7],
-                h[8],
-            ];
-        }
-        Ok((dets, st))
+        let (dets, st) = self.detect_view(&view, search, lut, workers);
+        Ok((dets.iter().map(|d| d.shifted(ox, oy)).collect(), st))
     }
 
     fn detect_view(

@@ -50,27 +50,8 @@ pub(super) fn finish(dets: Vec<Detection>) -> Vec<Detection> {
     dets.sort_by(|a, b| {
         a.id.cmp(&b.id).then(a.center[0].total_cmp(&b.center[0])).then(a.center[1].total_cmp(&b.center[1]))
     });
-    for d in &mut dets {
-        // JawTrack's pixel convention.
-        d.center = [d.center[0] - 0.5, d.center[1] - 0.5];
-        for p in &mut d.corners {
-            p[0] -= 0.5;
-            p[1] -= 0.5;
-        }
-        let h = d.homography;
-        d.homography = [
-            h[0] - 0.5 * h[6],
-            h[1] - 0.5 * h[7],
-            h[2] - 0.5 * h[8],
-            h[3] - 0.5 * h[6],
-            h[4] - 0.5 * h[7],
-            h[5] - 0.5 * h[8],
-            h[6],
-            h[7],
-            h[8],
-        ];
-    }
-    dets
+    // JawTrack's pixel convention.
+    dets.iter().map(|d| d.shifted(-0.5, -0.5)).collect()
 }
 
 /// C's reconciliation: of two detections of the same id whose quads overlap, keep the one with

@@ -20,7 +20,7 @@
 //! differently are kept out of reach.
 
 use super::border::{ALONG_BLUR, BANDS, FixedSide, PIXEL_SIGMA_PX, Print, Profile, along, profiles};
-use super::{Detection, Detector};
+use super::{Detection, Detector, shifted_homography};
 use crate::image::ImageView;
 use crate::tone::{FrameToneFit, GAMMA_SEARCH};
 use jawtrack_tag_family::TagFamily;
@@ -84,18 +84,7 @@ pub(super) fn fit_tone_through(
     for d in dets {
         let Some(bitmap) = family.bitmap(d.id) else { continue };
         // The border model works in C's pixel convention, the detections in ours.
-        let h = d.homography;
-        let h = [
-            h[0] + 0.5 * h[6],
-            h[1] + 0.5 * h[7],
-            h[2] + 0.5 * h[8],
-            h[3] + 0.5 * h[6],
-            h[4] + 0.5 * h[7],
-            h[5] + 0.5 * h[8],
-            h[6],
-            h[7],
-            h[8],
-        ];
+        let h = shifted_homography(&d.homography, 0.5, 0.5);
         let places = along(bitmap.width(), &ALONG_BLUR);
         for k in 0..4 {
             let Some(profiles) = profiles(&h, &bitmap, k, &places) else { continue };

@@ -106,29 +106,7 @@ impl Patch {
             row.copy_from_slice(&frame.row(y0 + y)[x0..x0 + w]);
         }
         let (ox, oy) = (x0 as f64, y0 as f64);
-        let dets = dets
-            .iter()
-            .map(|d| {
-                let h = d.homography;
-                Detection {
-                    center: [d.center[0] - ox, d.center[1] - oy],
-                    corners: d.corners.map(|p| [p[0] - ox, p[1] - oy]),
-                    // Pixels' = pixels − offset.
-                    homography: [
-                        h[0] - ox * h[6],
-                        h[1] - ox * h[7],
-                        h[2] - ox * h[8],
-                        h[3] - oy * h[6],
-                        h[4] - oy * h[7],
-                        h[5] - oy * h[8],
-                        h[6],
-                        h[7],
-                        h[8],
-                    ],
-                    ..*d
-                }
-            })
-            .collect();
+        let dets = dets.iter().map(|d| d.shifted(-ox, -oy)).collect();
         Patch { pixels, dets }
     }
 
