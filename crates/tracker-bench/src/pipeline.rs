@@ -1,11 +1,11 @@
 //! `jawtrack-bench pipeline`: time per frame of the whole tracking pipeline and of its stages
 //! (tag detection, pose), at 1080p and 4K, searching every frame whole and tracking in the
 //! steady state (searching the region where the markers are expected, or looking for each tag
-//! where the poses predict it), with 1 and 2 detector threads;
-//! the detector's own stages (threshold, components, clusters, quads, tags); every frame of a
-//! long take, for the slowest (a frame that pays for more than detection stalls the stream); and the PnP
-//! time per body, ours beside OpenCV's solvePnP (SQPnP, ITERATIVE) on the same
-//! correspondences when Python with OpenCV is installed.
+//! where the poses predict it), with 1 and 2 detector threads; the detector's own stages
+//! (threshold, components, clusters, quads, tags); every frame of a long take, for the slowest
+//! (a frame that pays for more than detection stalls the stream); and the PnP time per body,
+//! ours beside OpenCV's solvePnP (SQPnP, ITERATIVE) on the same correspondences when Python
+//! with OpenCV is installed.
 //!
 //! Frames are a hinge opening rendered with the default realism (noise, blur, sRGB), 30
 //! frames/s, so consecutive frames move as a real recording does. Each pass over the frames

@@ -363,8 +363,7 @@ impl Tracker {
                 // The region, or the whole frame searched periodically while both bodies are
                 // tracked: a tag that comes into view is of the size of those tracked.
                 let tracked = expected.is_some() || (self.config.search.region_search && self.both_tracked(t));
-                let coarse = tracked.then(|| self.coarse_decimation(camera, t)).flatten();
-                let min_quad = tracked.then(|| self.min_quad_px(camera, t)).flatten().unwrap_or(0.0);
+                let (coarse, min_quad) = if tracked { self.tracked_search(camera, t) } else { (None, 0.0) };
                 let mut d = self.detect(frame, expected, smeared, (coarse, min_quad))?;
                 stages = stages + self.detector.last_stages();
                 if coarse.is_some() && self.lost_a_tag(&d) {

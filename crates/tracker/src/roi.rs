@@ -328,42 +328,38 @@ impl Tracker {
         out
     }
 
-    /// The shortest a quad's longest side may be (px) for a search while both bodies are
-    /// tracked to try it ([`jawtrack_apriltag::Search::min_quad_px`]):
-    /// [`MIN_QUAD_OF_SMALLEST_TAG`] of the smallest longest side among the tags the bodies
-    /// were solved from in the last frame, predicted at `t`. `None` when one cannot be
-    /// predicted.
-    pub(crate) fn min_quad_px(&self, camera: &CameraIntrinsics, t: f64) -> Option<f64> {
-        let mut smallest = f64::INFINITY;
-        for b in &self.bodies {
-            let pose = b.predict(t)?;
-            for &id in &b.tags {
-                let (_, tag) = self.marker.find_tag(id)?;
-                smallest = smallest.min(sides_px(&pose, &tag.corners, camera)?.into_iter().fold(0.0, f64::max));
-            }
-        }
-        smallest.is_finite().then_some(MIN_QUAD_OF_SMALLEST_TAG * smallest)
+    /// How a search while the bodies are tracked finds quads, judged by the tags the bodies
+    /// were solved from in the last frame, predicted at `t`: at the coarser decimation
+    /// ([`COARSE_DECIMATION`]) when every such tag's shortest side is at least
+    /// [`COARSE_MIN_SIDE_SHARP_PX`] ([`COARSE_MIN_SIDE_PX`] after a frame with a tag blurred
+    /// more than [`MAX_PREDICTED_BLUR_PX`]) and the settings' decimation is finer; trying only
+    /// the quads whose longest side is at least [`MIN_QUAD_OF_SMALLEST_TAG`] of the smallest
+    /// longest side among those tags ([`jawtrack_apriltag::Search::min_quad_px`]). `(None,
+    /// 0.0)`, the settings' decimation and every quad, when a tag cannot be predicted.
+    pub(crate) fn tracked_search(&self, camera: &CameraIntrinsics, t: f64) -> (Option<f32>, f64) {
+        let Some((shortest, longest)) = self.smallest_sides(camera, t) else { return (None, 0.0) };
+        let min_side = if self.blurred { COARSE_MIN_SIDE_PX } else { COARSE_MIN_SIDE_SHARP_PX };
+        let coarse = self.config.search.pyramid
+            && self.config.detector.quad_decimate < COARSE_DECIMATION
+            && shortest >= min_side;
+        (coarse.then_some(COARSE_DECIMATION), MIN_QUAD_OF_SMALLEST_TAG * longest)
     }
 
-    /// The coarser decimation ([`COARSE_DECIMATION`]) a region search may find quads at:
-    /// when every tag the bodies were solved from in the last frame is predicted at `t` with
-    /// its shortest side at least [`COARSE_MIN_SIDE_SHARP_PX`] ([`COARSE_MIN_SIDE_PX`] after a
-    /// frame with a tag blurred more than [`MAX_PREDICTED_BLUR_PX`]). `None` when the settings'
-    /// decimation is as coarse, or a tag is smaller or cannot be predicted.
-    pub(crate) fn coarse_decimation(&self, camera: &CameraIntrinsics, t: f64) -> Option<f32> {
-        if !self.config.search.pyramid || self.config.detector.quad_decimate >= COARSE_DECIMATION {
-            return None;
-        }
-        let mut smallest = f64::INFINITY;
+    /// The smallest shortest side and the smallest longest side (px) among the tags the
+    /// bodies were solved from in the last frame, predicted at `t`; `None` when there are
+    /// none or one cannot be predicted.
+    fn smallest_sides(&self, camera: &CameraIntrinsics, t: f64) -> Option<(f64, f64)> {
+        let (mut shortest, mut longest) = (f64::INFINITY, f64::INFINITY);
         for b in &self.bodies {
             let pose = b.predict(t)?;
             for &id in &b.tags {
                 let (_, tag) = self.marker.find_tag(id)?;
-                smallest = smallest.min(shortest_side_px(&pose, &tag.corners, camera)?);
+                let sides = sides_px(&pose, &tag.corners, camera)?;
+                shortest = shortest.min(sides.into_iter().fold(f64::INFINITY, f64::min));
+                longest = longest.min(sides.into_iter().fold(0.0, f64::max));
             }
         }
-        let min_side = if self.blurred { COARSE_MIN_SIDE_PX } else { COARSE_MIN_SIDE_SHARP_PX };
-        (smallest.is_finite() && smallest >= min_side).then_some(COARSE_DECIMATION)
+        shortest.is_finite().then_some((shortest, longest))
     }
 }
 
