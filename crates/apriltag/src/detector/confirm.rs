@@ -48,6 +48,13 @@ const SIDE_CHANGE: f64 = 1.0 / 16.0;
 /// short, and put the jaw 0.14 mm further off.
 const SIDE_MOVE_PX: f64 = PULL_IN_DECIMATE as f64 + 1.0;
 
+/// The box searched for a tag tries only the quads whose longest side is at least this share of
+/// the tag's predicted longest side ([`Search::min_quad_px`]): a tag turning into view keeps at
+/// least 0.7 of its face-on width along its longest side, and the prediction's own error in a
+/// side is a few per cent, while the quads a tag's data cells make are a few cells of its
+/// eight across. The tracker's region search passes them over by the same rule.
+const MIN_QUAD_OF_PREDICTED: f64 = 0.5;
+
 /// The box searched around a tag predicted for searching ([`Expected::search`]), or whose
 /// refitted quad did not hold it, reaches this far beyond its predicted corners (px) …
 const BOX_MARGIN_PX: f64 = 24.0;
@@ -62,7 +69,8 @@ impl Detector {
     /// within a sixteenth of the predicted ones and none moved more than 4 px (the first
     /// refit's reach); a tag to be searched
     /// ([`Expected::search`]), or whose quad was not kept, is looked for in a box around its
-    /// prediction as [`Detector::search`] looks in a region. Then the border fit, as
+    /// prediction as [`Detector::search`] looks in a region, among the quads at least half its
+    /// predicted size. Then the border fit, as
     /// [`Detector::search`] does. A tag predicted off by more than the box's margin, hidden,
     /// or turned away is missing from the result: a tracker searches again
     /// ([`Detector::search`]) when a tag it needs is missing. Tags predicted with a corner
@@ -131,8 +139,12 @@ impl Detector {
                         return Ok((found, st));
                     }
                 }
-                let search =
-                    Search { roi: Some(job.around), smeared, quad_decimate: c.quad_decimate, min_quad_px: 0.0 };
+                let search = Search {
+                    roi: Some(job.around),
+                    smeared,
+                    quad_decimate: c.quad_decimate,
+                    min_quad_px: MIN_QUAD_OF_PREDICTED * job.expected.longest_side(),
+                };
                 let (found, searched) = self.detect_region(frame, &search, lut, &serial)?;
                 Ok((found.into_iter().find(|d| d.id == job.expected.id), st + searched))
             });
@@ -159,6 +171,14 @@ struct Job {
     expected: Expected,
     quad: Option<Quad>,
     around: Roi,
+}
+
+impl Expected {
+    /// The longest of the predicted quad's sides (px).
+    fn longest_side(&self) -> f64 {
+        let c = &self.corners;
+        (0..4).map(|i| (c[(i + 1) % 4][0] - c[i][0]).hypot(c[(i + 1) % 4][1] - c[i][1])).fold(0.0, f64::max)
+    }
 }
 
 impl Job {
@@ -199,9 +219,9 @@ fn around(e: &Expected, frame: &ImageView<'_>) -> Roi {
 
 #[cfg(test)]
 mod tests {
-    use super::Expected;
+    use super::{Expected, around};
     use crate::detector::border::tests::drawn_through;
-    use crate::{Detection, Detector, DetectorConfig, ImageView, ToneCurve};
+    use crate::{Detection, Detector, DetectorConfig, ImageView, Search, ToneCurve, ToneSetting};
 
     /// A predicted quad a few pixels off is pulled onto the tag and reads as the search reads
     /// it; one five or more pixels off, or one asked to be searched, is found in the box around
@@ -263,5 +283,27 @@ mod tests {
         let outside = Expected { id: 7, corners: moved(-found.center[0] - 5.0, 0.0, 0.0, 1.0), search: false };
         assert!(detector.confirm(&view, &[outside], false).expect("runs").is_empty());
         assert_eq!(detector.last_stages().quads, 0, "a quad leaving the frame is not tried");
+    }
+
+    /// A box searched for a predicted tag passes over the quads its data cells make (tag 0's
+    /// make one at 12 px cells), and finds the tag as the same box searched with every quad
+    /// tried.
+    #[test]
+    fn a_box_searched_for_a_tag_tries_no_quad_under_half_its_size() {
+        let (img, n, _) = drawn_through(0, 12.0, 12.0, 1.0, 0.8, 1.0, ToneCurve::Srgb);
+        let view = ImageView::new(&img, n, n, n).expect("view");
+        let config = DetectorConfig { tone: ToneSetting::Fixed(ToneCurve::Srgb), ..DetectorConfig::default() };
+        let detector = Detector::new(config).expect("valid");
+        let [found] = detector.detect(&view).expect("runs")[..] else { panic!("one tag") };
+        let expected = Expected { id: 0, corners: found.corners, search: true };
+        let [boxed] = detector.confirm(&view, &[expected], false).expect("runs")[..] else { panic!("boxed: one tag") };
+        let tried = detector.last_stages().quads;
+        let every =
+            Search { roi: Some(around(&expected, &view)), smeared: false, quad_decimate: 2.0, min_quad_px: 0.0 };
+        let all = detector.search(&view, &every).expect("runs");
+        let all_tried = detector.last_stages().quads;
+        assert_eq!(tried, 1, "the tag's quad only");
+        assert!(all_tried > tried, "the data cells make quads of their own: {all_tried} tried");
+        assert_eq!(all.iter().filter(|d| d.id == 0).collect::<Vec<_>>(), [&boxed]);
     }
 }
