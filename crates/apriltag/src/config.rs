@@ -90,8 +90,8 @@ pub struct DetectorConfig {
     /// tags the window otherwise takes in the next edge out (white border to a brighter
     /// background) and pulls the side outward by 1–2 px; the window is split so only on sides
     /// whose gradient profile, summed along the side, shows two edges (one sample's profile on
-    /// a dim, blurred grazing tag dips by noise alone). `false` reproduces the C library
-    /// exactly.
+    /// a dim, blurred grazing tag dips by noise alone); (5) passing over the quads a decoded
+    /// tag's data cells make. `false` reproduces the C library exactly.
     pub linear_edges: bool,
     /// With `linear_edges`, the curve the camera encoded frames with, undone to fit edges in
     /// linear light. A curve that is not the camera's moves every blurred edge toward one side

@@ -23,6 +23,7 @@ use tone_refit::PendingFit;
 mod border;
 mod confirm;
 mod edges;
+mod nested;
 mod per_quad;
 mod stages;
 mod tone_fit;
@@ -398,8 +399,22 @@ impl Detector {
         if search.min_quad_px > 0.0 {
             quads.retain(|q| longest_side(q) >= search.min_quad_px);
         }
-        st.quads = quads.len();
-        let dets = workers.filter_map(&quads, |q| self.tag_from_quad(im, q, decimate, lut, smeared));
+        let tag = |q: &Quad| self.tag_from_quad(im, q, decimate, lut, smeared);
+        let dets = if c.linear_edges {
+            // The quads nested in a larger one wait, and those a decoded tag holds (its data
+            // cells') are passed over; the tags come out in the quads' order as before.
+            let (first, nested) = nested::split(&quads);
+            let mut found = workers.filter_map(&first, |&i| tag(&quads[i]).map(|d| (i, d)));
+            let nested: Vec<usize> =
+                nested.into_iter().filter(|&i| !nested::held_by_a_tag(&quads[i], &found)).collect();
+            st.quads = first.len() + nested.len();
+            found.extend(workers.filter_map(&nested, |&i| tag(&quads[i]).map(|d| (i, d))));
+            found.sort_by_key(|&(i, _)| i);
+            found.into_iter().map(|(_, d)| d).collect()
+        } else {
+            st.quads = quads.len();
+            workers.filter_map(&quads, tag)
+        };
         st.tags_s = clock.lap();
         let dets = finish(dets);
         st.finish_s = clock.lap();

@@ -24,7 +24,8 @@ pub struct StageTimes {
     pub finish_s: f64,
     /// Clusters found.
     pub clusters: usize,
-    /// Quads fitted, or predicted.
+    /// Quads tried (given the per-quad work), or predicted: those fitted but for the ones
+    /// passed over (shorter than [`super::Search::min_quad_px`], or a decoded tag's data cells).
     pub quads: usize,
     /// Of `quads`, those a tracker predicted ([`super::Detector::confirm`]) rather than the
     /// image stages found.

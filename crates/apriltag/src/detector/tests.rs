@@ -324,3 +324,18 @@ fn quads_shorter_than_asked_are_not_tried() {
     assert!(d.search(&view, &search(130.0)).expect("runs").is_empty(), "none as long as 130 px");
     assert_eq!(d.last_stages().quads, 0);
 }
+
+#[test]
+fn the_quads_a_decoded_tags_data_cells_make_are_passed_over() {
+    // Tag 0 with 12 px cells: a block of its data cells makes a quad of its own.
+    let (img, n, _) = super::border::tests::drawn_through(0, 12.0, 12.0, 1.0, 0.8, 1.0, crate::ToneCurve::Srgb);
+    let view = ImageView::new(&img, n, n, n).expect("view");
+    let mut tried = Vec::new();
+    for linear_edges in [false, true] {
+        let d = Detector::new(DetectorConfig { linear_edges, ..DetectorConfig::default() }).expect("valid");
+        let found = d.detect(&view).expect("runs");
+        assert_eq!(found.iter().map(|t| t.id).collect::<Vec<_>>(), [0], "linear edges {linear_edges}");
+        tried.push(d.last_stages().quads);
+    }
+    assert_eq!(tried, [2, 1], "quads tried: C's edge fit tries every quad, ours not the data cells'");
+}
