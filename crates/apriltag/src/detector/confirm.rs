@@ -6,7 +6,7 @@
 use super::edges::refine_edges;
 use super::per_quad::finish;
 use super::stages::StageTimes;
-use super::{Detection, Detector, Search};
+use super::{Detection, Detector, Search, longest_side_of};
 use crate::DetectError;
 use crate::config::Roi;
 use crate::image::ImageView;
@@ -143,7 +143,7 @@ impl Detector {
                     roi: Some(job.around),
                     smeared,
                     quad_decimate: c.quad_decimate,
-                    min_quad_px: MIN_QUAD_OF_PREDICTED * job.expected.longest_side(),
+                    min_quad_px: MIN_QUAD_OF_PREDICTED * longest_side_of(&job.expected.corners),
                 };
                 let (found, searched) = self.detect_region(frame, &search, lut, &serial)?;
                 Ok((found.into_iter().find(|d| d.id == job.expected.id), st + searched))
@@ -171,14 +171,6 @@ struct Job {
     expected: Expected,
     quad: Option<Quad>,
     around: Roi,
-}
-
-impl Expected {
-    /// The longest of the predicted quad's sides (px).
-    fn longest_side(&self) -> f64 {
-        let c = &self.corners;
-        (0..4).map(|i| (c[(i + 1) % 4][0] - c[i][0]).hypot(c[(i + 1) % 4][1] - c[i][1])).fold(0.0, f64::max)
-    }
 }
 
 impl Job {
@@ -287,8 +279,8 @@ mod tests {
 
     /// A box searched for a predicted tag passes over the quads its data cells make (tag 0's
     /// make one at 12 px cells), and finds the tag as the same box searched with every quad
-    /// tried. With C's edge fit, which passes over no quad a decoded tag holds, so that the
-    /// floor alone is seen.
+    /// tried. Run with C's edge fit, which tries the quads a decoded tag holds, so that only
+    /// the floor passes them over.
     #[test]
     fn a_box_searched_for_a_tag_tries_no_quad_under_half_its_size() {
         let (img, n, _) = drawn_through(0, 12.0, 12.0, 1.0, 0.8, 1.0, ToneCurve::Srgb);

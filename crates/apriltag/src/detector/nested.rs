@@ -4,7 +4,7 @@
 //! the quads that lie inside no larger quad first, and then only those nested quads that no
 //! decoded tag holds. The tags found are the same; C's edge fit tries every quad, as C does.
 
-use super::Detection;
+use super::{Detection, longest_side_of};
 use crate::quads::Quad;
 
 /// A quad is nested in another when its longest side is at most this share of the other's:
@@ -17,14 +17,10 @@ fn corners(q: &Quad) -> [[f64; 2]; 4] {
     q.p.map(|p| p.map(f64::from))
 }
 
-fn longest_side(c: &[[f64; 2]; 4]) -> f64 {
-    (0..4).map(|i| (c[(i + 1) % 4][0] - c[i][0]).hypot(c[(i + 1) % 4][1] - c[i][1])).fold(0.0, f64::max)
-}
-
 /// Whether every corner of `inner` lies inside the quad `outer` (convex, either winding) and
 /// `inner`'s longest side is at most [`NESTED_SIDE_SHARE`] of `outer`'s.
 fn nested_in(inner: &[[f64; 2]; 4], outer: &[[f64; 2]; 4]) -> bool {
-    if longest_side(inner) > NESTED_SIDE_SHARE * longest_side(outer) {
+    if longest_side_of(inner) > NESTED_SIDE_SHARE * longest_side_of(outer) {
         return false;
     }
     let cross = |a: [f64; 2], b: [f64; 2], p: [f64; 2]| (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
