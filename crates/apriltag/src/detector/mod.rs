@@ -482,12 +482,12 @@ fn with_border_fit(im: &ImageView<'_>, lut: &[f64; 256], family: &TagFamily, d: 
     Detection { corners, center: [cx, cy], homography, ..measured }
 }
 
-/// The longest side of `q` (px).
 /// The longest side (px) of the quad with corners `c`.
 fn longest_side_of(c: &[[f64; 2]; 4]) -> f64 {
     (0..4).map(|i| (c[(i + 1) % 4][0] - c[i][0]).hypot(c[(i + 1) % 4][1] - c[i][1])).fold(0.0, f64::max)
 }
 
+/// The longest side of `q` (px), computed in the quad's own `f32`.
 fn longest_side(q: &Quad) -> f64 {
     (0..4)
         .map(|i| f64::from((q.p[(i + 1) % 4][0] - q.p[i][0]).hypot(q.p[(i + 1) % 4][1] - q.p[i][1])))
