@@ -4,14 +4,11 @@
 
 use crate::model::Pattern;
 use jawtrack_pose::Pose;
-use nalgebra::{Matrix2, Matrix2x3, Matrix2x6, Matrix3, Matrix3x2, Matrix3x6, SVector, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, SVector, Vector2, Vector3};
 
-/// The tag's plane at one instant, in the camera frame, with the map from a normalised
-/// direction to tag coordinates.
+/// The tag's plane at one instant, in the camera frame: the map from a normalised direction
+/// (n, 1) to tag coordinates (tx, ty, 1), up to scale.
 pub(crate) struct Plane {
-    pub(crate) centre: Vector3<f64>,
-    pub(crate) x: Vector3<f64>,
-    pub(crate) y: Vector3<f64>,
     pub(crate) to_tag: Matrix3<f64>,
 }
 
@@ -33,7 +30,7 @@ pub(crate) fn plane(pose: &Pose, centre: &Vector3<f64>, x: &Vector3<f64>, y: &Ve
     // A normalised direction n is the image of tag coordinates (tx, ty) where
     // centre + tx·x + ty·y ∝ (n, 1): the columns (x, y, centre) map (tx, ty, 1) to it.
     let to_tag = Matrix3::from_columns(&[x, y, centre]).try_inverse()?;
-    Some(Plane { centre, x, y, to_tag })
+    Some(Plane { to_tag })
 }
 
 /// The tag coordinates (tx, ty) that the normalised direction `n` looks at on the plane whose
@@ -43,27 +40,47 @@ pub(crate) fn to_tag(to_tag: &Matrix3<f64>, n: &Vector2<f64>) -> Option<(f64, f6
     (m.z.abs() > 1e-12).then(|| (m.x / m.z, m.y / m.z))
 }
 
-/// Whether the point at tag coordinates (tx, ty) on `plane` is within `band` (normalised units)
+/// Whether the pixel looking along `n` sees a point of `plane` within `band` (normalised units)
 /// of an edge of the pattern, each way along the tag's axes: whether the cells about it hold
-/// both ink and paper. `false` where the plane is behind the camera or edge-on.
-pub(crate) fn near_edge(plane: &Plane, pattern: &Pattern, tx: f64, ty: f64, band: f64, half: f64) -> bool {
-    let Some((_, _, j)) = local(plane, tx, ty) else { return false };
-    let (ru, rv) = (half * band * j.row(0).norm(), half * band * j.row(1).norm());
-    pattern.mixed((tx + 1.0) * half, (ty + 1.0) * half, ru, rv)
+/// both ink and paper. `false` where the plane is behind the camera.
+pub(crate) fn near_edge(plane: &Plane, pattern: &Pattern, n: &Vector2<f64>, band: f64, half: f64) -> bool {
+    let Some(l) = Local::at(plane, n) else { return false };
+    let (ru, rv) = (half * band * l.j.row(0).norm(), half * band * l.j.row(1).norm());
+    pattern.mixed((l.tx + 1.0) * half, (l.ty + 1.0) * half, ru, rv)
 }
 
-/// The plane's point at tag coordinates (tx, ty) in the camera frame, d(normalised)/d(camera
-/// point) there, and the map from a normalised direction's change to the tag coordinates'
-/// change; `None` behind the camera or edge-on.
-fn local(plane: &Plane, tx: f64, ty: f64) -> Option<(Vector3<f64>, Matrix2x3<f64>, Matrix2<f64>)> {
-    let x = plane.centre + plane.x * tx + plane.y * ty;
-    if x.z <= 0.0 {
-        return None;
+/// Where a pixel's ray meets the plane, and how that point moves as the ray turns.
+struct Local {
+    /// Tag coordinates.
+    tx: f64,
+    ty: f64,
+    /// The point in the camera frame.
+    x: Vector3<f64>,
+    /// d(tx, ty)/d(normalised direction).
+    j: Matrix2<f64>,
+}
+
+impl Local {
+    /// Where the ray along `n` meets `plane`; `None` behind the camera or along the plane.
+    fn at(plane: &Plane, n: &Vector2<f64>) -> Option<Local> {
+        // m = to_tag·(n, 1) is (tx, ty, 1) scaled by 1/depth: the columns of to_tag's inverse
+        // take (tx, ty, 1) to the point, and the point is (n, 1) times its depth.
+        let a = &plane.to_tag;
+        let m = a * Vector3::new(n.x, n.y, 1.0);
+        if m.z <= 1e-12 || m.z.is_nan() {
+            return None;
+        }
+        let depth = 1.0 / m.z;
+        let (tx, ty) = (m.x * depth, m.y * depth);
+        // The homography's own derivative.
+        let j = Matrix2::new(
+            (a[(0, 0)] - tx * a[(2, 0)]) * depth,
+            (a[(0, 1)] - tx * a[(2, 1)]) * depth,
+            (a[(1, 0)] - ty * a[(2, 0)]) * depth,
+            (a[(1, 1)] - ty * a[(2, 1)]) * depth,
+        );
+        Some(Local { tx, ty, x: Vector3::new(n.x, n.y, 1.0) * depth, j })
     }
-    let iz = 1.0 / x.z;
-    let dpi = Matrix2x3::new(iz, 0.0, -x.x * iz * iz, 0.0, iz, -x.y * iz * iz);
-    let j = (dpi * Matrix3x2::from_columns(&[plane.x, plane.y])).try_inverse()?;
-    Some((x, dpi, j))
 }
 
 /// What the pixel looking along `n` sees of a tag on `plane`: the paper, and (with
@@ -76,28 +93,26 @@ pub(crate) fn look(
     half: f64,
     jacobian: bool,
 ) -> Option<Seen> {
-    let (tx, ty) = to_tag(&plane.to_tag, n)?;
-    let (x, dpi, j) = local(plane, tx, ty)?;
+    let l = Local::at(plane, n)?;
     // The blur carried onto the plane, per axis, in cells.
-    let su = half * sigma * j.row(0).norm();
-    let sv = half * sigma * j.row(1).norm();
-    let (u, v) = ((tx + 1.0) * half, (ty + 1.0) * half);
-    let m = pattern.paper(u, v, su, sv);
+    let su = half * sigma * l.j.row(0).norm();
+    let sv = half * sigma * l.j.row(1).norm();
+    let m = pattern.paper((l.tx + 1.0) * half, (l.ty + 1.0) * half, su, sv);
     let mut d = Looked::zeros();
     if jacobian && (m.du != 0.0 || m.dv != 0.0 || m.dsu != 0.0 || m.dsv != 0.0) {
-        // The point on the plane a fixed pixel sees moves by −J·Dπ·dx when the plane's point x
-        // moves by dx; a left perturbation moves x by −[x]×·ω + τ.
-        let mut dx = Matrix3x6::zeros();
-        dx.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-x.cross_matrix()));
-        dx.fixed_view_mut::<3, 3>(0, 3).copy_from(&Matrix3::identity());
-        let d_tag: Matrix2x6<f64> = -(j * dpi * dx) * half;
-        // The blur carried onto the plane grows with the point's depth (nearly as it: the
-        // plane's tilt changes little over a step).
-        let d_depth = dx.row(2) / x.z;
-        let d_pose = d_tag.transpose() * Vector2::new(m.du, m.dv) + (d_depth * (m.dsu * su + m.dsv * sv)).transpose();
-        d.fixed_rows_mut::<6>(0).copy_from(&d_pose);
+        // The paper's slope by the direction looked along, in cells.
+        let by_n = l.j.transpose() * Vector2::new(m.du, m.dv) * half;
+        // Moving the plane's point x by dx moves the point a fixed pixel sees as turning the
+        // ray by −Dπ·dx would (π the projection); the blur carried onto the plane also grows
+        // with the point's depth (nearly as it: the plane's tilt changes little over a step).
+        let blur = m.dsu * su + m.dsv * sv;
+        let iz = 1.0 / l.x.z;
+        let by_x = Vector3::new(-by_n.x * iz, -by_n.y * iz, (by_n.x * n.x + by_n.y * n.y + blur) * iz);
+        // A left perturbation (ω, τ) moves x by ω × x + τ.
+        d.fixed_rows_mut::<3>(0).copy_from(&l.x.cross(&by_x));
+        d.fixed_rows_mut::<3>(3).copy_from(&by_x);
         // By σ (normalised units): the spreads grow in proportion.
-        d[6] = (m.dsu * su + m.dsv * sv) / sigma;
+        d[6] = blur / sigma;
     }
     Some(Seen { paper: m.value, d })
 }

@@ -96,10 +96,12 @@ impl State {
 
 /// Parameters shared by the tags: the pose's six, the blur and the tone's power.
 const SHARED: usize = 8;
-type Shared = SVector<f64, SHARED>;
 /// Parameters of each tag: its ink and its contrast.
 const PER_TAG: usize = 2;
-type PerTag = SVector<f64, PER_TAG>;
+/// One tag's parameters: the shared ones, then its own.
+const BLOCK: usize = SHARED + PER_TAG;
+type Block = SMatrix<f64, BLOCK, BLOCK>;
+type BlockVector = SVector<f64, BLOCK>;
 
 /// Refines `start`, the body's pose at the frame's time, from the pixels of its tags.
 pub fn refine(body: &Body<'_>, start: &Pose, options: &Options) -> Result<Refined, RefineError> {
@@ -296,7 +298,7 @@ fn gather(
                 continue;
             }
             let sample = (col, Sample { row, normalised: n, linear: image.linear[usize::from(v)] });
-            let near = near_edge(&plane, &pattern, tx, ty, band, half);
+            let near = near_edge(&plane, &pattern, &n, band, half);
             if near {
                 edge.push(sample);
             } else if col.is_multiple_of(FLAT_STRIDE) && row.is_multiple_of(FLAT_STRIDE) {
@@ -606,27 +608,22 @@ impl Fit<'_> {
         let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
         for (k, (t, l)) in self.pixels.iter().zip(&s.levels).enumerate() {
-            let (mut hss, mut hsl, mut hll) = (
-                SMatrix::<f64, SHARED, SHARED>::zeros(),
-                SMatrix::<f64, SHARED, PER_TAG>::zeros(),
-                SMatrix::<f64, PER_TAG, PER_TAG>::zeros(),
-            );
-            let (mut gs, mut gl) = (Shared::zeros(), PerTag::zeros());
+            // The tag's block: the shared parameters, then its own levels. Only the lower
+            // triangle is summed.
+            let (mut ht, mut gt) = (Block::zeros(), BlockVector::zeros());
             // The sums run on from the tags before, and are kept only if the tag is seen whole.
             let (mut tag_sq, mut tag_weighted_sq, mut tag_cost) = (sq, weighted_sq, cost);
             let whole = self.each_seen(t, &s.pose, s.sigma_px, true, |px, m| {
                 let (model, by_light, by_gamma) = s.predict(k, m.paper);
                 let r = px.linear - model;
                 let (w, c) = weights(r, model);
-                let mut js = Shared::zeros();
-                js.fixed_rows_mut::<7>(0).copy_from(&(m.d * (-by_light * l[1])));
-                js[7] = -by_gamma;
-                let jl = PerTag::new(-by_light, -by_light * m.paper);
-                hss += js * js.transpose() * c;
-                hsl += js * jl.transpose() * c;
-                hll += jl * jl.transpose() * c;
-                gs += js * (w * r);
-                gl += jl * (w * r);
+                let mut j = BlockVector::zeros();
+                j.fixed_rows_mut::<7>(0).copy_from(&(m.d * (-by_light * l[1])));
+                j[7] = -by_gamma;
+                j[SHARED] = -by_light;
+                j[SHARED + 1] = -by_light * m.paper;
+                ht.syger(c, &j, &j, 1.0);
+                gt.axpy(w * r, &j, 1.0);
                 tag_sq += r * r;
                 tag_weighted_sq += w * r * r;
                 tag_cost += rho(r, huber);
@@ -636,13 +633,14 @@ impl Fit<'_> {
                 continue;
             }
             (sq, weighted_sq, cost) = (tag_sq, tag_weighted_sq, tag_cost);
+            ht.fill_upper_triangle_with_lower_triangle();
             let o = SHARED + PER_TAG * k;
-            h.view_mut((0, 0), (SHARED, SHARED)).add_assign(&hss);
-            h.view_mut((0, o), (SHARED, PER_TAG)).add_assign(&hsl);
-            h.view_mut((o, 0), (PER_TAG, SHARED)).add_assign(&hsl.transpose());
-            h.view_mut((o, o), (PER_TAG, PER_TAG)).add_assign(&hll);
-            g.rows_mut(0, SHARED).add_assign(&gs);
-            g.rows_mut(o, PER_TAG).add_assign(&gl);
+            h.view_mut((0, 0), (SHARED, SHARED)).add_assign(&ht.fixed_view::<SHARED, SHARED>(0, 0));
+            h.view_mut((0, o), (SHARED, PER_TAG)).add_assign(&ht.fixed_view::<SHARED, PER_TAG>(0, SHARED));
+            h.view_mut((o, 0), (PER_TAG, SHARED)).add_assign(&ht.fixed_view::<PER_TAG, SHARED>(SHARED, 0));
+            h.view_mut((o, o), (PER_TAG, PER_TAG)).add_assign(&ht.fixed_view::<PER_TAG, PER_TAG>(SHARED, SHARED));
+            g.rows_mut(0, SHARED).add_assign(&gt.fixed_rows::<SHARED>(0));
+            g.rows_mut(o, PER_TAG).add_assign(&gt.fixed_rows::<PER_TAG>(SHARED));
         }
         Normal { h, g, sq, weighted_sq, cost }
     }
