@@ -131,20 +131,27 @@ impl Axis {
         if x.is_nan() {
             return None; // a point at no place
         }
-        let lo = floor(x - REACH * s).max(0);
-        let hi = floor(x + REACH * s).min(n as i64 - 1);
+        let (first, last) = (floor(x - REACH * s), floor(x + REACH * s));
+        let (lo, hi) = (first.max(0), last.min(n as i64 - 1));
         if lo > hi {
             return None;
         }
         let (i0, i1) = (lo as usize, hi as usize);
-        let z0 = (i0 as f64 - x) / s;
-        let (mut f0, mut p0, mut z0) = {
-            let (f, p) = cdf_pdf(z0);
-            (f, p, z0)
+        // A boundary of the window beyond the reach adds nothing: Φ there is taken as 0 (below)
+        // or 1 (above) and φ as 0. Only the boundaries within reach are looked up: those
+        // between the cells, and the square's own edges where the window meets them.
+        let boundary = |b: usize, beyond: bool, f: f64| {
+            if beyond {
+                (f, 0.0, 0.0)
+            } else {
+                let z = (b as f64 - x) / s;
+                let (f, p) = cdf_pdf(z);
+                (f, p, z)
+            }
         };
+        let (mut f0, mut p0, mut z0) = boundary(i0, first >= 0, 0.0);
         for i in i0..=i1 {
-            let z1 = (i as f64 + 1.0 - x) / s;
-            let (f1, p1) = cdf_pdf(z1);
+            let (f1, p1, z1) = boundary(i + 1, i == i1 && last < n as i64, 1.0);
             self.w[i - i0] = f1 - f0;
             self.dx[i - i0] = (p0 - p1) / s;
             self.ds[i - i0] = (p0 * z0 - p1 * z1) / s;
