@@ -154,19 +154,20 @@ fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, Ref
     let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
     let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None, pose_fixed: false };
     let moving = modelled.then(|| Fit { camera, pixels: &pixels, times, motion, pose_fixed: false });
-    let (chosen, mut best) = match &moving {
-        None => (&still, still.run(begin, options)?),
+    let mut best = match &moving {
+        None => still.run(begin, options)?,
         Some(moving) => {
             let best = moving.run(begin, options)?;
             match still.run(begin, options) {
-                Ok(s) if s.cost < best.cost => (&still, s),
-                _ => (moving, best),
+                Ok(s) if s.cost < best.cost => s,
+                _ => best,
             }
         }
     };
     // The covariance is read from the reweighted normal equations (every pixel at its Huber
-    // weight), as the corner solver's: the fit's own give outliers no curvature.
-    best.normal = chosen.normal(&best.state, &|r, _| reweighted(r, best.huber), best.huber);
+    // weight), as the corner solver's: the fit's own give outliers no curvature. Its last
+    // evaluation summed those beside its own.
+    best.normal.h = std::mem::take(&mut best.normal.h_reweighted);
     Ok(best)
 }
 
@@ -191,7 +192,7 @@ pub fn bound(
     let (pixels, times) = setup(body, pose, fitted.state.sigma_px, options)?;
     fit.pixels = &pixels;
     fit.times = times;
-    let seen = fit.seen(pose, fitted.state.sigma_px, false);
+    let seen = fit.seen(pose, fitted.state.sigma_px, true);
     let levels = fit.levels(&seen).ok_or(RefineError::Singular)?;
     let state = State { levels, ..fitted.state };
     let information = fit.normal(
@@ -201,6 +202,7 @@ pub fn bound(
             (w, w)
         },
         f64::INFINITY,
+        Some(&seen),
     );
     let inverse = information.h.try_inverse().ok_or(RefineError::Singular)?;
     Ok(Matrix6::from_fn(|i, j| inverse[(i, j)]))
@@ -368,6 +370,8 @@ fn shift(camera: &CameraIntrinsics, a: &Pose, b: &Pose, tags: &[Tag<'_>]) -> f64
 #[derive(Clone)]
 struct Normal {
     h: DMatrix<f64>,
+    /// The curvature with each pixel at its weight in the gradient (for the covariance).
+    h_reweighted: DMatrix<f64>,
     g: DVector<f64>,
     /// Σ r² over the pixels.
     sq: f64,
@@ -388,8 +392,6 @@ struct Outcome {
     motion: bool,
     /// The pixels it compared.
     pixels: usize,
-    /// Huber's constant it used (linear light, 0–255).
-    huber: f64,
 }
 
 /// What the fit needs: the pixels, the optics and the motion.
@@ -407,8 +409,9 @@ impl Fit<'_> {
     /// The fit from `begin`: Levenberg–Marquardt with Huber weights on the residuals' robust
     /// scale there (the levels are fitted there first, by least squares).
     fn run(&self, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
-        // One pass of the model at the start gives the levels and the residuals' scale.
-        let seen = self.seen(&begin.pose, begin.sigma_px, false);
+        // One pass of the model at the start gives the levels, the residuals' scale and the
+        // first normal equations.
+        let seen = self.seen(&begin.pose, begin.sigma_px, true);
         let levels = self.levels(&seen).ok_or(RefineError::Singular)?;
         let mut state = State { pose: begin.pose, sigma_px: begin.sigma_px, gamma: begin.gamma, levels };
         let huber = options.huber * scale(self.residuals(&state, &seen)).max(MIN_SCALE);
@@ -419,7 +422,7 @@ impl Fit<'_> {
         let huber_weight = |r: f64, _: f64| (weight(r, huber), curvature(r, huber));
         // A state is evaluated with its normal equations at once: a step that is taken (most
         // are, near the minimum) is linearised next, from this.
-        let evaluated = RefCell::new((state.clone(), self.normal(&state, &huber_weight, huber)));
+        let evaluated = RefCell::new((state.clone(), self.normal(&state, &huber_weight, huber, Some(&seen))));
         let mut cost = evaluated.borrow().1.cost;
         let damping = Damping {
             initial: 1e-3,
@@ -441,7 +444,7 @@ impl Fit<'_> {
             &damping,
             |s| {
                 iterations += 1;
-                linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber)))
+                linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber, None)))
             },
             |s, n, lambda| {
                 let step = self.step(n, lambda, damping.diagonal_floor)?;
@@ -456,14 +459,14 @@ impl Fit<'_> {
                 Some(State { pose, sigma_px, gamma, levels: levels.collect() })
             },
             |s| {
-                let normal = self.normal(s, &huber_weight, huber);
+                let normal = self.normal(s, &huber_weight, huber, None);
                 let cost = normal.cost;
                 *evaluated.borrow_mut() = (s.clone(), normal);
                 cost
             },
         )
         .ok_or(RefineError::Singular)?;
-        let normal = linearise(&state).unwrap_or_else(|| self.normal(&state, &huber_weight, huber));
+        let normal = linearise(&state).unwrap_or_else(|| self.normal(&state, &huber_weight, huber, None));
         // Every linearisation used: the steps were still lowering the cost when they ran out.
         // Where there is next to no noise (a clean render) each step lowers it by a larger
         // fraction while moving the pose by next to nothing: settled, if the next step would
@@ -475,7 +478,7 @@ impl Fit<'_> {
             }
         }
         let pixels = self.pixels.iter().map(|t| t.samples.len()).sum();
-        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some(), pixels, huber })
+        Ok(Outcome { state, cost, iterations, normal, motion: self.motion.is_some(), pixels })
     }
 
     /// The damped Gauss–Newton step of the normal equations `n`: every parameter's, or, with the
@@ -600,20 +603,29 @@ impl Fit<'_> {
     }
 
     /// The normal equations at `s`, with each pixel's weights `weights(residual, model)`: its
-    /// weight in the gradient (Σ w r J) and in the curvature (Σ c J Jᵀ). With
-    /// Huber's cost (constant `huber`) of the residuals there: infinite where a tag is seen
-    /// edge-on, whose pixels are then left out of the equations.
-    fn normal(&self, s: &State, weights: &dyn Fn(f64, f64) -> (f64, f64), huber: f64) -> Normal {
+    /// weight in the gradient (Σ w r J) and in the curvature (Σ c J Jᵀ); beside them the
+    /// curvature at the gradient's weights (Σ w J Jᵀ). With Huber's cost (constant `huber`) of
+    /// the residuals there: infinite where a tag is seen edge-on, whose pixels are then left
+    /// out of the equations. The pixels' models are `seen` if given (made at `s` with their
+    /// derivatives), else made here.
+    fn normal(
+        &self,
+        s: &State,
+        weights: &dyn Fn(f64, f64) -> (f64, f64),
+        huber: f64,
+        seen: Option<&[Option<Vec<Seen>>]>,
+    ) -> Normal {
         let n = SHARED + PER_TAG * self.pixels.len();
-        let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
+        let (mut h, mut h_reweighted, mut g) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n), DVector::zeros(n));
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
         for (k, (t, l)) in self.pixels.iter().zip(&s.levels).enumerate() {
             // The tag's block: the shared parameters, then its own levels. Only the lower
-            // triangle is summed.
-            let (mut ht, mut gt) = (Block::zeros(), BlockVector::zeros());
+            // triangles are summed; `extra` holds what the pixels whose two weights differ
+            // (Huber's outliers) add to the reweighted curvature.
+            let (mut ht, mut extra, mut gt) = (Block::zeros(), Block::zeros(), BlockVector::zeros());
             // The sums run on from the tags before, and are kept only if the tag is seen whole.
             let (mut tag_sq, mut tag_weighted_sq, mut tag_cost) = (sq, weighted_sq, cost);
-            let whole = self.each_seen(t, &s.pose, s.sigma_px, true, |px, m| {
+            let mut add = |px: &Sample, m: Seen| {
                 let (model, by_light, by_gamma) = s.predict(k, m.paper);
                 let r = px.linear - model;
                 let (w, c) = weights(r, model);
@@ -623,27 +635,43 @@ impl Fit<'_> {
                 j[SHARED] = -by_light;
                 j[SHARED + 1] = -by_light * m.paper;
                 ht.syger(c, &j, &j, 1.0);
+                if w != c {
+                    extra.syger(w - c, &j, &j, 1.0);
+                }
                 gt.axpy(w * r, &j, 1.0);
                 tag_sq += r * r;
                 tag_weighted_sq += w * r * r;
                 tag_cost += rho(r, huber);
-            });
+            };
+            let whole = match seen {
+                Some(seen) => seen[k].as_ref().map(|m| t.samples.iter().zip(m).for_each(|(px, m)| add(px, *m))),
+                None => self.each_seen(t, &s.pose, s.sigma_px, true, &mut add),
+            };
             if whole.is_none() {
                 cost = f64::INFINITY;
                 continue;
             }
             (sq, weighted_sq, cost) = (tag_sq, tag_weighted_sq, tag_cost);
-            ht.fill_upper_triangle_with_lower_triangle();
+            extra += ht;
+            add_block(&mut h, &ht, k);
+            add_block(&mut h_reweighted, &extra, k);
             let o = SHARED + PER_TAG * k;
-            h.view_mut((0, 0), (SHARED, SHARED)).add_assign(&ht.fixed_view::<SHARED, SHARED>(0, 0));
-            h.view_mut((0, o), (SHARED, PER_TAG)).add_assign(&ht.fixed_view::<SHARED, PER_TAG>(0, SHARED));
-            h.view_mut((o, 0), (PER_TAG, SHARED)).add_assign(&ht.fixed_view::<PER_TAG, SHARED>(SHARED, 0));
-            h.view_mut((o, o), (PER_TAG, PER_TAG)).add_assign(&ht.fixed_view::<PER_TAG, PER_TAG>(SHARED, SHARED));
             g.rows_mut(0, SHARED).add_assign(&gt.fixed_rows::<SHARED>(0));
             g.rows_mut(o, PER_TAG).add_assign(&gt.fixed_rows::<PER_TAG>(SHARED));
         }
-        Normal { h, g, sq, weighted_sq, cost }
+        Normal { h, h_reweighted, g, sq, weighted_sq, cost }
     }
+}
+
+/// Adds tag `k`'s block, of which the lower triangle is summed, to the normal equations' `h`.
+fn add_block(h: &mut DMatrix<f64>, block: &Block, k: usize) {
+    let mut b = *block;
+    b.fill_upper_triangle_with_lower_triangle();
+    let o = SHARED + PER_TAG * k;
+    h.view_mut((0, 0), (SHARED, SHARED)).add_assign(&b.fixed_view::<SHARED, SHARED>(0, 0));
+    h.view_mut((0, o), (SHARED, PER_TAG)).add_assign(&b.fixed_view::<SHARED, PER_TAG>(0, SHARED));
+    h.view_mut((o, 0), (PER_TAG, SHARED)).add_assign(&b.fixed_view::<PER_TAG, SHARED>(SHARED, 0));
+    h.view_mut((o, o), (PER_TAG, PER_TAG)).add_assign(&b.fixed_view::<PER_TAG, PER_TAG>(SHARED, SHARED));
 }
 
 /// The residuals' robust scale: 1.4826 × their median absolute value.
@@ -671,10 +699,4 @@ fn weight(r: f64, k: f64) -> f64 {
 /// Huber's curvature ρ''/2: none beyond the constant, where ρ is a straight line.
 fn curvature(r: f64, k: f64) -> f64 {
     if r.abs() <= k { 1.0 } else { 0.0 }
-}
-
-/// Huber's IRLS weight in the gradient and in the curvature alike.
-fn reweighted(r: f64, k: f64) -> (f64, f64) {
-    let w = weight(r, k);
-    (w, w)
 }
