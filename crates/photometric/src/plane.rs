@@ -1,10 +1,17 @@
 //! A tag's plane as the camera sees it: where a pixel's ray meets it, what the pixel sees
-//! there under the blur (with its derivatives by the pose and the blur), and whether it is
-//! near enough an edge of the pattern to tell.
+//! there under the blur (with its derivatives by the pose and the blur), whether it is near
+//! enough an edge of the pattern to tell, and which pixels the tag's square may cover.
 
 use crate::model::Pattern;
-use jawtrack_pose::Pose;
-use nalgebra::{Matrix2, Matrix3, SVector, Vector2, Vector3};
+use jawtrack_pose::{CameraIntrinsics, Pose};
+use nalgebra::{Matrix2, Matrix3, Point2, SVector, Vector2, Vector3};
+
+/// Points per side of a square's outline: the lens's distortion bends a side, and between
+/// these points it departs from its chord by a few hundredths of a pixel (k1 = −0.25, the test).
+const OUTLINE_POINTS_PER_SIDE: usize = 8;
+/// The columns taken on a row reach this far (px) beyond the outline: for the chords, and so
+/// that a pixel on the outline is tested rather than left out by rounding.
+const OUTLINE_PAD_PX: f64 = 1.0;
 
 /// The tag's plane at one instant, in the camera frame: the map from a normalised direction
 /// (n, 1) to tag coordinates (tx, ty, 1), up to scale.
@@ -117,9 +124,66 @@ pub(crate) fn look(
     Some(Seen { paper: m.value, d })
 }
 
+/// A square of the tag's plane as the image shows it: its outline in pixels, for the pixels
+/// it may cover.
+pub(crate) struct Outline {
+    points: Vec<Point2<f64>>,
+}
+
+impl Outline {
+    /// The square centre ± x ± y (body frame) at `pose`; `None` where a point of it is not in
+    /// front of the camera.
+    pub(crate) fn new(
+        camera: &CameraIntrinsics,
+        pose: &Pose,
+        centre: &Vector3<f64>,
+        x: &Vector3<f64>,
+        y: &Vector3<f64>,
+    ) -> Option<Outline> {
+        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        let mut points = Vec::with_capacity(4 * OUTLINE_POINTS_PER_SIDE);
+        for (k, &(ax, ay)) in corners.iter().enumerate() {
+            let (bx, by) = corners[(k + 1) % 4];
+            for i in 0..OUTLINE_POINTS_PER_SIDE {
+                let f = i as f64 / OUTLINE_POINTS_PER_SIDE as f64;
+                let (sx, sy) = (ax + (bx - ax) * f, ay + (by - ay) * f);
+                points.push(camera.project(&pose.transform_point(&(centre + x * sx + y * sy).into()))?);
+            }
+        }
+        Some(Outline { points })
+    }
+
+    /// The smallest box holding the outline: its least and greatest pixel coordinates.
+    pub(crate) fn bounds(&self) -> (Vector2<f64>, Vector2<f64>) {
+        let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
+        for p in &self.points {
+            lo = lo.inf(&p.coords);
+            hi = hi.sup(&p.coords);
+        }
+        (lo, hi)
+    }
+
+    /// The columns of row `y` that may lie inside: from the leftmost to the rightmost crossing
+    /// of the outline, widened by [`OUTLINE_PAD_PX`]. Empty (from > to) where the row misses it.
+    pub(crate) fn columns(&self, y: f64) -> (f64, f64) {
+        let (mut from, mut to) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, a) in self.points.iter().enumerate() {
+            let b = &self.points[(k + 1) % self.points.len()];
+            if (a.y - y) * (b.y - y) > 0.0 {
+                continue; // both ends on one side of the row
+            }
+            let x = if a.y == b.y { [a.x, b.x] } else { [a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y); 2] };
+            from = from.min(x[0].min(x[1]));
+            to = to.max(x[0].max(x[1]));
+        }
+        (from - OUTLINE_PAD_PX, to + OUTLINE_PAD_PX)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plane::to_tag as to_tag_of;
     use jawtrack_pose::pnp::perturb;
     use jawtrack_tag_family::TagFamily;
     use nalgebra::{UnitQuaternion, Vector6};
@@ -159,5 +223,39 @@ mod tests {
             checked += 1;
         }
         assert_eq!(checked, 40);
+    }
+
+    #[test]
+    fn every_pixel_a_tilted_square_covers_is_within_its_outlines_columns_under_distortion() {
+        // A strongly distorting lens, and a square tilted 50° about a diagonal-ish axis, off
+        // the image's centre where the distortion bends its sides most.
+        let camera =
+            CameraIntrinsics { k1: -0.25, k2: 0.08, ..CameraIntrinsics::pinhole(1500.0, 1500.0, 959.5, 539.5) };
+        let pose = Pose::from_parts(
+            UnitQuaternion::from_scaled_axis(Vector3::new(0.6, 0.55, 0.3)),
+            Vector3::new(45.0, 20.0, 110.0),
+        );
+        let (centre, x, y) = (Vector3::zeros(), Vector3::new(6.0, 0.0, 0.0), Vector3::new(0.0, -6.0, 0.0));
+        let outline = Outline::new(&camera, &pose, &centre, &x, &y).expect("in front");
+        let to_tag = plane(&pose, &centre, &x, &y).expect("plane").to_tag;
+        let (lo, hi) = outline.bounds();
+        let (mut inside, mut boxed, mut taken) = (0, 0, 0);
+        for row in (lo.y.floor() as i64 - 3)..=(hi.y.ceil() as i64 + 3) {
+            let (from, to) = outline.columns(row as f64);
+            for col in (lo.x.floor() as i64 - 3)..=(hi.x.ceil() as i64 + 3) {
+                let pixel = Point2::new(col as f64, row as f64);
+                let n = camera.undistort(camera.pixel_to_distorted(&pixel)).expect("undistorted");
+                let covered = to_tag_of(&to_tag, &n).is_some_and(|(tx, ty)| tx.abs() <= 1.0 && ty.abs() <= 1.0);
+                let listed = (from..=to).contains(&(col as f64));
+                assert!(!covered || listed, "pixel ({col}, {row}) is covered but not listed ({from}..{to})");
+                inside += usize::from(covered);
+                boxed += usize::from((lo.x..=hi.x).contains(&pixel.x) && (lo.y..=hi.y).contains(&pixel.y));
+                taken += usize::from(listed && (lo.x..=hi.x).contains(&pixel.x) && (lo.y..=hi.y).contains(&pixel.y));
+            }
+        }
+        assert!(inside > 2000, "only {inside} pixels covered");
+        // The columns hold little more than the square (the pad), where its box holds far more.
+        assert!((taken as f64) < 1.15 * inside as f64, "{taken} listed for {inside} covered");
+        assert!((boxed as f64) > 1.4 * inside as f64, "the box holds {boxed} pixels for {inside}: not tilted enough");
     }
 }

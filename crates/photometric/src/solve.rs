@@ -2,7 +2,7 @@
 //! together until the image and the model agree.
 
 use crate::model::Pattern;
-use crate::plane::{Looked, Plane, Seen, look, near_edge, plane, to_tag};
+use crate::plane::{Looked, Outline, Plane, Seen, look, near_edge, plane, to_tag};
 use crate::{Body, Image, Motion, Options, RefineError, Refined, Tag};
 use jawtrack_pose::lm::{Damping, damped, minimise};
 use jawtrack_pose::pnp::perturb;
@@ -268,14 +268,10 @@ fn gather(
     let (x, y) = ((c[1] - c[0]) / 2.0, (c[0] - c[3]) / 2.0);
     let reach = 1.0 + 2.0 * o.quiet_zone_cells / pattern.cells() as f64;
     let plane = plane(start, &centre, &x, &y)?;
-    // The covering box of the square with its quiet zone, in pixels.
-    let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
-    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-        let p = start.transform_point(&(centre + x * sx * reach + y * sy * reach).into());
-        let px = camera.project(&p)?;
-        lo = lo.inf(&px.coords);
-        hi = hi.sup(&px.coords);
-    }
+    // The square with its quiet zone, in pixels: only the columns of each row it may cover
+    // are looked at (a tilted tag covers a fraction of its box).
+    let outline = Outline::new(camera, start, &centre, &(x * reach), &(y * reach))?;
+    let (lo, hi) = outline.bounds();
     let (w, h) = (image.frame.width() as f64, image.frame.height() as f64);
     let (x0, y0) = (lo.x.ceil().max(0.0) as usize, lo.y.ceil().max(0.0) as usize);
     let (x1, y1) = (hi.x.floor().min(w - 1.0), hi.y.floor().min(h - 1.0));
@@ -287,8 +283,13 @@ fn gather(
     let mut edge = Vec::new();
     let mut flat = Vec::new();
     for row in y0..=y1 as usize {
+        let (from, to) = outline.columns(row as f64);
+        let (first, last) = (from.ceil().max(x0 as f64), to.floor().min(x1));
+        if last < first {
+            continue;
+        }
         let values = image.frame.row(row);
-        for (col, &v) in values.iter().enumerate().take(x1 as usize + 1).skip(x0) {
+        for (col, &v) in values.iter().enumerate().take(last as usize + 1).skip(first as usize) {
             if v == u8::MAX {
                 continue; // clipped: glare, or paper brighter than the sensor holds
             }
