@@ -34,6 +34,18 @@ const SUBFRAMES_PER_PX: f64 = 2.0;
 const MIN_SCALE: f64 = 0.05;
 /// The pixel's own area as a blur: a box of 1 px, σ² = 1/12 px².
 const PIXEL_VARIANCE: f64 = 1.0 / 12.0;
+/// A moving body whose rows' own times move its tags by less than this (px), and whose exposure
+/// does not smear them, is not also fitted as still. Measured (`jawtrack-bench dense`, chewing
+/// with a 10 ms readout): 72 such bodies under 0.02 px fitted both ways ended within 0.02 % of
+/// each other's cost (one at 0.76 px fitted moving at half the still fit's cost). Keeping the
+/// still fit alone there took chew-2ms's median from 0.0091 to 0.0099 mm; the moving one alone
+/// kept it (0.0089).
+const STILL_SKEW_PX: f64 = 0.05;
+/// The still alternative to a moving fit is given up when its first pass costs this many times
+/// the moving fit's end. Measured (`jawtrack-bench dense`, 257 bodies with a smear): a still fit
+/// that won began at most 1.35 times the moving fit's end; the chewing mandible's began at
+/// 2.2–40 times it and lost.
+const STILL_CATCH_UP: f64 = 3.0;
 /// The blur's σ (px) is kept at least this: below it every edge is a step to the model.
 const MIN_SIGMA_PX: f64 = 0.1;
 /// A fit out of linearisations whose next step would move no corner farther than this (px) has
@@ -152,15 +164,25 @@ fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, Ref
     let (pixels, times) = setup(body, &begin.pose, begin.sigma_px, options)?;
     // Motion changes the model only through a smear (instants) or rows read at their own times.
     let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
+    // A wrong velocity could make the moving model worse than a still one only by the smear
+    // and skew it gives: where those are next to nothing, the still alternative is not fitted.
+    let alternative =
+        times.len() > 1 || motion.is_some_and(|m| skew_px(camera, &begin.pose, body.tags, m) >= STILL_SKEW_PX);
     let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None, pose_fixed: false };
     let moving = modelled.then(|| Fit { camera, pixels: &pixels, times, motion, pose_fixed: false });
     let mut best = match &moving {
         None => still.run(begin, options)?,
+        Some(moving) if !alternative => moving.run(begin, options)?,
         Some(moving) => {
             let best = moving.run(begin, options)?;
-            match still.run(begin, options) {
-                Ok(s) if s.cost < best.cost => s,
-                _ => best,
+            match still.start(begin, options) {
+                // So far behind that it will not catch up: the fit would be wasted.
+                Ok(s) if s.normal.cost > STILL_CATCH_UP * best.cost => best,
+                Ok(s) => match still.run_from(s, options) {
+                    Ok(s) if s.cost < best.cost => s,
+                    _ => best,
+                },
+                Err(_) => best,
             }
         }
     };
@@ -342,6 +364,26 @@ fn smear_px(camera: &CameraIntrinsics, start: &Pose, tags: &[Tag<'_>], m: &Motio
     smear
 }
 
+/// How far (px) the rows' own times move the tags' corners: the body's motion between the
+/// times of the highest and the lowest corner's rows.
+fn skew_px(camera: &CameraIntrinsics, start: &Pose, tags: &[Tag<'_>], m: &Motion) -> f64 {
+    let corners = || tags.iter().flat_map(|t| t.corners).map(|c| c.into());
+    let rows = corners().filter_map(|p| camera.project(&start.transform_point(&p))).map(|p| p.y);
+    let (top, bottom) = rows.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
+    if top > bottom {
+        return 0.0; // no corner in view
+    }
+    let (a, b) =
+        (m.velocity.advance(start, m.shutter.offset_s(top)), m.velocity.advance(start, m.shutter.offset_s(bottom)));
+    let mut skew: f64 = 0.0;
+    for p in corners() {
+        if let (Some(x), Some(y)) = (camera.project(&a.transform_point(&p)), camera.project(&b.transform_point(&p))) {
+            skew = skew.max((x - y).norm());
+        }
+    }
+    skew
+}
+
 /// The instants (s, relative to a row's own time) each row's pixels are modelled at: its
 /// exposure window sampled evenly, one instant per half pixel of `smear` (px), at most
 /// `max_subframes`; one instant, the row's own, without a smear.
@@ -395,6 +437,15 @@ struct Outcome {
     pixels: usize,
 }
 
+/// A fit after its first pass.
+struct Started {
+    state: State,
+    /// Huber's constant (linear light, 0–255), from the residuals' robust scale there.
+    huber: f64,
+    /// The normal equations there.
+    normal: Normal,
+}
+
 /// What the fit needs: the pixels, the optics and the motion.
 struct Fit<'a> {
     camera: &'a CameraIntrinsics,
@@ -410,20 +461,27 @@ impl Fit<'_> {
     /// The fit from `begin`: Levenberg–Marquardt with Huber weights on the residuals' robust
     /// scale there (the levels are fitted there first, by least squares).
     fn run(&self, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
-        // One pass of the model at the start gives the levels, the residuals' scale and the
-        // first normal equations.
+        self.run_from(self.start(begin, options)?, options)
+    }
+
+    /// The fit's first pass: the model at `begin` gives the levels, the residuals' scale and
+    /// the first normal equations.
+    fn start(&self, begin: &Begin, options: &Options) -> Result<Started, RefineError> {
         let seen = self.seen(&begin.pose, begin.sigma_px, true);
         let levels = self.levels(&seen).ok_or(RefineError::Singular)?;
-        let mut state = State { pose: begin.pose, sigma_px: begin.sigma_px, gamma: begin.gamma, levels };
+        let state = State { pose: begin.pose, sigma_px: begin.sigma_px, gamma: begin.gamma, levels };
         let huber = options.huber * scale(self.residuals(&state, &seen)).max(MIN_SCALE);
-        // Newton's curvature for Huber's cost: a pixel beyond the constant weighs in the gradient
-        // but adds no curvature. Its reweighted curvature (as the covariance's) would shorten
-        // every step where the model's misfit at the edges puts many pixels there: measured on
-        // a still frame at 100 mm, 5–11 linearisations against 4–5 this way.
-        let huber_weight = |r: f64, _: f64| (weight(r, huber), curvature(r, huber));
+        let normal = self.normal(&state, &|r, _| huber_weights(r, huber), huber, Some(&seen));
+        Ok(Started { state, huber, normal })
+    }
+
+    /// The fit on from its first pass.
+    fn run_from(&self, started: Started, options: &Options) -> Result<Outcome, RefineError> {
+        let Started { mut state, huber, normal } = started;
+        let huber_weight = |r: f64, _: f64| huber_weights(r, huber);
         // A state is evaluated with its normal equations at once: a step that is taken (most
         // are, near the minimum) is linearised next, from this.
-        let evaluated = RefCell::new((state.clone(), self.normal(&state, &huber_weight, huber, Some(&seen))));
+        let evaluated = RefCell::new((state.clone(), normal));
         let mut cost = evaluated.borrow().1.cost;
         let damping = Damping {
             initial: 1e-3,
@@ -695,6 +753,15 @@ fn rho(r: f64, k: f64) -> f64 {
 fn weight(r: f64, k: f64) -> f64 {
     let a = r.abs();
     if a <= k { 1.0 } else { k / a }
+}
+
+/// A pixel's weights in the fit: in the gradient Huber's IRLS weight, in the curvature Newton's
+/// for Huber's cost (a pixel beyond the constant weighs in the gradient but adds no curvature).
+/// Its reweighted curvature (as the covariance's) would shorten every step where the model's
+/// misfit at the edges puts many pixels there: measured on a still frame at 100 mm, 5–11
+/// linearisations against 4–5 this way.
+fn huber_weights(r: f64, k: f64) -> (f64, f64) {
+    (weight(r, k), curvature(r, k))
 }
 
 /// Huber's curvature ρ''/2: none beyond the constant, where ρ is a straight line.
