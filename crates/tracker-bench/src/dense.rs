@@ -2,7 +2,7 @@
 //! same rendered frames (issue 41). Each case is tracked twice from the same frames, once per
 //! [`PoseRefinement`], with the marker as rendered (exact), the true intrinsics, and the readout
 //! and exposure told; the error of the mandible in the maxilla against the truth, the jitter
-//! of a still jaw (frames of one tripod view differ only in sensor noise) against its
+//! of a still jaw (frames of one tripod view that differ only in sensor noise) against its
 //! Cramér–Rao bound ([`jawtrack_photometric::bound`], from the renderer's noise model), and the
 //! refinement's time per body.
 
@@ -10,12 +10,13 @@ use crate::chew::PoseError;
 use crate::frames::{self, Development, Phone, Request};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use jawtrack_apriltag::tone::{SETTLING_FRAMES, ToneSummary};
 use jawtrack_apriltag::{DetectorConfig, ImageView};
 use jawtrack_marker::{BodyKind, Marker};
 use jawtrack_photometric::{Body, Image, Options, Tag};
 use jawtrack_pose::Pose;
 use jawtrack_synth::{GroundTruth, Realism, Resolution, SceneKind};
-use jawtrack_tone::ToneCurve;
+use jawtrack_tone::{ToneCurve, ToneSetting};
 use jawtrack_tracker::{Flag, FrameResult, PoseRefinement, Tracker, TrackerConfig};
 use nalgebra::{Matrix3, Matrix3x6, Matrix6};
 use std::path::PathBuf;
@@ -139,11 +140,13 @@ pub fn run(a: &DenseArgs) -> Result<()> {
                     run.errors_mm.push(PoseError::of(&p, &f.maxilla_from_mandible).mm);
                 }
                 // Frames of a still tripod view differ only in noise, once those with a glare
-                // spot or an occluder (placed at random per frame) are set aside.
+                // spot or an occluder (placed at random per frame) are set aside, and those
+                // read before the tone curve settled.
                 let still = c.request.scene == SceneKind::Static
                     && f.spec.view.hand_seed.is_none()
                     && f.glare.is_empty()
-                    && !f.occluder;
+                    && !f.occluder
+                    && tone_settled(&tracker.tone());
                 if still {
                     let key = (f.spec.view.distance_mm.to_bits(), f.spec.view.azimuth_deg.to_bits());
                     if view_of != Some(key) {
@@ -170,6 +173,14 @@ pub fn run(a: &DenseArgs) -> Result<()> {
         std::fs::write(out, &table).with_context(|| format!("writing {}", out.display()))?;
     }
     Ok(())
+}
+
+/// Whether the frame just tracked was read through the curve the frames after it keep: a
+/// curve given, or an estimate past its settling fits. At `auto` a session's first frames are
+/// read through sRGB and then through the first fits' curves: through a gamma-1.8 render they
+/// lay the jaw 1–3 µm from where the settled frames do (docs/dense.md), which is not noise.
+fn tone_settled(t: &ToneSummary) -> bool {
+    t.setting != ToneSetting::Auto || t.frames_fitted >= SETTLING_FRAMES
 }
 
 /// The Cramér–Rao bound (RMS over the three axes, mm) on the jaw's translation in one still
@@ -432,5 +443,22 @@ mod tests {
         assert!(bright > dark && dark > 0.0, "{dark} {bright}");
         let clean = Realism { full_well_e: 0.0, ..r };
         assert!(pixel_variance(&clean, ToneCurve::Srgb, 100.0) > 0.0, "8-bit rounding remains");
+    }
+
+    #[test]
+    fn frames_count_as_still_once_the_tone_curve_has_settled() {
+        use jawtrack_tone::ToneReason;
+        let at = |setting, frames_fitted| ToneSummary {
+            setting,
+            curve: ToneCurve::Srgb,
+            reason: ToneReason::NotYetTold,
+            frames_fitted,
+            pooled: None,
+        };
+        let settled: Vec<bool> = (0..=SETTLING_FRAMES + 1).map(|n| tone_settled(&at(ToneSetting::Auto, n))).collect();
+        let mut want = vec![false; SETTLING_FRAMES];
+        want.extend([true, true]);
+        assert_eq!(settled, want, "auto: frames read before the settling fits are done do not count");
+        assert!(tone_settled(&at(ToneSetting::Fixed(ToneCurve::Srgb), 0)), "a curve given never changes");
     }
 }
