@@ -161,6 +161,11 @@ impl Axis {
     }
 }
 
+/// Whether [x − r, x + r] lies within one cell: then no rectangle that wide about x is mixed.
+pub(crate) fn within_one_cell(x: f64, r: f64) -> bool {
+    floor(x - r) == floor(x + r)
+}
+
 /// ⌊v⌋, saturating at the integers' ends. `f64::floor` is a library call on x86-64 without
 /// SSE4.1 (the baseline), and was a twentieth of the refinement's time.
 fn floor(v: f64) -> i64 {

@@ -56,6 +56,35 @@ pub(crate) fn near_edge(plane: &Plane, pattern: &Pattern, n: &Vector2<f64>, band
     pattern.mixed((l.tx + 1.0) * half, (l.ty + 1.0) * half, ru, rv)
 }
 
+/// The widest half-widths (cells, along u and v) that [`near_edge`] gives a pixel looking at
+/// any point of the square centre ± x ± y (body frame) on `plane` (made from that square's
+/// plane at `pose`): a bound for ruling out the pixels well inside a cell before their own is
+/// worked out. d(tag)/d(direction) is (A − t·a₃ᵀ) times the depth ([`Local::at`]); each row's
+/// norm is convex in the tag coordinates t and the depth affine in them, so neither exceeds
+/// its largest value at the square's corners. `None` where a corner is not in front.
+pub(crate) fn widest_band(
+    plane: &Plane,
+    pose: &Pose,
+    (centre, x, y): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
+    band: f64,
+    half: f64,
+) -> Option<(f64, f64)> {
+    let (mut by_u, mut by_v, mut depth): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+        let p = pose.transform_point(&(centre + x * sx + y * sy).into());
+        if p.z <= 0.0 {
+            return None;
+        }
+        let l = Local::at(plane, &Vector2::new(p.x / p.z, p.y / p.z))?;
+        by_u = by_u.max(l.j.row(0).norm() / l.x.z);
+        by_v = by_v.max(l.j.row(1).norm() / l.x.z);
+        depth = depth.max(l.x.z);
+    }
+    // A hair wider, so that rounding never makes a bound narrower than a pixel's own.
+    let widen = half * band * depth * (1.0 + 1e-9);
+    Some((by_u * widen, by_v * widen))
+}
+
 /// Where a pixel's ray meets the plane, and how that point moves as the ray turns.
 struct Local {
     /// Tag coordinates.
@@ -257,5 +286,32 @@ mod tests {
         // The columns hold little more than the square (the pad), where its box holds far more.
         assert!((taken as f64) < 1.15 * inside as f64, "{taken} listed for {inside} covered");
         assert!((boxed as f64) > 1.4 * inside as f64, "the box holds {boxed} pixels for {inside}: not tilted enough");
+    }
+
+    #[test]
+    fn no_pixel_of_a_tilted_square_gets_a_wider_band_than_the_widest() {
+        let pose = Pose::from_parts(
+            UnitQuaternion::from_scaled_axis(Vector3::new(0.7, -0.5, 0.2)),
+            Vector3::new(-20.0, 10.0, 90.0),
+        );
+        let (centre, x, y) = (Vector3::new(1.0, 2.0, 0.5), Vector3::new(6.0, 0.0, 0.0), Vector3::new(0.0, -6.0, 0.4));
+        let p = plane(&pose, &centre, &x, &y).expect("plane");
+        let (band, half) = (1.2 / 1500.0, 4.0);
+        let (ru, rv) = widest_band(&p, &pose, (&centre, &x, &y), band, half).expect("in front");
+        let (mut checked, mut widest_u, mut widest_v) = (0, 0.0f64, 0.0f64);
+        for i in 0..=40 {
+            for k in 0..=40 {
+                let (tx, ty) = (f64::from(i) / 20.0 - 1.0, f64::from(k) / 20.0 - 1.0);
+                let q = pose.transform_point(&(centre + x * tx + y * ty).into());
+                let l = Local::at(&p, &Vector2::new(q.x / q.z, q.y / q.z)).expect("seen");
+                let (u, v) = (half * band * l.j.row(0).norm(), half * band * l.j.row(1).norm());
+                assert!(u <= ru && v <= rv, "({tx}, {ty}): {u}, {v} beyond {ru}, {rv}");
+                (widest_u, widest_v) = (widest_u.max(u), widest_v.max(v));
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 41 * 41);
+        // A bound, and not a loose one: the widest pixel comes within a fifth of it.
+        assert!(widest_u > 0.8 * ru && widest_v > 0.8 * rv, "{widest_u} of {ru}, {widest_v} of {rv}");
     }
 }

@@ -1,8 +1,8 @@
 //! The fit: pixels gathered once at the starting pose, then the pose and the tags' levels moved
 //! together until the image and the model agree.
 
-use crate::model::Pattern;
-use crate::plane::{Looked, Outline, Plane, Seen, look, near_edge, plane, to_tag};
+use crate::model::{Pattern, within_one_cell};
+use crate::plane::{Looked, Outline, Plane, Seen, look, near_edge, plane, to_tag, widest_band};
 use crate::{Body, Image, Motion, Options, RefineError, Refined, Tag};
 use jawtrack_pose::lm::{Damping, damped, minimise};
 use jawtrack_pose::pnp::perturb;
@@ -302,6 +302,9 @@ fn gather(
     }
     let half = pattern.cells() as f64 / 2.0;
     let band = band_px / (camera.fx * camera.fy).sqrt();
+    // Most pixels lie well inside a cell, where even the widest band any pixel of the tag gets
+    // reaches no edge: they are ruled out before their own band is worked out.
+    let (widest_u, widest_v) = widest_band(&plane, start, (&centre, &(x * reach), &(y * reach)), band, half)?;
     let mut edge = Vec::new();
     let mut flat = Vec::new();
     for row in y0..=y1 as usize {
@@ -323,7 +326,8 @@ fn gather(
                 continue;
             }
             let sample = (col, Sample { row, normalised: n, linear: image.linear[usize::from(v)] });
-            let near = near_edge(&plane, &pattern, &n, band, half);
+            let clear = within_one_cell((tx + 1.0) * half, widest_u) && within_one_cell((ty + 1.0) * half, widest_v);
+            let near = !clear && near_edge(&plane, &pattern, &n, band, half);
             if near {
                 edge.push(sample);
             } else if col.is_multiple_of(FLAT_STRIDE) && row.is_multiple_of(FLAT_STRIDE) {
