@@ -32,8 +32,8 @@ pub struct DenseArgs {
     #[arg(long, value_delimiter = ',', default_value = "still-200,still-100,gamma-1.8,hinge,chew-2ms,chew-8ms")]
     cases: Vec<String>,
     /// Frames per view of the still cases (3 tripod and 3 hand-held views): the jitter is
-    /// the spread over a tripod view's frames without glare or an occluder (25 of the 30
-    /// tripod frames at seed 7).
+    /// the spread over a tripod view's frames without glare or an occluder, read through the
+    /// settled tone curve (23 of the 30 tripod frames at seed 7).
     #[arg(long, default_value_t = 10)]
     still_frames: usize,
     /// Frames of the hinge and chew cases (60 frames/s for chewing).
@@ -294,8 +294,9 @@ fn summary(r: &Run) -> Summary {
 
 /// The 3-D spread of points about their view's mean, pooled over the views: √(Σ squared
 /// distances / Σ (n − 1)). Pooled, because a view keeps only its frames without glare or an
-/// occluder (25 of the 30 tripod frames at seed 7), and one view's spread alone rests on about
-/// 20 degrees of freedom, uncertain by about 15 %. `None` without two frames in any view.
+/// occluder, read through the settled tone curve (23 of the 30 tripod frames at seed 7), and
+/// one view's spread alone rests on about 20 degrees of freedom, uncertain by about 15 %.
+/// `None` without two frames in any view.
 fn spread(views: &[Vec<[f64; 3]>]) -> Option<f64> {
     let (mut ss, mut dof) = (0.0, 0usize);
     for v in views.iter().filter(|v| v.len() >= 2) {
