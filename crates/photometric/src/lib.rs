@@ -16,7 +16,9 @@
 //! pixel sees the pattern averaged over its row's exposure window (sampled at up to
 //! [`Options::max_subframes`] instants). The pose is the body's at the frame's time (its centre
 //! row's), as the corner pipeline's is. The motion is kept only where it fits the image better
-//! than a still body does: a velocity taken from earlier frames can be wrong.
+//! than a still body does, a velocity taken from earlier frames can be wrong; where it smears
+//! nothing and moves the tags by a twentieth of a pixel at most, a wrong one cannot matter and
+//! the still fit is not made.
 //!
 //! The refinement starts from the corner pose and is checked against it: a refinement that does
 //! not settle within [`Options::max_iterations`], cannot be solved, or lands farther than

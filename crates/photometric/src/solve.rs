@@ -158,7 +158,9 @@ fn sigma_px(blur_px: f64) -> f64 {
 /// The fit of the body from `begin` over the pixels taken there. With motion given, the same
 /// pixels are also fitted as a still body and the better fit is kept: the velocity comes from
 /// the poses before, and the image says whether it holds (a view that jumped with the
-/// regularity of motion would otherwise have its sharp tags modelled smeared).
+/// regularity of motion would otherwise have its sharp tags modelled smeared). Not where the
+/// motion moves the tags by under [`STILL_SKEW_PX`] without a smear, and not on from a still
+/// start [`STILL_CATCH_UP`] times as costly as the moving fit's end.
 fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
     let (camera, motion) = (body.camera, body.motion.as_ref());
     let (pixels, times) = setup(body, &begin.pose, begin.sigma_px, options)?;
