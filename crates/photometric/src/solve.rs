@@ -371,23 +371,16 @@ fn smear_px(camera: &CameraIntrinsics, start: &Pose, tags: &[Tag<'_>], m: &Motio
 }
 
 /// How far (px) the rows' own times move the tags' corners: the body's motion between the
-/// times of the highest and the lowest corner's rows.
+/// times of the highest and the lowest corner's rows ([`shift`]: infinite where a corner
+/// leaves the view, so that the still alternative is then fitted).
 fn skew_px(camera: &CameraIntrinsics, start: &Pose, tags: &[Tag<'_>], m: &Motion) -> f64 {
-    let corners = || tags.iter().flat_map(|t| t.corners).map(|c| c.into());
-    let rows = corners().filter_map(|p| camera.project(&start.transform_point(&p))).map(|p| p.y);
-    let (top, bottom) = rows.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
+    let rows = tags.iter().flat_map(|t| t.corners).filter_map(|c| camera.project(&start.transform_point(&c.into())));
+    let (top, bottom) = rows.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.y), b.max(p.y)));
     if top > bottom {
         return 0.0; // no corner in view
     }
-    let (a, b) =
-        (m.velocity.advance(start, m.shutter.offset_s(top)), m.velocity.advance(start, m.shutter.offset_s(bottom)));
-    let mut skew: f64 = 0.0;
-    for p in corners() {
-        if let (Some(x), Some(y)) = (camera.project(&a.transform_point(&p)), camera.project(&b.transform_point(&p))) {
-            skew = skew.max((x - y).norm());
-        }
-    }
-    skew
+    let at = |y: f64| m.velocity.advance(start, m.shutter.offset_s(y));
+    shift(camera, &at(top), &at(bottom), tags)
 }
 
 /// The instants (s, relative to a row's own time) each row's pixels are modelled at: its
