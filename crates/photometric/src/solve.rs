@@ -622,10 +622,12 @@ impl Fit<'_> {
                 seen.paper += one.paper;
                 seen.d += one.d;
             }
-            seen.paper /= k as f64;
             // σ in normalised units to σ in pixels.
             seen.d[6] /= k as f64 * sigma_px / sigma;
-            seen.d.fixed_rows_mut::<6>(0).unscale_mut(k as f64);
+            if k > 1 {
+                seen.paper /= k as f64;
+                seen.d.fixed_rows_mut::<6>(0).unscale_mut(k as f64);
+            }
             f(s, seen);
         }
         Some(())
