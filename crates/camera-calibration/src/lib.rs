@@ -7,7 +7,7 @@
 //! Each frame's body pose is solved at the frame's time (its centre row's), and a corner seen
 //! in row y is predicted where the body was at `t + RollingShutter::offset_s(y)`, the body
 //! moving at the velocity its neighbouring frames' poses give (the derivative of the parabola
-//! through three, [`Velocity::at`]). Within a frame the shear is velocity × readout, while the
+//! through three, [`Velocity::at`](jawtrack_pose::Velocity::at)). Within a frame the shear is velocity × readout, while the
 //! velocity is seen between frames: so the readout is observable, where a free velocity per
 //! frame would leave only their product. Intrinsics, readout and every pose are refined
 //! together by Levenberg–Marquardt; the poses are coupled only to their neighbours, so the

@@ -21,7 +21,7 @@ pub(crate) struct CalibrateArgs {
     /// worse: a tag moves only when the recordings fit its new place better).
     #[arg(long)]
     marker: Option<PathBuf>,
-    /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2].
+    /// Camera intrinsics in pixels: fx,fy,cx,cy, or fx,fy,cx,cy,k1,k2 with distortion.
     #[arg(long, allow_hyphen_values = true)]
     intrinsics: CameraIntrinsics,
     /// Where to write the calibrated marker file.

@@ -28,9 +28,9 @@ pub(crate) struct CalibrateCameraArgs {
     /// replaces the stored times.
     #[arg(long, allow_hyphen_values = true)]
     fps: Option<f64>,
-    /// A first guess of the intrinsics, fx,fy,cx,cy[,k1,k2] (px), e.g. another resolution's
-    /// scaled. Default: from the image size; the focal length is scanned over a factor of 3
-    /// either way, so the guess need not be close.
+    /// A first guess of the intrinsics, fx,fy,cx,cy or fx,fy,cx,cy,k1,k2 (px), e.g. another
+    /// resolution's scaled. Default: from the image size; the focal length is scanned over a
+    /// factor of 3 either way, so the guess need not be close.
     #[arg(long, allow_hyphen_values = true)]
     intrinsics: Option<CameraIntrinsics>,
     /// The marker file (default: the nominal 12.7 mm pair). A calibrated marker

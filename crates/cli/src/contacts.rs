@@ -1,8 +1,8 @@
 //! `jawtrack contacts`: where the arches touch over a recording. Each frame's lower scan is
 //! placed in the upper scan's frame by `maxilla_scan_from_mandible_scan` and checked by a
-//! [`ContactSession`] (regions in contact, their areas and depths, the contact map over the
-//! recording); the run itself is `jawtrack_session::contact_run`, and this file gives it the
-//! flags and prints what it finds.
+//! [`ContactSession`](jawtrack_occlusion::session::ContactSession) (regions in contact, their
+//! areas and depths, the contact map over the recording); the run itself is
+//! `jawtrack_session::contact_run`, and this file gives it the flags and prints what it finds.
 //!
 //! Where the pose comes from: with `--registration`, from each frame's `maxilla_from_mandible`
 //! through the registration; without, from the frames' recorded `maxilla_scan_from_mandible_scan`

@@ -25,7 +25,7 @@ pub(crate) struct SynthArgs {
     /// Seed of everything random (print errors, noise, tremor, clutter).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Camera intrinsics fx,fy,cx,cy[,k1,k2] (px); default: an iPhone wide camera.
+    /// Camera intrinsics fx,fy,cx,cy or fx,fy,cx,cy,k1,k2 (px); default: an iPhone wide camera.
     #[arg(long, allow_hyphen_values = true)]
     intrinsics: Option<CameraIntrinsics>,
     /// Marker file (default: the nominal 12.7 mm pair).

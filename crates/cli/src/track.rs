@@ -23,8 +23,8 @@ pub(crate) struct TrackArgs {
     /// the nominal 12.7 mm marker.
     #[arg(long)]
     marker: Option<PathBuf>,
-    /// Camera intrinsics in pixels: fx,fy,cx,cy[,k1,k2] (pixel centres at integer coordinates);
-    /// default: the --camera file's, else the --like recording's.
+    /// Camera intrinsics in pixels: fx,fy,cx,cy or fx,fy,cx,cy,k1,k2 (pixel centres at integer
+    /// coordinates); default: the --camera file's, else the --like recording's.
     #[arg(long, allow_hyphen_values = true, required_unless_present_any = ["like", "camera"])]
     intrinsics: Option<CameraIntrinsics>,
     /// The camera file `jawtrack calibrate-camera` wrote: its intrinsics and readout (each

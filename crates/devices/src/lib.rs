@@ -1,8 +1,8 @@
 //! What is known about phone cameras that no API reports, and what follows from it for
-//! filming the markers: each model's sensor readout ([`readout`]), its lenses' optics — focal
+//! filming the markers: each model's sensor readout ([`readout()`]), its lenses' optics — focal
 //! length, f-number, the nearest they focus, whether the sensor gives a native 2× crop
-//! ([`optics`]) — the capture plan those facts call for: camera, format, zoom and the distance
-//! to hold the phone at, beyond where it can focus ([`plan`]), and the guidance that keeps the
+//! ([`optics()`]) — the capture plan those facts call for: camera, format, zoom and the distance
+//! to hold the phone at, beyond where it can focus ([`plan()`]), and the guidance that keeps the
 //! phone there while it films ([`guidance`]).
 //!
 //! Models are keyed by their hardware identifier (`uname().machine`, e.g. `iPhone16,2`), which

@@ -60,7 +60,7 @@ impl FormatFacts {
 pub struct CameraFacts {
     /// Which.
     pub lens: Lens,
-    /// Its optics (the table's, [`crate::optics`]).
+    /// Its optics (the table's, [`crate::optics()`]).
     pub optics: LensOptics,
     /// The nearest it focuses (mm), as the phone reports it; `None` takes the table's.
     pub reported_min_focus_mm: Option<f64>,

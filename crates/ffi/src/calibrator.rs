@@ -211,7 +211,7 @@ fn count(n: usize) -> u32 {
 #[uniffi::export]
 impl Calibrator {
     /// A calibration starting from the marker file's JSON (`None`: the nominal 12.7 mm marker;
-    /// a calibrated file: the nominal marker of its size, see [`starting_marker`]); a tag needs
+    /// a calibrated file: the nominal marker of its size, see `starting_marker`); a tag needs
     /// `min_views` views (1–100; 3 is the command line's default) to be placed.
     #[uniffi::constructor]
     pub fn new(marker_json: Option<String>, min_views: u32) -> Result<Arc<Self>, JawTrackError> {

@@ -23,7 +23,7 @@ const AXIS_MM: f64 = 10.0;
 pub struct BodyResult {
     /// Maps the body's marker frame into the camera frame: 4×4 row-major, mm.
     pub camera_from_body: Vec<f64>,
-    /// 6×6 covariance of (rotation vector [rad], translation [mm]), row-major.
+    /// 6×6 covariance of (rotation vector \[rad\], translation \[mm\]), row-major.
     pub covariance: Vec<f64>,
     /// Tags used.
     pub tags: Vec<u32>,
@@ -364,7 +364,7 @@ fn pose_of(m: &[f64], what: &str) -> Result<Pose, JawTrackError> {
 }
 
 /// The camera from AVFoundation's intrinsic matrix (`matrix_float3x3`, column-major: fx at
-/// [0], fy at [4], the principal point at [6] and [7]) given for `reference` dimensions,
+/// \[0\], fy at \[4\], the principal point at \[6\] and \[7\]) given for `reference` dimensions,
 /// scaled to the delivered frame. AVFoundation's pixel coordinates start at the top-left
 /// corner of the top-left pixel; ours at its centre, hence the half pixel.
 #[uniffi::export]

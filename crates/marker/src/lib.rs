@@ -1,6 +1,6 @@
 //! The marker: the solid a body is ([`solid`], the dodecahedron by default, or a cube), the
 //! tags laid on its faces and the two jaw bodies that carry them ([`model`]), and the versioned
-//! JSON marker file ([`file`]).
+//! JSON marker file ([`file`](mod@file)).
 //!
 //! All lengths are millimetres, all points in a body's frame (see [`solid`]).
 

@@ -2,7 +2,7 @@
 //!
 //! All visible points of the body are used at once (tag corners and centres from any number of
 //! tags). Starting poses come from the previous frame when tracking and from IPPE on each
-//! visible tag (its two planar solutions, [`ippe`]); each is scored on every point, and the
+//! visible tag (its two planar solutions, `ippe`); each is scored on every point, and the
 //! best are refined by Levenberg–Marquardt on the reprojection error in pixels with a Huber
 //! loss, then polished by Gauss–Newton (near the minimum the cost's rounding hides the last
 //! 1e-8 of the pose; the gradient does not). When tracking several tags, the previous pose
@@ -17,7 +17,7 @@
 //! measurement whatever the solver.
 //!
 //! The covariance is that of a left perturbation of `camera_from_body` in the camera frame,
-//! (rotation vector [rad], translation [mm]), from the Gauss–Newton normal matrix scaled by the
+//! (rotation vector \[rad\], translation \[mm\]), from the Gauss–Newton normal matrix scaled by the
 //! residuals' variance (or by `corner_sigma_px`² when there are too few points to estimate it).
 
 use crate::lm::{self, Damping, damped};
@@ -69,7 +69,7 @@ impl Default for PnpOptions {
 pub struct BodyPose {
     /// Maps body points into the camera frame (mm).
     pub camera_from_body: Pose,
-    /// Covariance of (rotation vector [rad], translation [mm]) of a left perturbation in the
+    /// Covariance of (rotation vector \[rad\], translation \[mm\]) of a left perturbation in the
     /// camera frame.
     pub covariance: Matrix6<f64>,
     /// RMS reprojection error over the points used (px).
@@ -495,7 +495,7 @@ pub fn pose_jacobian(c: &Point3<f64>, dproj: &Matrix2x3<f64>) -> SMatrix<f64, 2,
     j
 }
 
-/// Applies a left perturbation (ω [rad], v [mm]) in the `to` frame: p ↦ exp(ω)·(pose·p) + v.
+/// Applies a left perturbation (ω \[rad\], v \[mm\]) in the `to` frame: p ↦ exp(ω)·(pose·p) + v.
 pub fn perturb(pose: &Isometry3<f64>, d: &Vector6<f64>) -> Isometry3<f64> {
     let r = UnitQuaternion::from_scaled_axis(Vector3::new(d[0], d[1], d[2]));
     let t = r * pose.translation.vector + Vector3::new(d[3], d[4], d[5]);

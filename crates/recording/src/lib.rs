@@ -28,7 +28,7 @@
 //! "spread_deg"}}` ([`BiteRecord`]) records the rest position it chose.
 //!
 //! Every `M` is a 4×4 row-major matrix in mm; `cov` is the 6×6 covariance of (rotation vector
-//! [rad], translation [mm]), row-major. No value is ever NaN: the tracker never returns a pose
+//! \[rad\], translation \[mm\]), row-major. No value is ever NaN: the tracker never returns a pose
 //! that is not finite, and JSON cannot carry one.
 
 mod flag;

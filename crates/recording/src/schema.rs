@@ -171,7 +171,7 @@ pub struct BodyRecord {
     pub rejected_tags: Vec<u32>,
     /// RMS reprojection error (px).
     pub rms_px: f64,
-    /// 6×6 covariance of (rotation vector [rad], translation [mm]), row-major; absent when the
+    /// 6×6 covariance of (rotation vector \[rad\], translation \[mm\]), row-major; absent when the
     /// frame came over the link (packets do not carry it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cov: Option<Vec<f64>>,

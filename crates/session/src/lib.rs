@@ -1,11 +1,11 @@
 //! A recorded session read the way the clinical commands need it — one library that the CLI,
 //! the viewer, the report and the FFI share, so that each rule has one home:
 //!
-//! - [`open`]: a recording's frames of one session, in capture order (several sessions in one
+//! - [`open()`]: a recording's frames of one session, in capture order (several sessions in one
 //!   file are refused unless one is chosen, since their frames would mix);
 //! - [`rest`]: where displacements are measured from (a chosen frame, else the bite accepted
 //!   while recording, else the first frame with a jaw pose);
-//! - [`anatomy`]: the patient's points through a registration, else the standard mounting;
+//! - [`anatomy()`]: the patient's points through a registration, else the standard mounting;
 //! - [`scan_pose`]: the lower scan in the upper scan's frame — through a registration, else as
 //!   recorded;
 //! - [`arches`] and [`survey`]: the tooth scans read and their contacts checked over frames;

@@ -58,7 +58,7 @@ pub struct AccuracyArgs {
     /// scene. Its tables are too small to judge anything by.
     #[arg(long)]
     quick: bool,
-    /// Where rendered frames are cached (default: <out>/frames).
+    /// Where rendered frames are cached (default: the `frames` folder inside `--out`).
     #[arg(long)]
     cache: Option<PathBuf>,
     /// The Python that runs OpenCV for the reference stack (skipped, and said so, without it).

@@ -4,7 +4,7 @@
 //! breathes, the lens's own blur) at 120–300 mm, in each format (1080p, its native 2× crop, 4K),
 //! with the lens locked at the phone's distance (focused) or stuck at its nearest focus, 20 cm
 //! (a phone held too close, or one that drifted from where focus was locked), under each
-//! exposure; the plan's choice ([`jawtrack_devices::plan`]) among them. Tracked as a user
+//! exposure; the plan's choice ([`jawtrack_devices::plan()`]) among them. Tracked as a user
 //! would: the exact marker (so only the optics are wrong), the true intrinsics (the frames',
 //! breathing included), the readout and exposure told.
 
