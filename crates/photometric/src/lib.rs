@@ -13,8 +13,8 @@
 //!
 //! Motion is modelled as the camera records it: each row is exposed at its own time under a
 //! rolling shutter, and over the exposure the body moves on at its tracked velocity, so a
-//! pixel sees the pattern averaged over its row's exposure window (sampled at up to
-//! [`Options::max_subframes`] instants). The pose is the body's at the frame's time (its centre
+//! pixel sees the pattern averaged over its row's exposure window: the window is cut into up
+//! to [`Options::max_subframes`] parts, each seen at its middle with its sweep as a blur. The pose is the body's at the frame's time (its centre
 //! row's), as the corner pipeline's is. The motion is kept only where it fits the image better
 //! than a still body does, a velocity taken from earlier frames can be wrong; where it smears
 //! nothing and moves the tags by a twentieth of a pixel at most, a wrong one cannot matter and
@@ -56,6 +56,7 @@
 //! ```
 
 pub mod model;
+mod parts;
 mod plane;
 mod solve;
 
@@ -124,7 +125,9 @@ pub struct Options {
     /// How far into the quiet zone pixels are taken (cells): the zone is one cell wide on
     /// JawTrack's faces, and beyond it the face's edge may come.
     pub quiet_zone_cells: f64,
-    /// The most instants a row's exposure is sampled at (one per half pixel of smear).
+    /// The most parts a row's exposure is cut into: each is modelled at its middle instant
+    /// with its sweep as a blur, and sweeps the tags by at most twice the blur where this
+    /// allows.
     pub max_subframes: usize,
     /// Huber's constant, in robust standard deviations of the residuals (1.4826 × their median
     /// absolute value at the start). Pixels farther off count linearly: an occluder, a glare

@@ -2,6 +2,7 @@
 //! together until the image and the model agree.
 
 use crate::model::{Pattern, within_one_cell};
+use crate::parts::Parts;
 use crate::plane::{Looked, Outline, Plane, Seen, look, near_edge, plane, to_tag, widest_band};
 use crate::{Body, Image, Motion, Options, RefineError, Refined, Tag};
 use jawtrack_pose::lm::{Damping, damped, minimise};
@@ -27,8 +28,6 @@ const EDGE_BAND_SIGMAS: f64 = 2.0;
 const EDGE_BAND_PX: f64 = 0.5;
 /// Away from the edges, every this many pixels each way are compared, for the tag's levels.
 const FLAT_STRIDE: usize = 4;
-/// Sub-frames per pixel of smear over the exposure.
-const SUBFRAMES_PER_PX: f64 = 2.0;
 /// The residuals' robust scale is never taken below this (linear light, 0–255): a noiseless
 /// render would otherwise make every pixel an outlier.
 const MIN_SCALE: f64 = 0.05;
@@ -163,15 +162,15 @@ fn sigma_px(blur_px: f64) -> f64 {
 /// start [`STILL_CATCH_UP`] times as costly as the moving fit's end.
 fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, RefineError> {
     let (camera, motion) = (body.camera, body.motion.as_ref());
-    let (pixels, times) = setup(body, &begin.pose, begin.sigma_px, options)?;
-    // Motion changes the model only through a smear (instants) or rows read at their own times.
-    let modelled = times.len() > 1 || motion.is_some_and(|m| !m.shutter.is_global());
+    let (pixels, parts) = setup(body, &begin.pose, begin.sigma_px, options)?;
+    // Motion changes the model only through a smear or rows read at their own times.
+    let smeared = parts.smeared();
+    let modelled = smeared || motion.is_some_and(|m| !m.shutter.is_global());
     // A wrong velocity could make the moving model worse than a still one only by the smear
     // and skew it gives: where those are next to nothing, the still alternative is not fitted.
-    let alternative =
-        times.len() > 1 || motion.is_some_and(|m| skew_px(camera, &begin.pose, body.tags, m) >= STILL_SKEW_PX);
-    let still = Fit { camera, pixels: &pixels, times: vec![0.0], motion: None, pose_fixed: false };
-    let moving = modelled.then(|| Fit { camera, pixels: &pixels, times, motion, pose_fixed: false });
+    let alternative = smeared || motion.is_some_and(|m| skew_px(camera, &begin.pose, body.tags, m) >= STILL_SKEW_PX);
+    let still = Fit { camera, pixels: &pixels, parts: Parts::instant(), motion: None, pose_fixed: false };
+    let moving = modelled.then(|| Fit { camera, pixels: &pixels, parts, motion, pose_fixed: false });
     let mut best = match &moving {
         None => still.run(begin, options)?,
         Some(moving) if !alternative => moving.run(begin, options)?,
@@ -209,13 +208,13 @@ pub fn bound(
 ) -> Result<Matrix6<f64>, RefineError> {
     validate(options, body.blur_px, body.motion.as_ref())?;
     let begin = Begin { pose: *pose, sigma_px: sigma_px(body.blur_px), gamma: 1.0 };
-    let (pixels, times) = setup(body, pose, begin.sigma_px, options)?;
-    let mut fit = Fit { camera: body.camera, pixels: &pixels, times, motion: body.motion.as_ref(), pose_fixed: true };
+    let (pixels, parts) = setup(body, pose, begin.sigma_px, options)?;
+    let mut fit = Fit { camera: body.camera, pixels: &pixels, parts, motion: body.motion.as_ref(), pose_fixed: true };
     let fitted = fit.run(&begin, options)?;
     // The pixels the refinement would take with the blur that fits.
-    let (pixels, times) = setup(body, pose, fitted.state.sigma_px, options)?;
+    let (pixels, parts) = setup(body, pose, fitted.state.sigma_px, options)?;
     fit.pixels = &pixels;
-    fit.times = times;
+    fit.parts = parts;
     let seen = fit.seen(pose, fitted.state.sigma_px, true);
     let levels = fit.levels(&seen).ok_or(RefineError::Singular)?;
     let state = State { levels, ..fitted.state };
@@ -233,13 +232,13 @@ pub fn bound(
 }
 
 /// What [`refine`] and [`bound`] share: the pixels gathered at `pose` for a blur of `sigma_px`,
-/// and the instants each row is modelled at.
+/// and the parts of the exposure each row is modelled over.
 fn setup(
     body: &Body<'_>,
     pose: &Pose,
     sigma_px: f64,
     options: &Options,
-) -> Result<(Vec<TagPixels>, Vec<f64>), RefineError> {
+) -> Result<(Vec<TagPixels>, Parts), RefineError> {
     let (camera, motion) = (body.camera, body.motion.as_ref());
     let smear = motion.map_or(0.0, |m| smear_px(camera, pose, body.tags, m));
     let band_px = EDGE_BAND_SIGMAS * sigma_px + smear / 2.0 + EDGE_BAND_PX;
@@ -248,7 +247,7 @@ fn setup(
     if pixels.is_empty() {
         return Err(RefineError::NoPixels);
     }
-    Ok((pixels, times(smear, motion, options)))
+    Ok((pixels, Parts::of(smear, sigma_px, motion, options)))
 }
 
 fn validate(o: &Options, blur_px: f64, motion: Option<&Motion>) -> Result<(), RefineError> {
@@ -383,18 +382,6 @@ fn skew_px(camera: &CameraIntrinsics, start: &Pose, tags: &[Tag<'_>], m: &Motion
     shift(camera, &at(top), &at(bottom), tags)
 }
 
-/// The instants (s, relative to a row's own time) each row's pixels are modelled at: its
-/// exposure window sampled evenly, one instant per half pixel of `smear` (px), at most
-/// `max_subframes`; one instant, the row's own, without a smear.
-fn times(smear: f64, motion: Option<&Motion>, o: &Options) -> Vec<f64> {
-    let Some(m) = motion else { return vec![0.0] };
-    let k = ((smear * SUBFRAMES_PER_PX).ceil() as usize).clamp(1, o.max_subframes);
-    if k == 1 {
-        return vec![0.0];
-    }
-    (0..k).map(|i| ((i as f64 + 0.5) / k as f64 - 0.5) * m.exposure_s).collect()
-}
-
 /// The farthest any tag corner moved (px) between `a` and `b`.
 fn shift(camera: &CameraIntrinsics, a: &Pose, b: &Pose, tags: &[Tag<'_>]) -> f64 {
     let mut most: f64 = 0.0;
@@ -449,8 +436,8 @@ struct Started {
 struct Fit<'a> {
     camera: &'a CameraIntrinsics,
     pixels: &'a [TagPixels],
-    /// Sub-frame instants within a row's exposure.
-    times: Vec<f64>,
+    /// The parts of a row's exposure.
+    parts: Parts,
     motion: Option<&'a Motion>,
     /// The pose is held where the fit begins; only the blur, the tone and the levels move.
     pose_fixed: bool,
@@ -571,21 +558,34 @@ impl Fit<'_> {
         most
     }
 
-    /// Each of a tag's rows' planes at each instant: `rows × times`, row-major.
-    fn planes(&self, pose: &Pose, t: &TagPixels) -> Option<Vec<Plane>> {
+    /// Each of a tag's rows' planes at the middle of each part of its exposure (`rows ×
+    /// parts`, row-major), and, where the sweep is modelled, at the parts' ends (`rows ×
+    /// (parts + 1)`).
+    fn planes(&self, pose: &Pose, t: &TagPixels) -> Option<(Vec<Plane>, Vec<Plane>)> {
         let rows = t.samples.last().map_or(0, |s| s.row + 1 - t.first_row);
-        let mut out = Vec::with_capacity(rows * self.times.len());
+        let k = self.parts.middles.len();
+        let mut middles = Vec::with_capacity(rows * k);
+        let mut ends = Vec::with_capacity(if self.parts.smeared() { rows * (k + 1) } else { 0 });
         for r in 0..rows {
             let row_offset = self.motion.map_or(0.0, |m| m.shutter.offset_s((t.first_row + r) as f64));
-            for &dt in &self.times {
+            let at = |dt: f64| {
                 let at = match self.motion {
                     Some(m) if row_offset + dt != 0.0 => m.velocity.advance(pose, row_offset + dt),
                     _ => *pose,
                 };
-                out.push(plane(&at, &t.centre, &t.x, &t.y)?);
+                plane(&at, &t.centre, &t.x, &t.y)
+            };
+            for &dt in &self.parts.middles {
+                middles.push(at(dt)?);
+            }
+            if self.parts.smeared() {
+                let first = self.parts.middles[0] - self.parts.length_s / 2.0;
+                for i in 0..=k {
+                    ends.push(at(first + i as f64 * self.parts.length_s)?);
+                }
             }
         }
-        Some(out)
+        Some((middles, ends))
     }
 
     /// Every pixel's model at `pose`, tag by tag (`None` where a plane is edge-on).
@@ -612,13 +612,30 @@ impl Fit<'_> {
         mut f: impl FnMut(&Sample, Seen),
     ) -> Option<()> {
         let sigma = sigma_px / (self.camera.fx * self.camera.fy).sqrt();
-        let k = self.times.len();
-        let planes = self.planes(pose, t)?;
+        let k = self.parts.middles.len();
+        let (middles, ends) = self.planes(pose, t)?;
         let half = t.pattern.cells() as f64 / 2.0;
+        let sees = |p: &Plane, n: &Vector2<f64>| to_tag(&p.to_tag, n).map(|(x, y)| Vector2::new(x, y));
         for s in &t.samples {
+            let r = s.row - t.first_row;
             let mut seen = Seen { paper: 0.0, d: Looked::zeros() };
-            for p in &planes[(s.row - t.first_row) * k..][..k] {
-                let one = look(p, &t.pattern, &s.normalised, sigma, half, jacobian)?;
+            // Where the pixel looks on the tag at the start of each part, for its sweep.
+            let ends = if ends.is_empty() { &[][..] } else { &ends[r * (k + 1)..][..k + 1] };
+            let mut from = match ends.first() {
+                Some(p) => sees(p, &s.normalised)?,
+                None => Vector2::zeros(),
+            };
+            for (i, p) in middles[r * k..][..k].iter().enumerate() {
+                let sweep = match ends.get(i + 1) {
+                    Some(end) => {
+                        let to = sees(end, &s.normalised)?;
+                        let sweep = to - from;
+                        from = to;
+                        sweep
+                    }
+                    None => Vector2::zeros(),
+                };
+                let one = look(p, &t.pattern, &s.normalised, sigma, half, &sweep, jacobian)?;
                 seen.paper += one.paper;
                 seen.d += one.d;
             }
