@@ -283,7 +283,7 @@ impl SideFit<'_> {
         cache.clear();
         cache.resize((4 * (2 * (r.range + far) + 2) + 1) as usize, None);
         let (nx, ny) = (self.side.nx, self.side.ny);
-        let mut normal = Normal { refine: r, x0, y0, nx, ny, lowest, cache };
+        let mut normal = Normal { refine: r, x0, y0, nx, ny, lowest, first: (4.0 * lowest) as i64, cache };
         if !r.recentre {
             return normal.c_mean(r.range);
         }
@@ -311,6 +311,8 @@ struct Normal<'r, 'c> {
     ny: f64,
     /// The offset (px) of the cache's first entry.
     lowest: f64,
+    /// That offset in quarter-pixel steps.
+    first: i64,
     cache: &'c mut [Option<Option<f64>>],
 }
 
@@ -333,12 +335,7 @@ impl Normal<'_, '_> {
         if xi < 0 || xi + 1 >= r.w || yi < 0 || yi + 1 >= r.h {
             return None;
         }
-        Some(
-            (1.0 - fa) * (1.0 - fb) * r.px(xi, yi)
-                + fa * (1.0 - fb) * r.px(xi + 1, yi)
-                + (1.0 - fa) * fb * r.px(xi, yi + 1)
-                + fa * fb * r.px(xi + 1, yi + 1),
-        )
+        Some(blend(fa, fb, [r.px(xi, yi), r.px(xi + 1, yi), r.px(xi, yi + 1), r.px(xi + 1, yi + 1)]))
     }
 
     /// The pixel whose corner of four the point `pos` px along the normal is interpolated
@@ -358,7 +355,6 @@ impl Normal<'_, '_> {
     /// A window's steps are read at once this way (per step, the cache's tests were a tenth
     /// of a detection with C's parameters).
     fn fill(&mut self, lo: i64, hi: i64) {
-        let base = (-4.0 * self.lowest) as i64;
         let inside = |n: &Self, k: i64| {
             let (xi, yi, _, _) = n.footing(0.25 * k as f64);
             xi >= 0 && xi + 1 < n.refine.w && yi >= 0 && yi + 1 < n.refine.h
@@ -372,7 +368,7 @@ impl Normal<'_, '_> {
         let r = self.refine;
         let (data, stride, lut) = (r.im.data(), r.im.stride(), r.lut);
         for k in lo..=hi {
-            let j = (k + base) as usize;
+            let j = (k - self.first) as usize;
             if self.cache[j].is_some() {
                 continue;
             }
@@ -380,18 +376,13 @@ impl Normal<'_, '_> {
             let at = yi as usize * stride + xi as usize;
             let (a, b) = (&data[at..at + 2], &data[at + stride..at + stride + 2]);
             let px = |v: u8| lut[usize::from(v)];
-            self.cache[j] = Some(Some(
-                (1.0 - fa) * (1.0 - fb) * px(a[0])
-                    + fa * (1.0 - fb) * px(a[1])
-                    + (1.0 - fa) * fb * px(b[0])
-                    + fa * fb * px(b[1]),
-            ));
+            self.cache[j] = Some(Some(blend(fa, fb, [px(a[0]), px(a[1]), px(b[0]), px(b[1])])));
         }
     }
 
     /// Step k's value once [`Normal::fill`] has read it.
     fn filled(&self, k: i64) -> Option<f64> {
-        self.cache[(k + (-4.0 * self.lowest) as i64) as usize].flatten()
+        self.cache[(k - self.first) as usize].flatten()
     }
 
     /// C's fit: the squared-gradient-weighted mean offset over a window at the quad's edge,
@@ -427,6 +418,13 @@ impl Normal<'_, '_> {
             }
         }
     }
+}
+
+/// The bilinear blend at fractions (`fa` across, `fb` down) of a pixel's corner of four: top
+/// left, top right, bottom left, bottom right. One expression for both ways of reading, so
+/// that they give the same values to the last bit.
+fn blend(fa: f64, fb: f64, [tl, tr, bl, br]: [f64; 4]) -> f64 {
+    (1.0 - fa) * (1.0 - fb) * tl + fa * (1.0 - fb) * tr + (1.0 - fa) * fb * bl + fa * fb * br
 }
 
 /// The windows of ±`reach` px one sample fits along its normal.
