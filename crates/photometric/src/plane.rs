@@ -280,8 +280,9 @@ mod tests {
         assert_eq!(checked, 40);
     }
 
-    /// A tag seen at 150 mm, tilted, with pixels across all of it: the plane and (n, su, sv, u,
-    /// v) for each, σ and the half-width.
+    /// A tag seen at 150 mm, tilted: its pattern, its plane, the normalised directions of a
+    /// 61 × 61 grid over it and a little beyond, a blur σ (normalised) and the half-width in
+    /// cells.
     fn tilted_tag() -> (Pattern, Plane, Vec<Vector2<f64>>, f64, f64) {
         let pattern = Pattern::new(&TagFamily::TAG36H11.bitmap(3).expect("tag 3")).expect("8 cells");
         let (centre, x, y) = (Vector3::new(1.0, 2.0, 0.5), Vector3::new(5.0, 0.0, 0.0), Vector3::new(0.0, -5.0, 0.3));

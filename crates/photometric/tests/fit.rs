@@ -3,16 +3,20 @@
 use jawtrack_apriltag::ImageView;
 use jawtrack_photometric::{Body, Image, Motion, Options, Pattern, RefineError, Refined, Tag, bound, refine};
 use jawtrack_pose::{CameraIntrinsics, Pose, RollingShutter, Velocity};
-use jawtrack_tag_family::TagFamily;
+use jawtrack_tag_family::{TagBitmap, TagFamily};
 use nalgebra::{UnitQuaternion, Vector3};
+
+/// A 10 mm tag in the body's x–y plane, centred on its origin, printing `bitmap`.
+fn square(bitmap: &TagBitmap) -> [Tag<'_>; 1] {
+    [Tag { corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]], bitmap }]
+}
 
 fn refine_at(z: f64, blur_px: f64) -> Result<Refined, RefineError> {
     let luma = vec![128u8; 64 * 48];
     let frame = ImageView::new(&luma, 64, 48, 64).expect("frame");
     let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
     let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
-    let tags =
-        [Tag { corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]], bitmap: &bitmap }];
+    let tags = square(&bitmap);
     let camera = CameraIntrinsics::pinhole(60.0, 60.0, 31.5, 23.5);
     // Shifted far to the side: off the frame.
     let pose = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(500.0, 0.0, z));
@@ -28,7 +32,7 @@ fn a_tag_off_the_frame_or_behind_the_camera_has_no_pixels() {
 
 /// Tag 0, 10 mm across, drawn 100 mm in front of a 300 px pinhole (64 × 48): ink where the
 /// pattern is, under a blur of 0.05 cells.
-fn drawn_tag() -> (Vec<u8>, usize, usize, jawtrack_tag_family::TagBitmap) {
+fn drawn_tag() -> (Vec<u8>, usize, usize, TagBitmap) {
     let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
     let pattern = Pattern::new(&bitmap).expect("8 cells");
     let (w, h) = (64, 48);
@@ -50,8 +54,7 @@ fn a_fit_given_no_room_to_settle_is_refused_as_not_converged() {
     let camera = CameraIntrinsics::pinhole(300.0, 300.0, 31.5, 23.5);
     let frame = ImageView::new(&luma, w, h, w).expect("frame");
     let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
-    let tags =
-        [Tag { corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]], bitmap: &bitmap }];
+    let tags = square(&bitmap);
     let body =
         Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px: 0.3, motion: None };
     let start = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.2, -0.1, 100.0));
@@ -68,8 +71,7 @@ fn the_bound_is_that_of_the_blur_the_image_has_not_of_the_one_given() {
     let (frame_luma, w, h, bitmap) = drawn_tag();
     let frame = ImageView::new(&frame_luma, w, h, w).expect("frame");
     let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
-    let tags =
-        [Tag { corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]], bitmap: &bitmap }];
+    let tags = square(&bitmap);
     let camera = CameraIntrinsics::pinhole(300.0, 300.0, 31.5, 23.5);
     let pose = Pose::from_parts(UnitQuaternion::identity(), Vector3::new(0.0, 0.0, 100.0));
     let depth_sd = |blur_px: f64| {
@@ -121,8 +123,7 @@ fn a_smeared_tag_is_refined_to_its_place_at_the_exposures_middle_with_its_motion
     let frame = ImageView::new(&luma, 64, 48, 64).expect("frame");
     let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
     let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
-    let tags =
-        [Tag { corners: [[-5.0, 5.0, 0.0], [5.0, 5.0, 0.0], [5.0, -5.0, 0.0], [-5.0, -5.0, 0.0]], bitmap: &bitmap }];
+    let tags = square(&bitmap);
     let camera = CameraIntrinsics::pinhole(300.0, 300.0, 31.5, 23.5);
     let motion = Motion {
         velocity: Velocity {
