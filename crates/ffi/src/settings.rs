@@ -33,8 +33,8 @@ pub struct Settings {
     /// it from [`crate::readout_for`].
     pub readout_s: f64,
     /// Refine each jaw's pose from every pixel of its tags (`jawtrack track --refine dense`)
-    /// rather than from their corners alone. Off by default: it takes about 100 ms a body on a
-    /// desktop core today, too slow to run live (docs/dense.md).
+    /// rather than from their corners alone. Off by default: it takes 12–70 ms a body on a
+    /// desktop core today (the most while chewing), too slow to run live (docs/dense.md).
     pub dense: bool,
 }
 

@@ -5,7 +5,7 @@ use crate::model::{Pattern, within_one_cell};
 use crate::parts::Parts;
 use crate::plane::{Looked, Outline, Plane, Seen, look, near_edge, plane, to_tag, widest_band};
 use crate::{Body, Image, Motion, Options, RefineError, Refined, Tag};
-use jawtrack_pose::lm::{Damping, damped, minimise};
+use jawtrack_pose::lm::{Damping, damped, minimise_until};
 use jawtrack_pose::pnp::perturb;
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix6, Point2, SMatrix, SVector, Vector2, Vector3, Vector6};
@@ -55,6 +55,10 @@ const MIN_SIGMA_PX: f64 = 0.1;
 /// A fit out of linearisations whose next step would move no corner farther than this (px) has
 /// settled: a hundredth of a pixel is below what any frame here resolves.
 const SETTLED_PX: f64 = 0.01;
+/// A step shorter than this many of the estimate's standard deviations is not taken: the fit
+/// has settled within its own noise (left whole, such a step would add 9 % to the estimate's
+/// variance; 0.1 and 1 were measured too, `docs/dense.md`).
+const SETTLED_SIGMAS: f64 = 0.3;
 /// The tone's power is kept within these: beyond, the curve given was not a tone curve.
 const MIN_GAMMA: f64 = 0.25;
 const MAX_GAMMA: f64 = 4.0;
@@ -488,16 +492,24 @@ impl Fit<'_> {
             }
             Some(normal.clone())
         };
-        minimise(
+        // The state last linearised: where the loop ends after steps found no better (or
+        // settled), its equations are not the ones evaluated last.
+        let linearised = RefCell::new(None::<(State, Normal)>);
+        // The step the last candidate was made by, for whether it has settled.
+        let last_step = RefCell::new(None::<DVector<f64>>);
+        minimise_until(
             &mut state,
             &mut cost,
             &damping,
             |s| {
                 iterations += 1;
-                linearise(s).or_else(|| Some(self.normal(s, &huber_weight, huber, None)))
+                let normal = linearise(s).unwrap_or_else(|| self.normal(s, &huber_weight, huber, None));
+                *linearised.borrow_mut() = Some((s.clone(), normal.clone()));
+                Some(normal)
             },
             |s, n, lambda| {
                 let step = self.step(n, lambda, damping.diagonal_floor)?;
+                *last_step.borrow_mut() = Some(step.clone());
                 let d = Vector6::from_iterator(step.iter().take(6).copied());
                 let pose = Pose::from_isometry(perturb(s.pose.isometry(), &d));
                 let sigma_px = (s.sigma_px + step[6]).max(MIN_SIGMA_PX);
@@ -508,6 +520,7 @@ impl Fit<'_> {
                 });
                 Some(State { pose, sigma_px, gamma, levels: levels.collect() })
             },
+            |_, n, _| last_step.borrow().as_ref().is_some_and(|step| self.settled(step, n)),
             |s| {
                 let normal = self.normal(s, &huber_weight, huber, None);
                 let cost = normal.cost;
@@ -516,7 +529,9 @@ impl Fit<'_> {
             },
         )
         .ok_or(RefineError::Singular)?;
-        let normal = linearise(&state).unwrap_or_else(|| self.normal(&state, &huber_weight, huber, None));
+        let normal = linearise(&state)
+            .or_else(|| linearised.take().and_then(|(at, normal)| (at == state).then_some(normal)))
+            .unwrap_or_else(|| self.normal(&state, &huber_weight, huber, None));
         // Every linearisation used: the steps were still lowering the cost when they ran out.
         // Where there is next to no noise (a clean render) each step lowers it by a larger
         // fraction while moving the pose by next to nothing: settled, if the next step would
@@ -561,6 +576,19 @@ impl Fit<'_> {
             }
         }
         most
+    }
+
+    /// Whether `step`, from the state whose normal equations are `n`, is within a fraction
+    /// ([`SETTLED_SIGMAS`]) of the estimate's own standard deviation: (δᵀ H δ / the residuals'
+    /// variance)^½, the step's length in the covariance the fit reports. Evaluating it could not
+    /// change the fit by more than its noise already does. Never with the pose held.
+    fn settled(&self, step: &DVector<f64>, n: &Normal) -> bool {
+        if self.pose_fixed {
+            return false;
+        }
+        let pixels: usize = self.pixels.iter().map(|t| t.samples.len()).sum();
+        let variance = n.weighted_sq / (pixels as f64 - n.h.nrows() as f64).max(1.0);
+        (step.dot(&(&n.h * step)) / variance).sqrt() < SETTLED_SIGMAS
     }
 
     /// Each of a tag's rows' planes at the middle of each part of its exposure (`rows ×

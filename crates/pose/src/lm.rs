@@ -43,8 +43,49 @@ pub fn minimise<S, N>(
     state: &mut S,
     cost: &mut f64,
     damping: &Damping,
+    linearise: impl FnMut(&S) -> Option<N>,
+    step: impl FnMut(&S, &N, f64) -> Option<S>,
+    evaluate: impl FnMut(&S) -> f64,
+) -> Option<()> {
+    minimise_until(state, cost, damping, linearise, step, |_, _, _| false, evaluate)
+}
+
+/// [`minimise`], also stopping, before evaluating it, at the first candidate that
+/// `settled(state, normal equations there, candidate)` says moves the state by less than
+/// matters (the state is kept).
+/// Where evaluating is costly and the cost is only approximately smooth at the scale of the
+/// last steps, this saves the evaluations that would only find the damped steps no better.
+///
+/// # Examples
+///
+/// ```
+/// use jawtrack_pose::lm::{Damping, minimise_until};
+///
+/// // (x − 3)², stopped once a step would move x by under 0.01.
+/// let (mut x, mut cost, mut evaluations) = (0.0_f64, 9.0, 0);
+/// let damping = Damping { initial: 1e-3, diagonal_floor: 1e-12, relative_tolerance: 1e-15, max_iterations: 50 };
+/// minimise_until(
+///     &mut x,
+///     &mut cost,
+///     &damping,
+///     |x| Some((2.0, 2.0 * (x - 3.0))),
+///     |x, (h, g), lambda| Some(x - g / (h * (1.0 + lambda))),
+///     |x, _, next| (next - x).abs() < 0.01,
+///     |x| {
+///         evaluations += 1;
+///         (x - 3.0) * (x - 3.0)
+///     },
+/// );
+/// assert!((x - 3.0).abs() < 0.01);
+/// assert!(evaluations < 10);
+/// ```
+pub fn minimise_until<S, N>(
+    state: &mut S,
+    cost: &mut f64,
+    damping: &Damping,
     mut linearise: impl FnMut(&S) -> Option<N>,
     mut step: impl FnMut(&S, &N, f64) -> Option<S>,
+    mut settled: impl FnMut(&S, &N, &S) -> bool,
     mut evaluate: impl FnMut(&S) -> f64,
 ) -> Option<()> {
     let mut lambda = damping.initial;
@@ -56,6 +97,9 @@ pub fn minimise<S, N>(
                 lambda *= 10.0;
                 continue;
             };
+            if settled(state, &normal, &candidate) {
+                return Some(());
+            }
             let c = evaluate(&candidate);
             if c < *cost {
                 let converged = *cost - c <= damping.relative_tolerance * *cost;
@@ -99,6 +143,40 @@ mod tests {
         .expect("never aborted");
         assert!((p - Vector2::new(1.0, 1.0)).norm() < 1e-6, "{p}");
         assert!(c < 1e-12);
+    }
+
+    #[test]
+    fn a_settled_candidate_ends_the_loop_unevaluated_and_the_state_is_kept() {
+        let damping = Damping { initial: 1e-3, diagonal_floor: 1e-12, relative_tolerance: 1e-15, max_iterations: 50 };
+        let (mut x, mut c, mut evaluations) = (0.0_f64, 9.0, 0);
+        let out = minimise_until(
+            &mut x,
+            &mut c,
+            &damping,
+            |x| Some((2.0, 2.0 * (x - 3.0))),
+            |x, (h, g), lambda| Some(x - g / (h * (1.0 + lambda))),
+            |_, _, next| (next - 3.0).abs() < 1.0,
+            |x| {
+                evaluations += 1;
+                (x - 3.0) * (x - 3.0)
+            },
+        );
+        assert_eq!((out, x, c, evaluations), (Some(()), 0.0, 9.0, 0), "the first step lands within 1 of 3");
+        // Never settled: the same loop as `minimise`, which goes on until the cost stops falling.
+        let (mut y, mut d, mut evaluations) = (0.0_f64, 9.0, 0);
+        minimise_until(
+            &mut y,
+            &mut d,
+            &damping,
+            |y| Some((2.0, 2.0 * (y - 3.0))),
+            |y, (h, g), lambda| Some(y - g / (h * (1.0 + lambda))),
+            |_, _, _| false,
+            |y| {
+                evaluations += 1;
+                (y - 3.0) * (y - 3.0)
+            },
+        );
+        assert!((y - 3.0).abs() < 1e-6 && evaluations > 2, "{y} after {evaluations}");
     }
 
     #[test]
