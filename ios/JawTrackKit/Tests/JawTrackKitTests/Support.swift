@@ -272,10 +272,11 @@ final class MemoryVideoSink: VideoSink {
         return true
     }
 
+    /// Writes a stand-in movie; as the real writer, reports why not when it could not.
     func finish(completion: @escaping (String?) -> Void) {
         finished = true
-        FileManager.default.createFile(atPath: url.path, contents: Data("movie".utf8))
-        completion(nil)
+        let written = FileManager.default.createFile(atPath: url.path, contents: Data("movie".utf8))
+        completion(written ? nil : "could not write the movie \(url.path)")
     }
 }
 
