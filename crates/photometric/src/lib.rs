@@ -58,6 +58,7 @@
 pub mod model;
 mod parts;
 mod plane;
+mod robust;
 mod solve;
 
 pub use model::Pattern;

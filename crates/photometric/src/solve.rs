@@ -4,6 +4,7 @@
 use crate::model::{Pattern, within_one_cell};
 use crate::parts::Parts;
 use crate::plane::{Looked, Outline, Plane, Seen, look, near_edge, plane, to_tag, widest_band};
+use crate::robust::{huber_weights, rho, scale};
 use crate::{Body, Image, Motion, Options, RefineError, Refined, Tag};
 use jawtrack_pose::lm::{Damping, damped, minimise_until};
 use jawtrack_pose::pnp::perturb;
@@ -53,7 +54,10 @@ const STILL_CATCH_UP: f64 = 3.0;
 /// The blur's σ (px) is kept at least this: below it every edge is a step to the model.
 const MIN_SIGMA_PX: f64 = 0.1;
 /// A fit out of linearisations whose next step would move no corner farther than this (px) has
-/// settled: a hundredth of a pixel is below what any frame here resolves.
+/// settled. This only judges a fit that has used every linearisation (on a noiseless render,
+/// where each step lowers the cost by a large fraction while moving the pose by next to
+/// nothing); the fit's own end is [`SETTLED_SIGMAS`]: at 100 mm a hundredth of a pixel is 0.67
+/// µm, more than the jitter of a still jaw there (0.45 µm, `docs/dense.md`).
 const SETTLED_PX: f64 = 0.01;
 /// A step shorter than this many of the estimate's standard deviations is not taken: the fit
 /// has settled within its own noise (left whole, such a step would add 9 % to the estimate's
@@ -782,40 +786,4 @@ fn add_block(h: &mut DMatrix<f64>, block: &Block, k: usize) {
     h.view_mut((0, o), (SHARED, PER_TAG)).add_assign(&b.fixed_view::<SHARED, PER_TAG>(0, SHARED));
     h.view_mut((o, 0), (PER_TAG, SHARED)).add_assign(&b.fixed_view::<PER_TAG, SHARED>(SHARED, 0));
     h.view_mut((o, o), (PER_TAG, PER_TAG)).add_assign(&b.fixed_view::<PER_TAG, PER_TAG>(SHARED, SHARED));
-}
-
-/// The residuals' robust scale: 1.4826 × their median absolute value.
-fn scale(mut r: Vec<f64>) -> f64 {
-    if r.is_empty() {
-        return 0.0;
-    }
-    r.iter_mut().for_each(|v| *v = v.abs());
-    let mid = r.len() / 2;
-    1.4826 * *r.select_nth_unstable_by(mid, f64::total_cmp).1
-}
-
-/// Huber's ρ.
-fn rho(r: f64, k: f64) -> f64 {
-    let a = r.abs();
-    if a <= k { r * r } else { 2.0 * k * a - k * k }
-}
-
-/// Huber's IRLS weight ψ(r)/r (on the ρ above, whose quadratic part is r²).
-fn weight(r: f64, k: f64) -> f64 {
-    let a = r.abs();
-    if a <= k { 1.0 } else { k / a }
-}
-
-/// A pixel's weights in the fit: in the gradient Huber's IRLS weight, in the curvature Newton's
-/// for Huber's cost (a pixel beyond the constant weighs in the gradient but adds no curvature).
-/// Its reweighted curvature (as the covariance's) would shorten every step where the model's
-/// misfit at the edges puts many pixels there: measured on a still frame at 100 mm, 5–11
-/// linearisations against 4–5 this way.
-fn huber_weights(r: f64, k: f64) -> (f64, f64) {
-    (weight(r, k), curvature(r, k))
-}
-
-/// Huber's curvature ρ''/2: none beyond the constant, where ρ is a straight line.
-fn curvature(r: f64, k: f64) -> f64 {
-    if r.abs() <= k { 1.0 } else { 0.0 }
 }
