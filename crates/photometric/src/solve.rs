@@ -132,8 +132,7 @@ pub fn refine(body: &Body<'_>, start: &Pose, options: &Options) -> Result<Refine
     validate(options, body.blur_px, body.motion.as_ref())?;
     let best = fit(body, &Begin { pose: *start, sigma_px: sigma_px(body.blur_px), gamma: 1.0 }, options)?;
     let (state, normal) = (&best.state, &best.normal);
-    let dof = (best.pixels as f64 - normal.h.nrows() as f64).max(1.0);
-    let variance = normal.weighted_sq / dof;
+    let variance = normal.variance(best.pixels);
     let inverse = normal.h.clone().try_inverse().ok_or(RefineError::Singular)?;
     let covariance = Matrix6::from_fn(|i, j| inverse[(i, j)] * variance);
     let shift_px = shift(body.camera, start, &state.pose, body.tags);
@@ -423,6 +422,14 @@ struct Normal {
     cost: f64,
 }
 
+impl Normal {
+    /// The residuals' variance over `pixels`, each at its Huber weight, per degree of freedom
+    /// left: what scales the inverse curvature into the estimate's covariance.
+    fn variance(&self, pixels: usize) -> f64 {
+        self.weighted_sq / (pixels as f64 - self.h.nrows() as f64).max(1.0)
+    }
+}
+
 /// Where one fit ended.
 struct Outcome {
     state: State,
@@ -584,15 +591,14 @@ impl Fit<'_> {
 
     /// Whether `step`, from the state whose normal equations are `n`, is within a fraction
     /// ([`SETTLED_SIGMAS`]) of the estimate's own standard deviation: (δᵀ H δ / the residuals'
-    /// variance)^½, the step's length in the covariance the fit reports. Evaluating it could not
-    /// change the fit by more than its noise already does. Never with the pose held.
+    /// variance)^½, the step's length in the covariance the fit reports: taking it would move
+    /// the fit by less than a third of its own noise. Never with the pose held.
     fn settled(&self, step: &DVector<f64>, n: &Normal) -> bool {
         if self.pose_fixed {
             return false;
         }
-        let pixels: usize = self.pixels.iter().map(|t| t.samples.len()).sum();
-        let variance = n.weighted_sq / (pixels as f64 - n.h.nrows() as f64).max(1.0);
-        (step.dot(&(&n.h * step)) / variance).sqrt() < SETTLED_SIGMAS
+        let pixels = self.pixels.iter().map(|t| t.samples.len()).sum();
+        (step.dot(&(&n.h * step)) / n.variance(pixels)).sqrt() < SETTLED_SIGMAS
     }
 
     /// Each of a tag's rows' planes at the middle of each part of its exposure (`rows ×
