@@ -179,6 +179,13 @@ impl Realism {
         }
     }
 
+    /// The electrons a pixel of the delivered frame holds when full: [`Realism::full_well_e`]
+    /// over the [`Realism::zoom`]'s crop, whose pixel gathers 1/zoom² of a whole-sensor pixel's
+    /// light. The renderer's shot noise, and any bound on what a frame can tell, start here.
+    pub fn pixel_full_well_e(&self) -> f64 {
+        self.full_well_e / (self.zoom * self.zoom)
+    }
+
     /// The factor the image is enlarged by with the lens focused at `focus_mm` rather than at
     /// infinity: the lens sits f²/(u − f) further from the sensor, so u/(u − f) (1 without
     /// focus breathing, or without a focus distance).

@@ -345,9 +345,7 @@ impl Synthesizer {
         }
         post::add_glare(&mut img, &glare);
         post::illumination(&mut img, realism.vignetting, realism.lighting_gradient, self.gradient_dir);
-        // A crop gathers 1/zoom² of the light per pixel.
-        let full_well = realism.full_well_e / (realism.zoom * realism.zoom);
-        post::sensor_noise(&mut img, full_well, realism.read_noise_e, &mut rng);
+        post::sensor_noise(&mut img, realism.pixel_full_well_e(), realism.read_noise_e, &mut rng);
         let luma = post::develop(&mut img, realism);
 
         let scene_mid = self.scene_at(&cam_head, cam_max, cam_man, &extra);

@@ -28,8 +28,13 @@ pub struct DenseArgs {
     /// focused there, 1×: the far case), still-100 (the default lens at 100 mm: the easy
     /// case), gamma-1.8 (that, developed with a gamma-1.8 curve), hinge (the default hinge),
     /// chew-2ms and chew-8ms (the capture plan: 220 mm, 2× crop, 10 ms readout, at that
-    /// exposure).
-    #[arg(long, value_delimiter = ',', default_value = "still-200,still-100,gamma-1.8,hinge,chew-2ms,chew-8ms")]
+    /// exposure), defocus (the phone 200 mm away with the 2× crop, its focus locked 12 mm behind
+    /// the tags: a few millimetres of depth of field miss them).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "still-200,still-100,gamma-1.8,hinge,chew-2ms,chew-8ms,defocus"
+    )]
     cases: Vec<String>,
     /// Frames per view of the still cases (3 tripod and 3 hand-held views): the jitter is
     /// the spread over a tripod view's frames without glare or an occluder, read through the
@@ -49,6 +54,11 @@ pub struct DenseArgs {
     #[arg(long)]
     out: Option<PathBuf>,
 }
+
+/// How far (mm) behind the tags the `defocus` case's lens is focused: at 200 mm a 6.8 mm f/1.78
+/// lens spreads a point 12 mm off its focus over a disc of about 3.5 px at the 2× crop's 1080p
+/// (7.6 µm on the sensor).
+const DEFOCUS_MM: f64 = 12.0;
 
 /// One case: what is rendered and how it is tracked.
 struct Case {
@@ -86,7 +96,16 @@ fn case(name: &str, a: &DenseArgs) -> Result<Case> {
         "hinge" => ("hinge", Request { max_frames: Some(a.motion_frames), ..base(SceneKind::Hinge, 1, 30.0) }),
         "chew-2ms" => ("chew-2ms", chew(2.0)),
         "chew-8ms" => ("chew-8ms", chew(8.0)),
-        other => bail!("unknown case '{other}' (choose still-200, still-100, gamma-1.8, hinge, chew-2ms or chew-8ms)"),
+        "defocus" => (
+            "defocus",
+            Request {
+                phone: Some(Phone { focus_mm: 200.0 + DEFOCUS_MM, ..phone(200.0, 2.0) }),
+                ..base(SceneKind::Static, a.still_frames, 30.0)
+            },
+        ),
+        other => bail!(
+            "unknown case '{other}' (choose still-200, still-100, gamma-1.8, hinge, chew-2ms, chew-8ms or defocus)"
+        ),
     };
     Ok(Case { name, request })
 }
@@ -246,12 +265,9 @@ fn jaw_translation_covariance(
 /// 8-bit encoding's rounding carried back through the curve.
 fn pixel_variance(realism: &Realism, curve: ToneCurve, l: f64) -> f64 {
     let v = (l / 255.0).clamp(0.0, 1.0);
-    let sensor = if realism.full_well_e > 0.0 {
-        let fw = realism.full_well_e;
-        255.0 * 255.0 * (v * fw + realism.read_noise_e * realism.read_noise_e) / (fw * fw)
-    } else {
-        0.0
-    };
+    let fw = realism.pixel_full_well_e();
+    let sensor =
+        if fw > 0.0 { 255.0 * 255.0 * (v * fw + realism.read_noise_e * realism.read_noise_e) / (fw * fw) } else { 0.0 };
     let e = curve.encode(v) * 255.0;
     let slope = 255.0 * (curve.decode(((e + 0.5) / 255.0).min(1.0)) - curve.decode(((e - 0.5) / 255.0).max(0.0)));
     sensor + slope * slope / 12.0
@@ -428,11 +444,11 @@ mod tests {
             out: None,
         };
         let mut checked = 0;
-        for name in ["still-200", "still-100", "gamma-1.8", "hinge", "chew-2ms", "chew-8ms"] {
+        for name in ["still-200", "still-100", "gamma-1.8", "hinge", "chew-2ms", "chew-8ms", "defocus"] {
             assert_eq!(case(name, &a).expect("known").name, name);
             checked += 1;
         }
-        assert_eq!(checked, 6);
+        assert_eq!(checked, 7);
         let e = case("still-300", &a).err().expect("refused").to_string();
         assert!(e.contains("still-300") && e.contains("chew-8ms"), "{e}");
     }
@@ -444,6 +460,12 @@ mod tests {
         assert!(bright > dark && dark > 0.0, "{dark} {bright}");
         let clean = Realism { full_well_e: 0.0, ..r };
         assert!(pixel_variance(&clean, ToneCurve::Srgb, 100.0) > 0.0, "8-bit rounding remains");
+        // A 2× crop's pixel gathers a quarter of the light: its shot noise, relative to its
+        // signal, is twice as large (read noise and rounding aside, at this level about 4×).
+        let crop = Realism { zoom: 2.0, ..r };
+        let (whole, cropped) =
+            (pixel_variance(&r, ToneCurve::Srgb, 200.0), pixel_variance(&crop, ToneCurve::Srgb, 200.0));
+        assert!(cropped > 3.5 * whole && cropped < 4.5 * whole, "{whole} {cropped}");
     }
 
     #[test]
