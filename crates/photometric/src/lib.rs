@@ -55,6 +55,7 @@
 //! # }
 //! ```
 
+mod gather;
 pub mod model;
 mod parts;
 mod plane;
