@@ -26,7 +26,6 @@ pub(crate) struct TagPixels {
     pub(crate) centre: Vector3<f64>,
     pub(crate) x: Vector3<f64>,
     pub(crate) y: Vector3<f64>,
-    pub(crate) first_row: usize,
     pub(crate) samples: Vec<Sample>,
 }
 
@@ -100,7 +99,7 @@ pub(crate) fn gather(
         edge.into_iter().filter(|(col, s)| scatter(*col, s.row).is_multiple_of(stride)).map(|(_, s)| s).collect();
     samples.extend(flat.into_iter().map(|(_, s)| s));
     samples.sort_by_key(|s| s.row);
-    (!samples.is_empty()).then_some(TagPixels { pattern, centre, x, y, first_row: y0, samples })
+    (!samples.is_empty()).then_some(TagPixels { pattern, centre, x, y, samples })
 }
 
 /// A hash of a pixel's place, to thin pixels without a pattern.

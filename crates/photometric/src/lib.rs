@@ -142,6 +142,11 @@ pub struct Options {
     /// A refined pose that moves any tag corner farther than this (px) from the start is
     /// refused: the corner pose is better than that, so the fit went astray.
     pub max_shift_px: f64,
+    /// Above 1, each pass over the pixels is shared out tag by tag over the rayon pool the
+    /// call runs in (the tracker's, which refines the two bodies at once on the same pool;
+    /// rayon's global pool outside any). Each tag's sums are its own and are added in the
+    /// tags' order, so the result is the same for any number.
+    pub threads: usize,
 }
 
 impl Default for Options {
@@ -153,6 +158,7 @@ impl Default for Options {
             huber: 3.0,
             max_pixels_per_tag: 20000,
             max_shift_px: 1.5,
+            threads: 1,
         }
     }
 }

@@ -10,6 +10,7 @@ use jawtrack_pose::lm::{Damping, damped, minimise_until};
 use jawtrack_pose::pnp::perturb;
 use jawtrack_pose::{CameraIntrinsics, Pose};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix6, SMatrix, SVector, Vector2, Vector6};
+use rayon::prelude::*;
 use std::cell::RefCell;
 use std::ops::AddAssign;
 
@@ -96,6 +97,11 @@ impl State {
     }
 }
 
+/// Pixels of a tag taken as one piece of work: small enough that two threads share a body of a
+/// few tags of different sizes evenly, large enough that each piece's planes (one per row it
+/// covers and part of the exposure) are few beside its pixels.
+const PIECE: usize = 1024;
+
 /// Parameters shared by the tags: the pose's six, the blur and the tone's power.
 const SHARED: usize = 8;
 /// Parameters of each tag: its ink and its contrast.
@@ -159,8 +165,9 @@ fn fit(body: &Body<'_>, begin: &Begin, options: &Options) -> Result<Outcome, Ref
     // A wrong velocity could make the moving model worse than a still one only by the smear
     // and skew it gives: where those are next to nothing, the still alternative is not fitted.
     let alternative = smeared || motion.is_some_and(|m| skew_px(camera, &begin.pose, body.tags, m) >= STILL_SKEW_PX);
-    let still = Fit { camera, pixels: &pixels, parts: Parts::instant(), motion: None, pose_fixed: false };
-    let moving = modelled.then(|| Fit { camera, pixels: &pixels, parts, motion, pose_fixed: false });
+    let threads = options.threads;
+    let still = Fit { camera, pixels: &pixels, parts: Parts::instant(), motion: None, pose_fixed: false, threads };
+    let moving = modelled.then(|| Fit { camera, pixels: &pixels, parts, motion, pose_fixed: false, threads });
     let mut best = match &moving {
         None => still.run(begin, options)?,
         Some(moving) if !alternative => moving.run(begin, options)?,
@@ -194,12 +201,19 @@ pub fn bound(
     body: &Body<'_>,
     pose: &Pose,
     options: &Options,
-    noise: &dyn Fn(f64) -> f64,
+    noise: &(dyn Fn(f64) -> f64 + Sync),
 ) -> Result<Matrix6<f64>, RefineError> {
     validate(options, body.blur_px, body.motion.as_ref())?;
     let begin = Begin { pose: *pose, sigma_px: sigma_px(body.blur_px), gamma: 1.0 };
     let (pixels, parts) = setup(body, pose, begin.sigma_px, options)?;
-    let mut fit = Fit { camera: body.camera, pixels: &pixels, parts, motion: body.motion.as_ref(), pose_fixed: true };
+    let mut fit = Fit {
+        camera: body.camera,
+        pixels: &pixels,
+        parts,
+        motion: body.motion.as_ref(),
+        pose_fixed: true,
+        threads: options.threads,
+    };
     let fitted = fit.run(&begin, options)?;
     // The pixels the refinement would take with the blur that fits.
     let (pixels, parts) = setup(body, pose, fitted.state.sigma_px, options)?;
@@ -245,8 +259,8 @@ fn validate(o: &Options, blur_px: f64, motion: Option<&Motion>) -> Result<(), Re
     if !(blur_px.is_finite() && blur_px >= 0.0) {
         return bad(format!("the blur must be a finite σ of at least 0 px, got {blur_px}"));
     }
-    if o.max_iterations == 0 || o.max_subframes == 0 {
-        return bad("iterations and sub-frames must be at least 1".into());
+    if o.max_iterations == 0 || o.max_subframes == 0 || o.threads == 0 {
+        return bad("iterations, sub-frames and threads must be at least 1".into());
     }
     if !(o.quiet_zone_cells.is_finite() && (0.0..=1.0).contains(&o.quiet_zone_cells)) {
         return bad(format!("the quiet zone taken must be 0–1 cells, got {}", o.quiet_zone_cells));
@@ -358,6 +372,8 @@ struct Fit<'a> {
     motion: Option<&'a Motion>,
     /// The pose is held where the fit begins; only the blur, the tone and the levels move.
     pose_fixed: bool,
+    /// Above 1, a pass over the pixels is shared out tag by tag ([`Options::threads`]).
+    threads: usize,
 }
 
 impl Fit<'_> {
@@ -501,13 +517,14 @@ impl Fit<'_> {
     /// Each of a tag's rows' planes at the middle of each part of its exposure (`rows ×
     /// parts`, row-major), and, where the sweep is modelled, at the parts' ends (`rows ×
     /// (parts + 1)`).
-    fn planes(&self, pose: &Pose, t: &TagPixels) -> Option<(Vec<Plane>, Vec<Plane>)> {
-        let rows = t.samples.last().map_or(0, |s| s.row + 1 - t.first_row);
+    fn planes(&self, pose: &Pose, t: &TagPixels, samples: &[Sample]) -> Option<(Vec<Plane>, Vec<Plane>)> {
+        let first_row = samples.first().map_or(0, |s| s.row);
+        let rows = samples.last().map_or(0, |s| s.row + 1 - first_row);
         let k = self.parts.middles.len();
         let mut middles = Vec::with_capacity(rows * k);
         let mut ends = Vec::with_capacity(if self.parts.smeared() { rows * (k + 1) } else { 0 });
         for r in 0..rows {
-            let row_offset = self.motion.map_or(0.0, |m| m.shutter.offset_s((t.first_row + r) as f64));
+            let row_offset = self.motion.map_or(0.0, |m| m.shutter.offset_s((first_row + r) as f64));
             let at = |dt: f64| {
                 let at = match self.motion {
                     Some(m) if row_offset + dt != 0.0 => m.velocity.advance(pose, row_offset + dt),
@@ -530,14 +547,38 @@ impl Fit<'_> {
 
     /// Every pixel's model at `pose`, tag by tag (`None` where a plane is edge-on).
     fn seen(&self, pose: &Pose, sigma_px: f64, jacobian: bool) -> Vec<Option<Vec<Seen>>> {
-        self.pixels
+        let pieces = self.each_piece(|_, t, _, samples| {
+            let mut out = Vec::with_capacity(samples.len());
+            self.each_seen(t, samples, pose, sigma_px, jacobian, |_, m| out.push(m))?;
+            Some(out)
+        });
+        pieces.into_iter().map(|tag| tag.into_iter().collect::<Option<Vec<_>>>().map(|p| p.concat())).collect()
+    }
+
+    /// `f(k, tag k, at, its pixels from the at-th)` over each tag's pixels in pieces of at most
+    /// [`PIECE`],
+    /// the results tag by tag and piece by piece in order: one piece after another, or with
+    /// [`Fit::threads`] above 1 each a piece of work for the rayon pool the call runs in (a
+    /// pool's thread that is done takes the next). The pieces do not depend on the threads, so
+    /// neither do the sums made of them.
+    fn each_piece<T: Send>(&self, f: impl Fn(usize, &TagPixels, usize, &[Sample]) -> T + Sync + Send) -> Vec<Vec<T>> {
+        let pieces: Vec<(usize, usize, &[Sample])> = self
+            .pixels
             .iter()
-            .map(|t| {
-                let mut out = Vec::with_capacity(t.samples.len());
-                self.each_seen(t, pose, sigma_px, jacobian, |_, m| out.push(m))?;
-                Some(out)
-            })
-            .collect()
+            .enumerate()
+            .flat_map(|(k, t)| t.samples.chunks(PIECE).enumerate().map(move |(i, c)| (k, i * PIECE, c)))
+            .collect();
+        let run = |&(k, at, samples): &(usize, usize, &[Sample])| (k, f(k, &self.pixels[k], at, samples));
+        let done: Vec<(usize, T)> = if self.threads <= 1 || pieces.len() <= 1 {
+            pieces.iter().map(run).collect()
+        } else {
+            pieces.par_iter().with_max_len(1).map(run).collect()
+        };
+        let mut out: Vec<Vec<T>> = self.pixels.iter().map(|_| Vec::new()).collect();
+        for (k, r) in done {
+            out[k].push(r);
+        }
+        out
     }
 
     /// Calls `f` with each pixel of `t` and its model at `pose`, in order, without keeping them
@@ -546,6 +587,7 @@ impl Fit<'_> {
     fn each_seen(
         &self,
         t: &TagPixels,
+        samples: &[Sample],
         pose: &Pose,
         sigma_px: f64,
         jacobian: bool,
@@ -553,11 +595,12 @@ impl Fit<'_> {
     ) -> Option<()> {
         let sigma = sigma_px / (self.camera.fx * self.camera.fy).sqrt();
         let k = self.parts.middles.len();
-        let (middles, ends) = self.planes(pose, t)?;
+        let (middles, ends) = self.planes(pose, t, samples)?;
+        let first_row = samples.first().map_or(0, |s| s.row);
         let half = t.pattern.cells() as f64 / 2.0;
         let sees = |p: &Plane, n: &Vector2<f64>| to_tag(&p.to_tag, n).map(|(x, y)| Vector2::new(x, y));
-        for s in &t.samples {
-            let r = s.row - t.first_row;
+        for s in samples {
+            let r = s.row - first_row;
             let mut seen = Seen { paper: 0.0, d: Looked::zeros() };
             // Where the pixel looks on the tag at the start of each part, for its sweep.
             let ends = if ends.is_empty() { &[][..] } else { &ends[r * (k + 1)..][..k + 1] };
@@ -628,20 +671,21 @@ impl Fit<'_> {
     fn normal(
         &self,
         s: &State,
-        weights: &dyn Fn(f64, f64) -> (f64, f64),
+        weights: &(dyn Fn(f64, f64) -> (f64, f64) + Sync),
         huber: f64,
         seen: Option<&[Option<Vec<Seen>>]>,
     ) -> Normal {
         let n = SHARED + PER_TAG * self.pixels.len();
         let (mut h, mut h_reweighted, mut g) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n), DVector::zeros(n));
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
-        for (k, (t, l)) in self.pixels.iter().zip(&s.levels).enumerate() {
+        // Each tag's sums are its own, so tags may be summed at once; they are added up here in
+        // the tags' order, the same for any number of threads.
+        let pieces = self.each_piece(|k, t, at, samples| {
+            let l = s.levels[k];
             // The tag's block: the shared parameters, then its own levels. Only the lower
             // triangles are summed; `extra` holds what the pixels whose two weights differ
             // (Huber's outliers) add to the reweighted curvature.
-            let (mut ht, mut extra, mut gt) = (Block::zeros(), Block::zeros(), BlockVector::zeros());
-            // The sums run on from the tags before, and are kept only if the tag is seen whole.
-            let (mut tag_sq, mut tag_weighted_sq, mut tag_cost) = (sq, weighted_sq, cost);
+            let mut sums = TagSums::default();
             let mut add = |px: &Sample, m: Seen| {
                 let (model, by_light, by_gamma) = s.predict(k, m.paper);
                 let r = px.linear - model;
@@ -651,32 +695,67 @@ impl Fit<'_> {
                 j[7] = -by_gamma;
                 j[SHARED] = -by_light;
                 j[SHARED + 1] = -by_light * m.paper;
-                ht.syger(c, &j, &j, 1.0);
+                sums.h.syger(c, &j, &j, 1.0);
                 if w != c {
-                    extra.syger(w - c, &j, &j, 1.0);
+                    sums.extra.syger(w - c, &j, &j, 1.0);
                 }
-                gt.axpy(w * r, &j, 1.0);
-                tag_sq += r * r;
-                tag_weighted_sq += w * r * r;
-                tag_cost += rho(r, huber);
+                sums.g.axpy(w * r, &j, 1.0);
+                sums.sq += r * r;
+                sums.weighted_sq += w * r * r;
+                sums.cost += rho(r, huber);
             };
+            // A tag seen edge-on has no sums.
             let whole = match seen {
-                Some(seen) => seen[k].as_ref().map(|m| t.samples.iter().zip(m).for_each(|(px, m)| add(px, *m))),
-                None => self.each_seen(t, &s.pose, s.sigma_px, true, &mut add),
+                Some(seen) => seen[k].as_ref().map(|m| samples.iter().zip(&m[at..]).for_each(|(px, m)| add(px, *m))),
+                None => self.each_seen(t, samples, &s.pose, s.sigma_px, true, &mut add),
             };
-            if whole.is_none() {
+            whole.map(|_| sums)
+        });
+        for (k, tag) in pieces.into_iter().enumerate() {
+            let tag = tag.into_iter().try_fold(TagSums::default(), |mut all, piece| {
+                all.add(&piece?);
+                Some(all)
+            });
+            let Some(mut t) = tag else {
                 cost = f64::INFINITY;
                 continue;
-            }
-            (sq, weighted_sq, cost) = (tag_sq, tag_weighted_sq, tag_cost);
-            extra += ht;
-            add_block(&mut h, &ht, k);
-            add_block(&mut h_reweighted, &extra, k);
+            };
+            sq += t.sq;
+            weighted_sq += t.weighted_sq;
+            cost += t.cost;
+            t.extra += t.h;
+            add_block(&mut h, &t.h, k);
+            add_block(&mut h_reweighted, &t.extra, k);
             let o = SHARED + PER_TAG * k;
-            g.rows_mut(0, SHARED).add_assign(&gt.fixed_rows::<SHARED>(0));
-            g.rows_mut(o, PER_TAG).add_assign(&gt.fixed_rows::<PER_TAG>(SHARED));
+            g.rows_mut(0, SHARED).add_assign(&t.g.fixed_rows::<SHARED>(0));
+            g.rows_mut(o, PER_TAG).add_assign(&t.g.fixed_rows::<PER_TAG>(SHARED));
         }
         Normal { h, h_reweighted, g, sq, weighted_sq, cost }
+    }
+}
+
+/// One tag's share of the normal equations: the lower triangles of its block of the curvature
+/// and of what the reweighted curvature adds to it, its block of the gradient, and its
+/// residuals' sums.
+#[derive(Default)]
+struct TagSums {
+    h: Block,
+    extra: Block,
+    g: BlockVector,
+    sq: f64,
+    weighted_sq: f64,
+    cost: f64,
+}
+
+impl TagSums {
+    /// Adds another piece of the tag's pixels.
+    fn add(&mut self, o: &TagSums) {
+        self.h += o.h;
+        self.extra += o.extra;
+        self.g += o.g;
+        self.sq += o.sq;
+        self.weighted_sq += o.weighted_sq;
+        self.cost += o.cost;
     }
 }
 

@@ -33,13 +33,18 @@ fn a_tag_off_the_frame_or_behind_the_camera_has_no_pixels() {
 /// Tag 0, 10 mm across, drawn 100 mm in front of a 300 px pinhole (64 × 48): ink where the
 /// pattern is, under a blur of 0.05 cells.
 fn drawn_tag() -> (Vec<u8>, usize, usize, TagBitmap) {
+    drawn_tag_by(300.0, 64, 48)
+}
+
+/// [`drawn_tag`] through a pinhole of `f` px, `w` × `h`, centred.
+fn drawn_tag_by(f: f64, w: usize, h: usize) -> (Vec<u8>, usize, usize, TagBitmap) {
     let bitmap = TagFamily::TAG36H11.bitmap(0).expect("tag 0");
     let pattern = Pattern::new(&bitmap).expect("8 cells");
-    let (w, h) = (64, 48);
+    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
     let luma: Vec<u8> = (0..w * h)
         .map(|i| {
-            let (x, y) = ((i % w) as f64 - 31.5, (i / w) as f64 - 23.5);
-            let (tx, ty) = (x * 100.0 / 300.0 / 5.0, y * 100.0 / 300.0 / 5.0);
+            let (x, y) = ((i % w) as f64 - cx, (i / w) as f64 - cy);
+            let (tx, ty) = (x * 100.0 / f / 5.0, y * 100.0 / f / 5.0);
             let paper = pattern.paper((tx + 1.0) * 4.0, (ty + 1.0) * 4.0, 0.05, 0.05).value;
             (20.0 + 200.0 * paper) as u8
         })
@@ -64,6 +69,31 @@ fn a_fit_given_no_room_to_settle_is_refused_as_not_converged() {
     assert!(settled.iterations < Options::default().max_iterations, "{} steps", settled.iterations);
     let off = (settled.camera_from_body.translation() - Vector3::new(0.0, 0.0, 100.0)).norm();
     assert!(off < 0.02, "{off:.4} mm from where the tag was drawn");
+}
+
+#[test]
+fn the_fit_is_the_same_on_any_number_of_threads() {
+    // Drawn 150 px wide, the tag has pixels enough for several pieces of work.
+    let (f, w, h) = (1500.0, 200, 200);
+    let (luma, w, h, bitmap) = drawn_tag_by(f, w, h);
+    let camera = CameraIntrinsics::pinhole(f, f, (w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let frame = ImageView::new(&luma, w, h, w).expect("frame");
+    let linear: [f64; 256] = std::array::from_fn(|v| v as f64);
+    let tags = square(&bitmap);
+    let body =
+        Body { image: Image { frame, linear: &linear }, camera: &camera, tags: &tags, blur_px: 0.5, motion: None };
+    let start = Pose::from_parts(
+        UnitQuaternion::from_scaled_axis(Vector3::new(0.01, -0.02, 0.0)),
+        Vector3::new(0.05, -0.03, 100.2),
+    );
+    let one = refine(&body, &start, &Options::default()).expect("settles");
+    assert!(one.pixels > 4000, "only {} pixels: too few to share out", one.pixels);
+    for threads in [2, 3] {
+        let many = refine(&body, &start, &Options { threads, ..Options::default() }).expect("settles");
+        assert_eq!(many, one, "{threads} threads");
+    }
+    let none = refine(&body, &start, &Options { threads: 0, ..Options::default() }).expect_err("refused");
+    assert!(none.to_string().contains("threads"), "{none}");
 }
 
 #[test]
@@ -126,14 +156,7 @@ fn a_smeared_tag_is_refined_to_its_place_at_the_exposures_middle_with_its_motion
     let tags = square(&bitmap);
     let camera = CameraIntrinsics::pinhole(300.0, 300.0, 31.5, 23.5);
     let motion = Motion {
-        velocity: Velocity {
-            angular: Vector3::zeros(),
-            linear: Vector3::new(
-                speed * std::env::var("VF").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(1.0),
-                0.0,
-                0.0,
-            ),
-        },
+        velocity: Velocity { angular: Vector3::zeros(), linear: Vector3::new(speed, 0.0, 0.0) },
         shutter: RollingShutter::global(),
         exposure_s,
     };

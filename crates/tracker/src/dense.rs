@@ -82,7 +82,8 @@ pub(crate) fn miss_px(
     most
 }
 
-/// `body`'s pose refined from its tags' pixels in `image`.
+/// `body`'s pose refined from its tags' pixels in `image`, each pass over them shared out tag by tag
+/// over `threads` (the pool the call runs in, [`Options::threads`]).
 pub(crate) fn refine_body(
     marker: &Marker,
     image: Image<'_>,
@@ -90,6 +91,7 @@ pub(crate) fn refine_body(
     body: &BodyResult,
     detections: &[Detection],
     motion: Option<Motion>,
+    threads: usize,
 ) -> Result<Refined, RefineError> {
     let bitmaps: Vec<_> = body.tags.iter().filter_map(|&id| Some((id, marker.family.bitmap(id)?))).collect();
     let tags: Vec<Tag<'_>> = bitmaps
@@ -101,5 +103,5 @@ pub(crate) fn refine_body(
         .collect();
     let blur_px = median(detections.iter().filter(|d| body.tags.contains(&d.id)).filter_map(|d| d.blur_px));
     let seen = Body { image, camera, tags: &tags, blur_px: blur_px.unwrap_or(0.0), motion };
-    refine(&seen, &body.camera_from_body, &Options::default())
+    refine(&seen, &body.camera_from_body, &Options { threads, ..Options::default() })
 }

@@ -622,9 +622,13 @@ impl Tracker {
             let image = jawtrack_photometric::Image { frame: *frame, linear };
             jobs.push((kind, body, image, motion));
         }
-        // The bodies are refined independently: over the detector's threads when it has two.
-        let refined = self.detector.workers().map(jobs, |(kind, body, image, motion)| {
-            (kind, dense::refine_body(&self.marker, image, camera, body, detections, motion))
+        // The bodies are refined independently: over the detector's threads when it has two,
+        // and within each its tags' pixels on the same threads, so that a thread done with the
+        // quicker body (a still one's single fit) helps with the other.
+        let workers = self.detector.workers();
+        let threads = workers.threads();
+        let refined = workers.map(jobs, |(kind, body, image, motion)| {
+            (kind, dense::refine_body(&self.marker, image, camera, body, detections, motion, threads))
         });
         for (kind, result) in refined {
             match (result, bodies[slot(kind)].as_mut()) {
