@@ -142,10 +142,10 @@ pub struct Options {
     /// A refined pose that moves any tag corner farther than this (px) from the start is
     /// refused: the corner pose is better than that, so the fit went astray.
     pub max_shift_px: f64,
-    /// Above 1, each pass over the pixels is shared out tag by tag over the rayon pool the
-    /// call runs in (the tracker's, which refines the two bodies at once on the same pool;
-    /// rayon's global pool outside any). Each tag's sums are its own and are added in the
-    /// tags' order, so the result is the same for any number.
+    /// Above 1, each pass over the pixels is shared out in pieces of a tag's pixels over the
+    /// rayon pool the call runs in (the tracker's, which refines the two bodies at once on the
+    /// same pool; rayon's global pool outside any). The pieces are cut and their sums added in
+    /// the same order for any number, so the result is the same for any number.
     pub threads: usize,
 }
 

@@ -372,7 +372,7 @@ struct Fit<'a> {
     motion: Option<&'a Motion>,
     /// The pose is held where the fit begins; only the blur, the tone and the levels move.
     pose_fixed: bool,
-    /// Above 1, a pass over the pixels is shared out tag by tag ([`Options::threads`]).
+    /// Above 1, a pass over the pixels is shared out in pieces ([`Options::threads`]).
     threads: usize,
 }
 
@@ -514,9 +514,9 @@ impl Fit<'_> {
         (step.dot(&(&n.h * step)) / n.variance(pixels)).sqrt() < SETTLED_SIGMAS
     }
 
-    /// Each of a tag's rows' planes at the middle of each part of its exposure (`rows ×
-    /// parts`, row-major), and, where the sweep is modelled, at the parts' ends (`rows ×
-    /// (parts + 1)`).
+    /// The tag's plane for each row `samples` span (they are in row order) at the middle of each
+    /// part of its exposure (`rows × parts`, row-major), and, where the sweep is modelled, at
+    /// the parts' ends (`rows × (parts + 1)`).
     fn planes(&self, pose: &Pose, t: &TagPixels, samples: &[Sample]) -> Option<(Vec<Plane>, Vec<Plane>)> {
         let first_row = samples.first().map_or(0, |s| s.row);
         let rows = samples.last().map_or(0, |s| s.row + 1 - first_row);
@@ -555,12 +555,11 @@ impl Fit<'_> {
         pieces.into_iter().map(|tag| tag.into_iter().collect::<Option<Vec<_>>>().map(|p| p.concat())).collect()
     }
 
-    /// `f(k, tag k, at, its pixels from the at-th)` over each tag's pixels in pieces of at most
-    /// [`PIECE`],
-    /// the results tag by tag and piece by piece in order: one piece after another, or with
-    /// [`Fit::threads`] above 1 each a piece of work for the rayon pool the call runs in (a
-    /// pool's thread that is done takes the next). The pieces do not depend on the threads, so
-    /// neither do the sums made of them.
+    /// `f(k, tag k, at, a piece of its pixels from the at-th)` over each tag's pixels in pieces
+    /// of at most [`PIECE`], the results tag by tag and piece by piece in order: one piece after
+    /// another, or with [`Fit::threads`] above 1 each a piece of work for the rayon pool the
+    /// call runs in (a pool's thread that is done takes the next). The pieces do not depend on
+    /// the threads, so neither do the sums made of them.
     fn each_piece<T: Send>(&self, f: impl Fn(usize, &TagPixels, usize, &[Sample]) -> T + Sync + Send) -> Vec<Vec<T>> {
         let pieces: Vec<(usize, usize, &[Sample])> = self
             .pixels
@@ -581,8 +580,8 @@ impl Fit<'_> {
         out
     }
 
-    /// Calls `f` with each pixel of `t` and its model at `pose`, in order, without keeping them
-    /// (the normal equations need each once). `None` where a plane is edge-on, once `f` has
+    /// Calls `f` with each of `samples` (pixels of `t`, in row order) and its model at `pose`,
+    /// in order, without keeping them (the normal equations need each once). `None` where a plane is edge-on, once `f` has
     /// seen the pixels before it.
     fn each_seen(
         &self,
