@@ -69,8 +69,7 @@ pub(crate) struct TrackArgs {
     /// Decimation for quad finding: 1, 1.5, 2, 3 or 4.
     #[arg(long, default_value_t = 2.0)]
     decimate: f32,
-    /// Threads: the detector's, and with `--refine dense` the refinement's (the two bodies, and
-    /// each one's pixels in pieces, shared out over them).
+    /// Threads: the detector's, and with `--refine dense` the refinement's (bodies and pixels).
     #[arg(long, default_value_t = 1)]
     threads: usize,
     #[command(flatten)]

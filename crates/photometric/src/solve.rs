@@ -514,12 +514,10 @@ impl Fit<'_> {
         (step.dot(&(&n.h * step)) / n.variance(pixels)).sqrt() < SETTLED_SIGMAS
     }
 
-    /// The tag's plane for each row `samples` span (they are in row order) at the middle of each
-    /// part of its exposure (`rows × parts`, row-major), and, where the sweep is modelled, at
-    /// the parts' ends (`rows × (parts + 1)`).
-    fn planes(&self, pose: &Pose, t: &TagPixels, samples: &[Sample]) -> Option<(Vec<Plane>, Vec<Plane>)> {
-        let first_row = samples.first().map_or(0, |s| s.row);
-        let rows = samples.last().map_or(0, |s| s.row + 1 - first_row);
+    /// The tag's plane for each of `rows` rows from `first_row` at the middle of each part of its
+    /// exposure (`rows × parts`, row-major), and, where the sweep is modelled, at the parts'
+    /// ends (`rows × (parts + 1)`).
+    fn planes(&self, pose: &Pose, t: &TagPixels, first_row: usize, rows: usize) -> Option<(Vec<Plane>, Vec<Plane>)> {
         let k = self.parts.middles.len();
         let mut middles = Vec::with_capacity(rows * k);
         let mut ends = Vec::with_capacity(if self.parts.smeared() { rows * (k + 1) } else { 0 });
@@ -581,8 +579,8 @@ impl Fit<'_> {
     }
 
     /// Calls `f` with each of `samples` (pixels of `t`, in row order) and its model at `pose`,
-    /// in order, without keeping them (the normal equations need each once). `None` where a plane is edge-on, once `f` has
-    /// seen the pixels before it.
+    /// in order, without keeping them (the normal equations need each once). `None` where a
+    /// plane is edge-on, once `f` has seen the pixels before it.
     fn each_seen(
         &self,
         t: &TagPixels,
@@ -594,8 +592,10 @@ impl Fit<'_> {
     ) -> Option<()> {
         let sigma = sigma_px / (self.camera.fx * self.camera.fy).sqrt();
         let k = self.parts.middles.len();
-        let (middles, ends) = self.planes(pose, t, samples)?;
+        // The rows the samples span (they are in row order).
         let first_row = samples.first().map_or(0, |s| s.row);
+        let rows = samples.last().map_or(0, |s| s.row + 1 - first_row);
+        let (middles, ends) = self.planes(pose, t, first_row, rows)?;
         let half = t.pattern.cells() as f64 / 2.0;
         let sees = |p: &Plane, n: &Vector2<f64>| to_tag(&p.to_tag, n).map(|(x, y)| Vector2::new(x, y));
         for s in samples {
@@ -677,8 +677,8 @@ impl Fit<'_> {
         let n = SHARED + PER_TAG * self.pixels.len();
         let (mut h, mut h_reweighted, mut g) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n), DVector::zeros(n));
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
-        // Each tag's sums are its own, so tags may be summed at once; they are added up here in
-        // the tags' order, the same for any number of threads.
+        // Each piece's sums are its own, so pieces may be summed at once; they are added up here
+        // tag by tag and piece by piece, the same for any number of threads.
         let pieces = self.each_piece(|k, t, at, samples| {
             let l = s.levels[k];
             // The tag's block: the shared parameters, then its own levels. Only the lower
