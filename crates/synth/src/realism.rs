@@ -65,8 +65,9 @@ pub struct Realism {
     pub optics_sigma_um: f64,
     /// Exposure time (s) for motion blur; 0 renders an instant.
     pub exposure_s: f64,
-    /// Most sub-frames averaged for motion blur with a global shutter (enough for ≤ 1 px
-    /// motion between them). A rolling shutter places its rows' instants by motion alone.
+    /// Most sub-frames averaged for motion blur with a global shutter: enough for ≤ ¼ px of
+    /// motion between two up to this many (64: a 16 px smear), coarser beyond. A rolling
+    /// shutter places its rows' instants by motion alone.
     pub max_subframes: u32,
     /// Rolling-shutter readout (s): the time from the first to the last row of the delivered
     /// buffer; 0 is a global shutter. Row r is exposed centred at [`Realism::row_time`].
@@ -115,7 +116,7 @@ impl Default for Realism {
             focal_length_mm: 5.7,
             focus_distance_mm: None,
             exposure_s: 1.0 / 120.0,
-            max_subframes: 24,
+            max_subframes: 64,
             readout_s: 0.0,
             // After the phone's own denoising: about 1.3 DN of noise at mid-grey.
             full_well_e: 8000.0,

@@ -41,13 +41,9 @@ impl Rolling<'_, '_> {
     /// window, enough that nothing moves more than `step_px` from one to the next.
     fn instants(&self, c: f64) -> Vec<f64> {
         let e = self.realism.exposure_s;
-        let n = if e > 0.0 {
-            let moved = largest_motion(&(self.probe_at)(c - e / 2.0), &(self.probe_at)(c + e / 2.0));
-            ((moved / self.step_px).ceil() as u32).clamp(1, MAX_INSTANTS)
-        } else {
-            1
-        };
-        (0..n).map(|s| c + e * ((f64::from(s) + 0.5) / f64::from(n) - 0.5)).collect()
+        let moved =
+            if e > 0.0 { largest_motion(&(self.probe_at)(c - e / 2.0), &(self.probe_at)(c + e / 2.0)) } else { 0.0 };
+        slice_midpoints(c, e, moved, self.step_px, MAX_INSTANTS)
     }
 
     /// The window `[x0, y0, x1, y1)` to render row by row: with a still camera, where the
@@ -117,6 +113,15 @@ impl Rolling<'_, '_> {
         }
         most
     }
+}
+
+/// The instants that stand for an exposure of `e` s centred at `c` over which the image moves
+/// `moved` px: the midpoints of n equal slices, n the fewest (at most `most`) that keep
+/// neighbouring instants within `step_px`. Both shutters average these, so a smear is drawn
+/// the same way whichever renders it; one instant (the centre) when nothing moves.
+pub(crate) fn slice_midpoints(c: f64, e: f64, moved: f64, step_px: f64, most: u32) -> Vec<f64> {
+    let n = if e > 0.0 { ((moved / step_px).ceil() as u32).clamp(1, most.max(1)) } else { 1 };
+    (0..n).map(|s| c + e * ((f64::from(s) + 0.5) / f64::from(n) - 0.5)).collect()
 }
 
 /// The largest distance between corresponding points (px).
@@ -334,5 +339,24 @@ mod tests {
     fn moving_edge_x(moving: &MovingTag, realism: &Realism, y: f64) -> f64 {
         let c = realism.row_time(0.0, y, H);
         (0..4).filter_map(|i| moving.corner(i, &moving.pose(c))).map(|p| p.x).fold(f64::INFINITY, f64::min)
+    }
+
+    /// A smear under a pixel is still drawn (three instants for 0.6 px at quarter-pixel steps,
+    /// the global shutter's old rule drew one), the instants are the slices' midpoints, centred
+    /// on the frame's time, and the cap and a still scene give what they say.
+    #[test]
+    fn instants_are_slice_midpoints_a_quarter_pixel_apart() {
+        let (c, e) = (1.0, 0.008);
+        let t = slice_midpoints(c, e, 0.6, STEP_PX, 64);
+        assert_eq!(t.len(), 3, "{t:?}");
+        for (i, ti) in t.iter().enumerate() {
+            let want = c - e / 2.0 + e * (i as f64 + 0.5) / 3.0;
+            assert!((ti - want).abs() < 1e-15, "instant {i}: {ti} for {want}");
+        }
+        assert!((t.iter().sum::<f64>() / 3.0 - c).abs() < 1e-15, "centred on the frame's time");
+        assert_eq!(slice_midpoints(c, e, 0.0, STEP_PX, 64), vec![c], "nothing moves: the centre alone");
+        assert_eq!(slice_midpoints(c, 0.0, 5.0, STEP_PX, 64), vec![c], "no exposure: the centre alone");
+        assert_eq!(slice_midpoints(c, e, 100.0, STEP_PX, 64).len(), 64, "capped");
+        assert_eq!(slice_midpoints(c, e, 1.0, STEP_PX, 0).len(), 1, "a cap of 0 still gives an instant");
     }
 }

@@ -369,29 +369,23 @@ impl Synthesizer {
         Ok(Frame { width: self.camera.width, height: self.camera.height, luma, truth })
     }
 
-    /// A global shutter's image: every row exposed over the same window, averaging enough
-    /// sub-frames that nothing moves more than 1 px between two (the blur stays symmetric about
-    /// mid-exposure, so the true pose is its centre). Returns the image and the sub-frames.
+    /// A global shutter's image: every row exposed over the same window, averaging sub-frames
+    /// at the midpoints of equal slices of it, as a rolling shutter's rows do: enough that
+    /// nothing moves more than [`shutter::STEP_PX`] between two, up to
+    /// [`Realism::max_subframes`] (the blur stays symmetric about mid-exposure, so the true pose
+    /// is its centre). Returns the image and the sub-frames.
     fn render_global(&self, spec: &FrameSpec, extra: &[Plane], cam_head: &Pose) -> (LinearImage, u32) {
         let realism = &self.config.realism;
-        let sub = if realism.exposure_s > 0.0 {
-            let (t0, t1) = (spec.t - realism.exposure_s / 2.0, spec.t + realism.exposure_s / 2.0);
-            let a = self.poses_at(spec, t0);
-            let b = self.poses_at(spec, t1);
-            let moved = shutter::largest_motion(&self.body_probe(&a), &self.body_probe(&b));
-            (moved.ceil() as u32).clamp(1, realism.max_subframes)
+        let e = realism.exposure_s;
+        let moved = if e > 0.0 {
+            let a = self.poses_at(spec, spec.t - e / 2.0);
+            let b = self.poses_at(spec, spec.t + e / 2.0);
+            shutter::largest_motion(&self.body_probe(&a), &self.body_probe(&b))
         } else {
-            1
+            0.0
         };
-        let times: Vec<f64> = (0..sub)
-            .map(|s| {
-                if sub == 1 {
-                    spec.t
-                } else {
-                    spec.t + realism.exposure_s * ((f64::from(s) + 0.5) / f64::from(sub) - 0.5)
-                }
-            })
-            .collect();
+        let times = shutter::slice_midpoints(spec.t, e, moved, shutter::STEP_PX, realism.max_subframes);
+        let sub = times.len() as u32;
         let scenes: Vec<RenderScene<'_>> = times
             .iter()
             .map(|&t| {
