@@ -29,11 +29,12 @@ pub struct DenseArgs {
     /// case), gamma-1.8 (that, developed with a gamma-1.8 curve), hinge (the default hinge),
     /// chew-2ms and chew-8ms (the capture plan: 220 mm, 2× crop, 10 ms readout, at that
     /// exposure), defocus (the phone 200 mm away with the 2× crop, its focus locked 12 mm behind
-    /// the tags: a few millimetres of depth of field miss them).
+    /// the tags: a few millimetres of depth of field miss them), defocus-gamma-1.8 (that,
+    /// developed with a gamma-1.8 curve: both strains at once).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "still-200,still-100,gamma-1.8,hinge,chew-2ms,chew-8ms,defocus"
+        default_value = "still-200,still-100,gamma-1.8,hinge,chew-2ms,chew-8ms,defocus,defocus-gamma-1.8"
     )]
     cases: Vec<String>,
     /// Frames per view of the still cases (3 tripod and 3 hand-held views): the jitter is
@@ -70,6 +71,11 @@ fn case(name: &str, a: &DenseArgs) -> Result<Case> {
     let phone = |distance_mm, zoom| Phone { resolution: Resolution::P1080, zoom, distance_mm, focus_mm: distance_mm };
     let still = |req: Request| Request { distance_mm: Some(100.0), ..req };
     let base = |scene, per_view, fps| Request::new(scene, a.seed, per_view, 1, fps);
+    let gamma_1_8 = Some(Development { curve: ToneCurve::Gamma { gamma: 1.8 }, sharpen: None, local_tone_map: 0.0 });
+    let defocus = || Request {
+        phone: Some(Phone { focus_mm: 200.0 + DEFOCUS_MM, ..phone(200.0, 2.0) }),
+        ..base(SceneKind::Static, a.still_frames, 30.0)
+    };
     let chew = |exposure_ms: f64| Request {
         max_frames: Some(a.motion_frames),
         exposure_s: Some(exposure_ms / 1000.0),
@@ -82,29 +88,17 @@ fn case(name: &str, a: &DenseArgs) -> Result<Case> {
             ("still-200", Request { phone: Some(phone(200.0, 1.0)), ..base(SceneKind::Static, a.still_frames, 30.0) })
         }
         "still-100" => ("still-100", still(base(SceneKind::Static, a.still_frames, 30.0))),
-        "gamma-1.8" => (
-            "gamma-1.8",
-            Request {
-                development: Some(Development {
-                    curve: ToneCurve::Gamma { gamma: 1.8 },
-                    sharpen: None,
-                    local_tone_map: 0.0,
-                }),
-                ..still(base(SceneKind::Static, a.still_frames, 30.0))
-            },
-        ),
+        "gamma-1.8" => {
+            ("gamma-1.8", Request { development: gamma_1_8, ..still(base(SceneKind::Static, a.still_frames, 30.0)) })
+        }
         "hinge" => ("hinge", Request { max_frames: Some(a.motion_frames), ..base(SceneKind::Hinge, 1, 30.0) }),
         "chew-2ms" => ("chew-2ms", chew(2.0)),
         "chew-8ms" => ("chew-8ms", chew(8.0)),
-        "defocus" => (
-            "defocus",
-            Request {
-                phone: Some(Phone { focus_mm: 200.0 + DEFOCUS_MM, ..phone(200.0, 2.0) }),
-                ..base(SceneKind::Static, a.still_frames, 30.0)
-            },
-        ),
+        "defocus" => ("defocus", defocus()),
+        "defocus-gamma-1.8" => ("defocus-gamma-1.8", Request { development: gamma_1_8, ..defocus() }),
         other => bail!(
-            "unknown case '{other}' (choose still-200, still-100, gamma-1.8, hinge, chew-2ms, chew-8ms or defocus)"
+            "unknown case '{other}' (choose still-200, still-100, gamma-1.8, hinge, chew-2ms, chew-8ms, defocus or \
+             defocus-gamma-1.8)"
         ),
     };
     Ok(Case { name, request })
@@ -444,11 +438,13 @@ mod tests {
             out: None,
         };
         let mut checked = 0;
-        for name in ["still-200", "still-100", "gamma-1.8", "hinge", "chew-2ms", "chew-8ms", "defocus"] {
+        for name in
+            ["still-200", "still-100", "gamma-1.8", "hinge", "chew-2ms", "chew-8ms", "defocus", "defocus-gamma-1.8"]
+        {
             assert_eq!(case(name, &a).expect("known").name, name);
             checked += 1;
         }
-        assert_eq!(checked, 7);
+        assert_eq!(checked, 8);
         let e = case("still-300", &a).err().expect("refused").to_string();
         assert!(e.contains("still-300") && e.contains("chew-8ms"), "{e}");
     }
