@@ -7,11 +7,9 @@
 //! plane, where the printed pattern blurred by the lens's spread ([`model`]) says how much
 //! paper it sees; the image, read in linear light through the tone curve, should be the tag's
 //! ink level plus that fraction of its contrast, raised to a power that takes up a tone curve
-//! that is not quite the camera's. The body's pose (six parameters), the blur and how it grows
-//! with nearness (a defocused lens blurs each tag by its own depth, linearly in inverse depth),
-//! that power and each tag's two levels are fitted to all pixels together by
-//! Levenberg–Marquardt with Huber weights, so an occluder, a glare spot or a neighbour's edge
-//! costs only its own pixels.
+//! that is not quite the camera's. The body's pose (six parameters), the blur, that power and
+//! each tag's two levels are fitted to all pixels together by Levenberg–Marquardt with Huber
+//! weights, so an occluder, a glare spot or a neighbour's edge costs only its own pixels.
 //!
 //! Motion is modelled as the camera records it: each row is exposed at its own time under a
 //! rolling shutter, and over the exposure the body moves on at its tracked velocity, so a
@@ -57,7 +55,6 @@
 //! # }
 //! ```
 
-mod depth_blur;
 mod gather;
 pub mod model;
 mod parts;

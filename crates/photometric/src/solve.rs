@@ -1,7 +1,6 @@
 //! The fit: pixels gathered once at the starting pose, then the pose and the tags' levels moved
 //! together until the image and the model agree.
 
-use crate::depth_blur;
 use crate::gather::{Sample, TagPixels, gather};
 use crate::parts::Parts;
 use crate::plane::{Looked, Plane, Seen, look, plane, to_tag};
@@ -73,16 +72,14 @@ const MAX_GAMMA: f64 = 4.0;
 struct State {
     pose: Pose,
     sigma_px: f64,
-    /// How the blur grows with nearness (px, [`depth_blur::sigmas`]).
-    depth_blur: f64,
     /// The image, read through the tone curve the caller gave, is the scene's linear light to
     /// this power (1: the curve is right). A wrong curve bends every edge's ramp one way, which
     /// a symmetric blur cannot take up: it would move the edges (a tag's ink seems to grow or
     /// shrink) and so the pose.
     gamma: f64,
-    /// Each tag's ink and contrast (linear light, 0–255). The tags' blurs differ only by their
-    /// depths: a free blur per tag traded with their sizes and made the far case worse
-    /// (`docs/dense.md`).
+    /// Each tag's ink and contrast (linear light, 0–255). One blur serves the body's tags: a
+    /// blur per tag (their depths differ by millimetres where a phone's depth of field is a few
+    /// millimetres deep) traded with their sizes and made the far case worse (`docs/dense.md`).
     levels: Vec<[f64; PER_TAG]>,
 }
 
@@ -105,9 +102,8 @@ impl State {
 /// covers and part of the exposure) are few beside its pixels.
 const PIECE: usize = 1024;
 
-/// Parameters shared by the tags: the pose's six, the blur, the tone's power and the blur's
-/// growth with nearness.
-const SHARED: usize = 9;
+/// Parameters shared by the tags: the pose's six, the blur and the tone's power.
+const SHARED: usize = 8;
 /// Parameters of each tag: its ink and its contrast.
 const PER_TAG: usize = 2;
 /// One tag's parameters: the shared ones, then its own.
@@ -223,7 +219,7 @@ pub fn bound(
     let (pixels, parts) = setup(body, pose, fitted.state.sigma_px, options)?;
     fit.pixels = &pixels;
     fit.parts = parts;
-    let seen = fit.seen(pose, fitted.state.sigma_px, fitted.state.depth_blur, true);
+    let seen = fit.seen(pose, fitted.state.sigma_px, true);
     let levels = fit.levels(&seen).ok_or(RefineError::Singular)?;
     let state = State { levels, ..fitted.state };
     let information = fit.normal(
@@ -390,9 +386,9 @@ impl Fit<'_> {
     /// The fit's first pass: the model at `begin` gives the levels, the residuals' scale and
     /// the first normal equations.
     fn start(&self, begin: &Begin, options: &Options) -> Result<Started, RefineError> {
-        let seen = self.seen(&begin.pose, begin.sigma_px, 0.0, true);
+        let seen = self.seen(&begin.pose, begin.sigma_px, true);
         let levels = self.levels(&seen).ok_or(RefineError::Singular)?;
-        let state = State { pose: begin.pose, sigma_px: begin.sigma_px, depth_blur: 0.0, gamma: begin.gamma, levels };
+        let state = State { pose: begin.pose, sigma_px: begin.sigma_px, gamma: begin.gamma, levels };
         let huber = options.huber * scale(self.residuals(&state, &seen)).max(MIN_SCALE);
         let normal = self.normal(&state, &|r, _| huber_weights(r, huber), huber, Some(&seen));
         Ok(Started { state, huber, normal })
@@ -442,12 +438,11 @@ impl Fit<'_> {
                 let pose = Pose::from_isometry(perturb(s.pose.isometry(), &d));
                 let sigma_px = (s.sigma_px + step[6]).max(MIN_SIGMA_PX);
                 let gamma = (s.gamma + step[7]).clamp(MIN_GAMMA, MAX_GAMMA);
-                let depth_blur = s.depth_blur + step[8];
                 let levels = s.levels.iter().enumerate().map(|(k, l)| {
                     let o = SHARED + PER_TAG * k;
                     [l[0] + step[o], l[1] + step[o + 1]]
                 });
-                Some(State { pose, sigma_px, depth_blur, gamma, levels: levels.collect() })
+                Some(State { pose, sigma_px, gamma, levels: levels.collect() })
             },
             |_, n, _| last_step.borrow().as_ref().is_some_and(|step| self.settled(step, n)),
             |s| {
@@ -549,11 +544,10 @@ impl Fit<'_> {
     }
 
     /// Every pixel's model at `pose`, tag by tag (`None` where a plane is edge-on).
-    fn seen(&self, pose: &Pose, sigma_px: f64, depth_blur: f64, jacobian: bool) -> Vec<Option<Vec<Seen>>> {
-        let (sigmas, _) = depth_blur::sigmas(self.pixels, pose, sigma_px, depth_blur, MIN_SIGMA_PX);
-        let pieces = self.each_piece(|k, t, _, samples| {
+    fn seen(&self, pose: &Pose, sigma_px: f64, jacobian: bool) -> Vec<Option<Vec<Seen>>> {
+        let pieces = self.each_piece(|_, t, _, samples| {
             let mut out = Vec::with_capacity(samples.len());
-            self.each_seen(t, samples, pose, sigmas[k], jacobian, |_, m| out.push(m))?;
+            self.each_seen(t, samples, pose, sigma_px, jacobian, |_, m| out.push(m))?;
             Some(out)
         });
         pieces.into_iter().map(|tag| tag.into_iter().collect::<Option<Vec<_>>>().map(|p| p.concat())).collect()
@@ -682,10 +676,6 @@ impl Fit<'_> {
     ) -> Normal {
         let n = SHARED + PER_TAG * self.pixels.len();
         let (mut h, mut h_reweighted, mut g) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n), DVector::zeros(n));
-        let (sigmas, delta) = depth_blur::sigmas(self.pixels, &s.pose, s.sigma_px, s.depth_blur, MIN_SIGMA_PX);
-        // Tags at one depth (a single tag) say nothing of how the blur grows with nearness: it
-        // is held (its row and column left as the identity's).
-        let depth_free = depth_blur::told(&delta);
         let (mut sq, mut weighted_sq, mut cost) = (0.0, 0.0, 0.0);
         // Each piece's sums are its own, so pieces may be summed at once; they are added up here
         // tag by tag and piece by piece, the same for any number of threads.
@@ -702,7 +692,6 @@ impl Fit<'_> {
                 let mut j = BlockVector::zeros();
                 j.fixed_rows_mut::<7>(0).copy_from(&(m.d * (-by_light * l[1])));
                 j[7] = -by_gamma;
-                j[8] = if depth_free { j[6] * delta[k] } else { 0.0 };
                 j[SHARED] = -by_light;
                 j[SHARED + 1] = -by_light * m.paper;
                 sums.h.syger(c, &j, &j, 1.0);
@@ -717,7 +706,7 @@ impl Fit<'_> {
             // A tag seen edge-on has no sums.
             let whole = match seen {
                 Some(seen) => seen[k].as_ref().map(|m| samples.iter().zip(&m[at..]).for_each(|(px, m)| add(px, *m))),
-                None => self.each_seen(t, samples, &s.pose, sigmas[k], true, &mut add),
+                None => self.each_seen(t, samples, &s.pose, s.sigma_px, true, &mut add),
             };
             whole.map(|_| sums)
         });
@@ -739,10 +728,6 @@ impl Fit<'_> {
             let o = SHARED + PER_TAG * k;
             g.rows_mut(0, SHARED).add_assign(&t.g.fixed_rows::<SHARED>(0));
             g.rows_mut(o, PER_TAG).add_assign(&t.g.fixed_rows::<PER_TAG>(SHARED));
-        }
-        if !depth_free {
-            h[(8, 8)] = 1.0;
-            h_reweighted[(8, 8)] = 1.0;
         }
         Normal { h, h_reweighted, g, sq, weighted_sq, cost }
     }
